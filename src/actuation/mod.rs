@@ -1,0 +1,4 @@
+//! Actuation: saturation, thruster layouts and allocation, PWPF modulation.
+
+pub mod pwpf;
+pub mod thrusters;

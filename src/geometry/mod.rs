@@ -1,0 +1,6 @@
+//! Analytic constraint surfaces (f64): the elliptic cissoid corridor (Guo 2016), the
+//! superquadric obstacle and heart-shaped keep-out (Xu, Wen, Wei 2019).
+
+pub mod cissoid;
+pub mod heart;
+pub mod superquadric;

@@ -1,0 +1,13 @@
+//! # rpod — a testbed for spacecraft rendezvous, proximity operations and docking
+//!
+//! Layers (see the README for the full map):
+//! - Bevy-free scientific core, f64, unit-tested alone: [`math`], [`orbit`], [`geometry`],
+//!   [`control`], [`actuation`], [`report`].
+//! - `sim` feature: the Bevy + rapier layer that turns a scene into a fixed-step `App`.
+
+pub mod actuation;
+pub mod control;
+pub mod geometry;
+pub mod math;
+pub mod orbit;
+pub mod report;

@@ -1,0 +1,1 @@
+//! Reports: PNG/SVG plots, REPORT.md builder and claims.json.
