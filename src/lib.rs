@@ -6,8 +6,14 @@
 //! - `sim` feature: the Bevy + rapier layer that turns a scene into a fixed-step `App`.
 
 pub mod actuation;
+#[cfg(feature = "sim")]
+pub mod bench;
 pub mod control;
 pub mod geometry;
+pub mod guarantee;
 pub mod math;
 pub mod orbit;
 pub mod report;
+pub mod scene;
+#[cfg(feature = "sim")]
+pub mod sim;

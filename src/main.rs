@@ -1,1 +1,205 @@
-fn main() {}
+//! `rpod`: the command line. `rpod run` (headless run of a scene), `rpod check` (validate
+//! scenes), `rpod bench` (steps/s against the bare rapier and parry floor).
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "rpod",
+    version,
+    about = "Spacecraft rendezvous, proximity operations and docking testbed"
+)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Run a scene headless and write trajectory.csv, events.jsonl and summary.json.
+    Run {
+        /// Scene file (RON).
+        scene: PathBuf,
+        /// Output directory (default: out/<scene name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Simulated duration in seconds (default: the scene's duration_s).
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Override a scene field: `--set bodies.chaser.mass_kg=120` (repeatable).
+        #[arg(long = "set", value_name = "PATH=VALUE")]
+        set: Vec<String>,
+    },
+    /// Validate scene files (syntax, units, physics, geometry overlaps at t = 0).
+    Check {
+        /// Scene files.
+        #[arg(required = true)]
+        scenes: Vec<PathBuf>,
+        /// Override a scene field (applies to every scene).
+        #[arg(long = "set", value_name = "PATH=VALUE")]
+        set: Vec<String>,
+    },
+    /// Measure steps/s of a scene against the bare rapier step and bare parry queries.
+    Bench {
+        /// Scene file (default scenes/free_drift.ron).
+        #[arg(default_value = "scenes/free_drift.ron")]
+        scene: PathBuf,
+        /// Steps per measurement.
+        #[arg(long, default_value_t = 20000)]
+        steps: u64,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.cmd {
+        Cmd::Run {
+            scene,
+            out,
+            duration,
+            set,
+        } => run(&scene, out, duration, &set),
+        Cmd::Check { scenes, set } => {
+            let mut bad = false;
+            for s in &scenes {
+                match load_and_build(s, &set) {
+                    Ok(sim) => println!(
+                        "{}: ok ({} bodies, dt = {} s, duration = {} s)",
+                        s.display(),
+                        sim.scene.bodies.len(),
+                        sim.scene.dt_s,
+                        sim.scene.duration_s
+                    ),
+                    Err(e) => {
+                        eprintln!("error: {e}");
+                        bad = true;
+                    }
+                }
+            }
+            if bad {
+                ExitCode::from(2)
+            } else {
+                ExitCode::SUCCESS
+            }
+        }
+        Cmd::Bench { scene, steps } => match rpod::bench::run(&scene, steps) {
+            Ok(report) => {
+                println!("{report}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
+    }
+}
+
+fn load_and_build(
+    path: &std::path::Path,
+    set: &[String],
+) -> Result<rpod::sim::Simulation, rpod::scene::SceneError> {
+    let loaded = rpod::scene::load_scene_file(path, set)?;
+    rpod::sim::Simulation::new(&loaded)
+}
+
+fn run(
+    scene: &std::path::Path,
+    out: Option<PathBuf>,
+    duration: Option<f64>,
+    set: &[String],
+) -> ExitCode {
+    let mut sim = match load_and_build(scene, set) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let duration = duration.unwrap_or(sim.scene.duration_s);
+    if !(duration.is_finite() && duration >= 0.0) {
+        eprintln!("error: --duration must be a non-negative number of seconds, got {duration}");
+        return ExitCode::from(2);
+    }
+    let out = out.unwrap_or_else(|| PathBuf::from("out").join(&sim.scene.name));
+    if let Err(e) = sim.record_to(&out) {
+        eprintln!("error: cannot write to {}: {e}", out.display());
+        return ExitCode::from(2);
+    }
+    let total = sim.steps_for(duration);
+    let bar = indicatif::ProgressBar::new(total);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} steps  sim {msg}  ETA {eta}",
+        )
+        .expect("template"),
+    );
+    let chunk = (total / 200).max(1000);
+    let mut done = 0;
+    while done < total {
+        let k = chunk.min(total - done);
+        sim.step(k);
+        done += k;
+        bar.set_position(done);
+        bar.set_message(format!("{:.1} s", sim.t_s()));
+    }
+    bar.finish_and_clear();
+    match sim.finish() {
+        Ok(summary) => {
+            let md = &summary["min_distance"];
+            println!(
+                "{}: {} steps, {:.2} s simulated in {:.2} s wall ({:.0} steps/s)",
+                summary["scene"].as_str().unwrap_or(""),
+                summary["steps"],
+                summary["simulated_s"].as_f64().unwrap_or(0.0),
+                summary["wall_s"].as_f64().unwrap_or(0.0),
+                summary["steps_per_s"].as_f64().unwrap_or(0.0)
+            );
+            if !md.is_null() {
+                println!(
+                    "min distance {:.4} m between {} and {} at t = {:.2} s",
+                    md["value_m"].as_f64().unwrap_or(f64::NAN),
+                    md["parts"][0].as_str().unwrap_or(""),
+                    md["parts"][1].as_str().unwrap_or(""),
+                    md["t_s"].as_f64().unwrap_or(f64::NAN)
+                );
+            }
+            match summary["first_collision_s"].as_f64() {
+                Some(t) => {
+                    let c = &summary["collisions"][0];
+                    println!(
+                        "COLLISION at t = {t:.2} s: {} hit {}",
+                        c["a"].as_str().unwrap_or(""),
+                        c["b"].as_str().unwrap_or("")
+                    );
+                }
+                None => println!("no collision"),
+            }
+            for g in summary["guarantees"].as_array().into_iter().flatten() {
+                println!(
+                    "guarantee {}: {} (worst margin {:.4} {} at t = {:.2} s)",
+                    g["name"].as_str().unwrap_or(""),
+                    if g["held"].as_bool() == Some(true) {
+                        "held"
+                    } else {
+                        "VIOLATED"
+                    },
+                    g["worst_margin"].as_f64().unwrap_or(f64::NAN),
+                    g["unit"].as_str().unwrap_or(""),
+                    g["worst_margin_t_s"].as_f64().unwrap_or(f64::NAN)
+                );
+            }
+            println!(
+                "wrote {}/{{trajectory.csv, events.jsonl, summary.json}}",
+                out.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: writing outputs to {}: {e}", out.display());
+            ExitCode::from(1)
+        }
+    }
+}

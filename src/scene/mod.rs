@@ -1,0 +1,564 @@
+//! Scene files: serde types, loading with `file:line:col` errors, `--set` overrides, and
+//! physical validation. Bevy-free.
+//!
+//! A scene is RON. Every numeric field carries its unit in its name (`mass_kg`, `rate_body_deg_s`,
+//! `size_m`); unknown fields are rejected. Frames:
+//! - **world**: non-rotating, axes parallel to the Earth-centred inertial frame (orbit scenes),
+//!   origin riding on the reference orbit (the target's unforced orbit);
+//! - **hill**: the reference orbit's Hill frame at t = 0 (x radial out, y along-track,
+//!   z orbit normal), same origin;
+//! - **body**: each spacecraft's own frame, in which its parts, centre of mass, inertia and ports
+//!   are given.
+//!
+//! Attitudes are body-to-frame rotations: `v_frame = q · v_body`.
+
+pub mod load;
+pub mod parts;
+pub mod validate;
+
+pub use load::{LoadedScene, SceneError, load_scene_file, load_scene_str};
+
+use serde::{Deserialize, Serialize};
+
+/// Three components, as written in a scene: `(x, y, z)`.
+pub type V3 = [f64; 3];
+
+/// A complete scene.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Scene name, written to the outputs.
+    pub name: String,
+    /// Fixed control/physics step, s.
+    pub dt_s: f64,
+    /// Default simulated duration, s (`rpod run --duration` overrides).
+    pub duration_s: f64,
+    /// rapier substeps per step (each of `dt_s / substeps`).
+    #[serde(default = "one")]
+    pub physics_substeps: u32,
+    /// Write one trajectory row every this many steps (1 = every step).
+    #[serde(default = "ten")]
+    pub record_every_steps: u32,
+    /// Where the spacecraft fly.
+    pub environment: Environment,
+    /// The spacecraft.
+    pub bodies: Vec<BodySpec>,
+    /// Invariants the monitor checks every step.
+    #[serde(default)]
+    pub guarantees: Vec<GuaranteeSpec>,
+}
+
+fn one() -> u32 {
+    1
+}
+fn ten() -> u32 {
+    10
+}
+fn yes() -> bool {
+    true
+}
+
+/// The environment the bodies move in.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Environment {
+    /// Earth orbit: the world frame rides on the reference orbit; every body gets the
+    /// differential gravity a(r_ref + r) − a(r_ref), computed in f64.
+    Orbit {
+        /// The reference orbit (the target's unforced orbit).
+        reference: OrbitSpec,
+        /// Include Earth's J2 in the gravity model.
+        #[serde(default = "yes")]
+        j2: bool,
+        /// Apply the gravity-gradient torque to every body.
+        #[serde(default = "yes")]
+        gravity_gradient: bool,
+    },
+    /// Force-free space with no gravity at all (for mechanism tests).
+    FreeSpace,
+}
+
+/// The reference orbit's initial state.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum OrbitSpec {
+    /// Classical elements at t = 0.
+    Elements {
+        /// Semi-major axis, m.
+        a_m: f64,
+        /// Eccentricity (0 ≤ e < 1).
+        e: f64,
+        /// Inclination, deg.
+        i_deg: f64,
+        /// Right ascension of the ascending node, deg.
+        raan_deg: f64,
+        /// Argument of perigee, deg.
+        argp_deg: f64,
+        /// True anomaly, deg.
+        true_anomaly_deg: f64,
+    },
+    /// Earth-centred inertial state at t = 0.
+    State {
+        /// Position, m (ECI).
+        r_eci_m: V3,
+        /// Velocity, m/s (ECI).
+        v_eci_m_s: V3,
+    },
+}
+
+/// What a body is, for the monitor: docking contacts are between a chaser and a target.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum BodyRole {
+    /// The active spacecraft.
+    Chaser,
+    /// The passive spacecraft (may tumble).
+    Target,
+    /// Anything else (a third spacecraft, debris).
+    Other,
+}
+
+/// Frame in which an initial state is written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum InitFrame {
+    /// Inertial axes, origin on the reference orbit.
+    #[default]
+    World,
+    /// Hill frame of the reference orbit at t = 0 (x radial out, y along-track, z normal).
+    Hill,
+}
+
+/// An attitude as written in a scene.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum AttitudeSpec {
+    /// Unit quaternion body → frame, scalar first (normalised on load; must not be zero).
+    Quat {
+        /// Scalar part.
+        w: f64,
+        /// Vector part, x.
+        x: f64,
+        /// Vector part, y.
+        y: f64,
+        /// Vector part, z.
+        z: f64,
+    },
+    /// 3-2-1 Euler angles (yaw about z, then pitch about the new y, then roll about the new x), deg.
+    EulerZyxDeg {
+        /// Yaw, deg.
+        yaw: f64,
+        /// Pitch, deg.
+        pitch: f64,
+        /// Roll, deg.
+        roll: f64,
+    },
+}
+
+impl Default for AttitudeSpec {
+    fn default() -> Self {
+        AttitudeSpec::Quat {
+            w: 1.0,
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+        }
+    }
+}
+
+impl AttitudeSpec {
+    /// The rotation body → frame.
+    pub fn to_quat(&self) -> nalgebra::UnitQuaternion<f64> {
+        match *self {
+            AttitudeSpec::Quat { w, x, y, z } => {
+                nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, x, y, z))
+            }
+            AttitudeSpec::EulerZyxDeg { yaw, pitch, roll } => {
+                let z = nalgebra::UnitQuaternion::from_axis_angle(
+                    &nalgebra::Vector3::z_axis(),
+                    yaw.to_radians(),
+                );
+                let y = nalgebra::UnitQuaternion::from_axis_angle(
+                    &nalgebra::Vector3::y_axis(),
+                    pitch.to_radians(),
+                );
+                let x = nalgebra::UnitQuaternion::from_axis_angle(
+                    &nalgebra::Vector3::x_axis(),
+                    roll.to_radians(),
+                );
+                z * y * x
+            }
+        }
+    }
+}
+
+/// Initial state of a body's centre of mass and attitude.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialState {
+    /// Frame of `pos_m`, `vel_m_s` and `attitude`.
+    #[serde(default)]
+    pub frame: InitFrame,
+    /// Centre-of-mass position, m.
+    pub pos_m: V3,
+    /// Centre-of-mass velocity, m/s (relative to the frame's origin, as seen in that frame).
+    #[serde(default)]
+    pub vel_m_s: V3,
+    /// Attitude body → frame.
+    #[serde(default)]
+    pub attitude: AttitudeSpec,
+    /// Inertial angular velocity in body axes, deg/s.
+    #[serde(default)]
+    pub rate_body_deg_s: V3,
+}
+
+/// Inertia tensor about the centre of mass, in body axes, kg·m².
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InertiaSpec {
+    /// I_xx, kg·m².
+    pub xx: f64,
+    /// I_yy, kg·m².
+    pub yy: f64,
+    /// I_zz, kg·m².
+    pub zz: f64,
+    /// I_xy (tensor element, i.e. minus the product of inertia), kg·m².
+    #[serde(default)]
+    pub xy: f64,
+    /// I_xz, kg·m².
+    #[serde(default)]
+    pub xz: f64,
+    /// I_yz, kg·m².
+    #[serde(default)]
+    pub yz: f64,
+}
+
+impl InertiaSpec {
+    /// The symmetric tensor.
+    pub fn matrix(&self) -> nalgebra::Matrix3<f64> {
+        nalgebra::Matrix3::new(
+            self.xx, self.xy, self.xz, self.xy, self.yy, self.yz, self.xz, self.yz, self.zz,
+        )
+    }
+}
+
+/// A docking port: a frame on a body.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PortSpec {
+    /// Port name, unique on the body.
+    pub name: String,
+    /// Port origin in the body frame, m.
+    pub pos_m: V3,
+    /// Outward port axis in the body frame (normalised on load).
+    pub axis: V3,
+}
+
+/// One spacecraft.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    /// Unique name; used as the column prefix in `trajectory.csv`.
+    pub name: String,
+    /// Chaser, target or other.
+    pub role: BodyRole,
+    /// Mass, kg.
+    pub mass_kg: f64,
+    /// Centre of mass in the body frame, m.
+    #[serde(default)]
+    pub com_m: V3,
+    /// Inertia tensor about the centre of mass, body axes, kg·m².
+    pub inertia_kg_m2: InertiaSpec,
+    /// Initial state.
+    pub initial: InitialState,
+    /// Geometry: every part becomes one or more colliders.
+    pub parts: Vec<PartSpec>,
+    /// Docking-port frames.
+    #[serde(default)]
+    pub ports: Vec<PortSpec>,
+}
+
+/// A body axis, for directions written in a scene.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Axis {
+    /// +x
+    PlusX,
+    /// −x
+    MinusX,
+    /// +y
+    PlusY,
+    /// −y
+    MinusY,
+    /// +z
+    PlusZ,
+    /// −z
+    MinusZ,
+}
+
+impl Axis {
+    /// The unit vector.
+    pub fn vector(self) -> nalgebra::Vector3<f64> {
+        use nalgebra::Vector3;
+        match self {
+            Axis::PlusX => Vector3::x(),
+            Axis::MinusX => -Vector3::x(),
+            Axis::PlusY => Vector3::y(),
+            Axis::MinusY => -Vector3::y(),
+            Axis::PlusZ => Vector3::z(),
+            Axis::MinusZ => -Vector3::z(),
+        }
+    }
+}
+
+/// A primitive shape, in its own frame.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ShapeSpec {
+    /// Rectangular box centred on its frame.
+    Box {
+        /// Full edge lengths along x, y, z, m.
+        size_m: V3,
+    },
+    /// Solid cylinder centred on its frame.
+    Cylinder {
+        /// Radius, m.
+        radius_m: f64,
+        /// Full length, m.
+        length_m: f64,
+        /// Axis of revolution.
+        axis: Axis,
+    },
+    /// Sphere centred on its frame.
+    Sphere {
+        /// Radius, m.
+        radius_m: f64,
+    },
+}
+
+/// What a part is, for the monitor and the docking mechanism.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum PartRole {
+    /// Main structure.
+    Bus,
+    /// Solar panel.
+    Panel,
+    /// Solar-array boom.
+    Boom,
+    /// Antenna.
+    Antenna,
+    /// Docking probe cone (chaser).
+    DockingCone,
+    /// Docking receptacle slot (target).
+    DockingSlot,
+    /// Anything else.
+    Other,
+}
+
+impl PartRole {
+    /// Docking parts may touch each other without it counting as a collision.
+    pub fn is_docking(self) -> bool {
+        matches!(self, PartRole::DockingCone | PartRole::DockingSlot)
+    }
+}
+
+/// A named part of a spacecraft. Positions and rotations are in the body frame.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum PartSpec {
+    /// The bus: one primitive shape.
+    Bus {
+        /// Part name, unique on the body.
+        name: String,
+        /// Shape.
+        shape: ShapeSpec,
+        /// Shape centre in the body frame, m.
+        #[serde(default)]
+        pos_m: V3,
+        /// Shape orientation in the body frame.
+        #[serde(default)]
+        attitude: AttitudeSpec,
+        /// The part may overlap another body's part at t = 0 without a validation error.
+        #[serde(default)]
+        allow_initial_overlap: bool,
+    },
+    /// An antenna (or any other appendage): one primitive shape.
+    Antenna {
+        /// Part name.
+        name: String,
+        /// Shape.
+        shape: ShapeSpec,
+        /// Shape centre in the body frame, m.
+        #[serde(default)]
+        pos_m: V3,
+        /// Shape orientation in the body frame.
+        #[serde(default)]
+        attitude: AttitudeSpec,
+        /// See [`PartSpec::Bus`].
+        #[serde(default)]
+        allow_initial_overlap: bool,
+    },
+    /// A solar-array wing: a boom from the root, then `panel_count` flat panels in a row.
+    /// Colliders are named `NAME.boom` and `NAME.panel1` … `NAME.panelN`.
+    SolarWing {
+        /// Wing name.
+        name: String,
+        /// Root point on the bus, body frame, m.
+        root_m: V3,
+        /// Direction the wing extends in.
+        direction: Axis,
+        /// Axis (perpendicular to `direction`) along which the panel width lies before the cant.
+        width_axis: Axis,
+        /// Boom length from the root to the first panel's inner edge, m (0 = no boom).
+        #[serde(default)]
+        boom_length_m: f64,
+        /// Boom radius, m.
+        #[serde(default = "boom_radius")]
+        boom_radius_m: f64,
+        /// Number of panels.
+        panel_count: u32,
+        /// Panel length along `direction` and width along `width_axis`, m.
+        panel_size_m: [f64; 2],
+        /// Panel thickness, m.
+        #[serde(default = "panel_thickness")]
+        panel_thickness_m: f64,
+        /// Gap between successive panels, m.
+        #[serde(default)]
+        panel_gap_m: f64,
+        /// Rotation of the panels about `direction`, deg.
+        #[serde(default)]
+        cant_deg: f64,
+        /// See [`PartSpec::Bus`].
+        #[serde(default)]
+        allow_initial_overlap: bool,
+    },
+    /// Docking probe: a truncated cone on a port, its base on the port plane and its tip
+    /// pointing out along the port axis. Collider `NAME`.
+    DockingCone {
+        /// Part name.
+        name: String,
+        /// The port it stands on.
+        port: String,
+        /// Base radius, m.
+        base_radius_m: f64,
+        /// Tip radius, m (0 < tip ≤ base).
+        tip_radius_m: f64,
+        /// Length along the port axis, m.
+        length_m: f64,
+        /// See [`PartSpec::Bus`].
+        #[serde(default)]
+        allow_initial_overlap: bool,
+    },
+    /// Docking receptacle: a concave funnel on a port, open along the port axis, built from
+    /// `segments` convex wall pieces plus a back plate. Colliders `NAME.wall1` … and `NAME.back`.
+    DockingSlot {
+        /// Part name.
+        name: String,
+        /// The port it is built around (the port origin is the bottom of the funnel).
+        port: String,
+        /// Inner radius at the mouth, m.
+        mouth_radius_m: f64,
+        /// Inner radius at the bottom, m.
+        throat_radius_m: f64,
+        /// Depth from the mouth to the bottom, m.
+        depth_m: f64,
+        /// Wall thickness, m.
+        #[serde(default = "slot_wall")]
+        wall_m: f64,
+        /// Number of convex wall pieces around the axis (≥ 6).
+        #[serde(default = "slot_segments")]
+        segments: u32,
+        /// See [`PartSpec::Bus`].
+        #[serde(default)]
+        allow_initial_overlap: bool,
+    },
+}
+
+fn boom_radius() -> f64 {
+    0.03
+}
+fn panel_thickness() -> f64 {
+    0.03
+}
+fn slot_wall() -> f64 {
+    0.02
+}
+fn slot_segments() -> u32 {
+    12
+}
+
+impl PartSpec {
+    /// The part's name.
+    pub fn name(&self) -> &str {
+        match self {
+            PartSpec::Bus { name, .. }
+            | PartSpec::Antenna { name, .. }
+            | PartSpec::SolarWing { name, .. }
+            | PartSpec::DockingCone { name, .. }
+            | PartSpec::DockingSlot { name, .. } => name,
+        }
+    }
+    /// Whether the part may overlap other bodies at t = 0.
+    pub fn allow_initial_overlap(&self) -> bool {
+        match self {
+            PartSpec::Bus {
+                allow_initial_overlap,
+                ..
+            }
+            | PartSpec::Antenna {
+                allow_initial_overlap,
+                ..
+            }
+            | PartSpec::SolarWing {
+                allow_initial_overlap,
+                ..
+            }
+            | PartSpec::DockingCone {
+                allow_initial_overlap,
+                ..
+            }
+            | PartSpec::DockingSlot {
+                allow_initial_overlap,
+                ..
+            } => *allow_initial_overlap,
+        }
+    }
+}
+
+/// An invariant written in the scene, checked every step by the monitor.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum GuaranteeSpec {
+    /// Full-geometry minimum distance between two bodies stays ≥ `min_m`
+    /// (margin = distance − min_m, m).
+    MinDistance {
+        /// Guarantee name.
+        name: String,
+        /// First body.
+        a: String,
+        /// Second body.
+        b: String,
+        /// Required clearance, m.
+        min_m: f64,
+    },
+    /// Point-mass keep-out: the centre of mass of `body` stays outside a sphere of `radius_m`
+    /// about the centre of mass of `around` (margin = |r| − radius, m).
+    KeepOutSphere {
+        /// Guarantee name.
+        name: String,
+        /// The body whose centre of mass is checked.
+        body: String,
+        /// The body at the sphere's centre.
+        around: String,
+        /// Sphere radius, m.
+        radius_m: f64,
+    },
+}
+
+impl GuaranteeSpec {
+    /// The guarantee's name.
+    pub fn name(&self) -> &str {
+        match self {
+            GuaranteeSpec::MinDistance { name, .. } | GuaranteeSpec::KeepOutSphere { name, .. } => {
+                name
+            }
+        }
+    }
+}

@@ -1,0 +1,509 @@
+//! From a scene to a running [`Simulation`].
+
+use super::monitor::{ColliderRef, ContactState, shape_distance};
+use super::output::{Diagnostics, OutputFiles, Recorder};
+use super::{
+    BodyState, Clock, EventLog, Guarantees, MonitorState, OrbitEnv, Part, Physics, Roster, SimBody,
+    StepBudget, Wrench, conv,
+};
+use crate::guarantee::{KeepOutSphere, MinDistance};
+use crate::orbit::constants::MU_EARTH_M3_S2;
+use crate::scene::parts::{PartCollider, Primitive, expand_body};
+use crate::scene::{
+    BodySpec, Environment, GuaranteeSpec, InitFrame, LoadedScene, OrbitSpec, Scene, SceneError,
+};
+use bevy::prelude::*;
+use bevy_rapier3d::rapier::prelude as rp;
+use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
+use std::path::Path;
+
+/// Steps run per `App::update` when advancing a long way.
+pub const STEPS_PER_UPDATE: u64 = 1000;
+
+/// A scene turned into a Bevy app, ready to step.
+pub struct Simulation {
+    /// The Bevy app (world, schedules).
+    pub app: App,
+    /// The scene it was built from.
+    pub scene: Scene,
+    /// Scene file name, for the summary.
+    pub scene_file: String,
+    /// Wall-clock seconds spent stepping.
+    pub wall_s: f64,
+}
+
+fn primitive_shape(p: &Primitive) -> Option<rp::SharedShape> {
+    Some(match p {
+        Primitive::Cuboid { half_m } => {
+            rp::SharedShape::cuboid(half_m.x as f32, half_m.y as f32, half_m.z as f32)
+        }
+        Primitive::Cylinder {
+            radius_m,
+            half_length_m,
+        } => rp::SharedShape::cylinder(*half_length_m as f32, *radius_m as f32),
+        Primitive::Ball { radius_m } => rp::SharedShape::ball(*radius_m as f32),
+        Primitive::ConvexHull { points_m } => {
+            let pts: Vec<_> = points_m.iter().map(|p| conv::v(&p.coords)).collect();
+            rp::SharedShape::convex_hull(&pts)?
+        }
+    })
+}
+
+/// Initial world-frame state of a body (centre of mass), given the reference orbit state.
+fn initial_state(b: &BodySpec, reference: Option<(Vector3<f64>, Vector3<f64>)>) -> BodyState {
+    let i = &b.initial;
+    let pos = Vector3::from(i.pos_m);
+    let vel = Vector3::from(i.vel_m_s);
+    let att_in_frame = i.attitude.to_quat();
+    let omega_body = Vector3::from(i.rate_body_deg_s).map(f64::to_radians);
+    let (pos_w, vel_w, att_w) = match (i.frame, reference) {
+        (InitFrame::Hill, Some((r, v))) => {
+            // Hill axes in the world (ECI-parallel) frame: x radial, y along-track, z normal.
+            let x = r.normalize();
+            let z = r.cross(&v).normalize();
+            let y = z.cross(&x);
+            let c = Matrix3::from_columns(&[x, y, z]);
+            let omega_frame = r.cross(&v) / r.norm_squared();
+            let pos_w = c * pos;
+            let vel_w = c * vel + omega_frame.cross(&pos_w);
+            let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(c));
+            (pos_w, vel_w, rot * att_in_frame)
+        }
+        _ => (pos, vel, att_in_frame),
+    };
+    BodyState {
+        pos_m: pos_w,
+        vel_m_s: vel_w,
+        att: att_w,
+        omega_rad_s: att_w * omega_body,
+    }
+}
+
+/// Principal moments and the rotation body → principal frame (right-handed), f64.
+fn principal(j: &Matrix3<f64>) -> (Vector3<f64>, UnitQuaternion<f64>) {
+    let e = j.symmetric_eigen();
+    let mut vecs = e.eigenvectors;
+    let mut vals = e.eigenvalues;
+    if vecs.determinant() < 0.0 {
+        vecs.swap_columns(1, 2);
+        vals.swap_rows(1, 2);
+    }
+    let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(vecs));
+    (vals, rot)
+}
+
+impl Simulation {
+    /// Builds the app. Geometry checks that need the shapes (overlaps at t = 0) are reported
+    /// against the scene text, like every other scene error.
+    pub fn new(loaded: &LoadedScene) -> Result<Self, SceneError> {
+        let scene = loaded.scene.clone();
+        let mut app = App::new();
+        let dt = scene.dt_s;
+
+        let mut pw = rp::PhysicsWorld::new();
+        pw.gravity = rp::Vector::ZERO;
+        pw.integration_parameters.dt = (dt / f64::from(scene.physics_substeps)) as f32;
+
+        let reference = match &scene.environment {
+            Environment::Orbit {
+                reference,
+                j2,
+                gravity_gradient,
+            } => {
+                let (r, v) = match reference {
+                    OrbitSpec::Elements {
+                        a_m,
+                        e,
+                        i_deg,
+                        raan_deg,
+                        argp_deg,
+                        true_anomaly_deg,
+                    } => crate::orbit::kepler::ClassicalElements {
+                        a_m: *a_m,
+                        e: *e,
+                        i_rad: i_deg.to_radians(),
+                        raan_rad: raan_deg.to_radians(),
+                        argp_rad: argp_deg.to_radians(),
+                        true_anomaly_rad: true_anomaly_deg.to_radians(),
+                    }
+                    .to_state(MU_EARTH_M3_S2),
+                    OrbitSpec::State { r_eci_m, v_eci_m_s } => {
+                        (Vector3::from(*r_eci_m), Vector3::from(*v_eci_m_s))
+                    }
+                };
+                app.insert_resource(OrbitEnv {
+                    reference: crate::orbit::integrate::ReferenceOrbit::from_state(r, v, *j2),
+                    j2: *j2,
+                    gravity_gradient: *gravity_gradient,
+                });
+                Some((r, v))
+            }
+            Environment::FreeSpace => None,
+        };
+
+        let mut roster = Roster::default();
+        let mut contacts = ContactState::default();
+        let mut all_parts: Vec<Vec<PartCollider>> = Vec::new();
+        for (index, b) in scene.bodies.iter().enumerate() {
+            if matches!(b.initial.frame, InitFrame::Hill) && reference.is_none() {
+                return Err(loaded.error_at(
+                    &format!("bodies.{}.initial.frame", b.name),
+                    "frame `Hill` needs an `Orbit` environment",
+                ));
+            }
+            let state = initial_state(b, reference);
+            let com = Vector3::from(b.com_m);
+            let j = b.inertia_kg_m2.matrix();
+            let (moments, frame) = principal(&j);
+            let mprops = rp::MassProperties::with_principal_inertia_frame(
+                conv::v(&com),
+                b.mass_kg as f32,
+                conv::v(&moments),
+                conv::q(&frame),
+            );
+            let colliders = expand_body(b);
+            let has_docking = colliders.iter().any(|c| c.role.is_docking());
+            let rb = rp::RigidBodyBuilder::dynamic()
+                .pose(conv::pose(&state.body_pose(&com)))
+                .linvel(conv::v(&state.vel_m_s))
+                .angvel(conv::v(&state.omega_rad_s))
+                .can_sleep(false)
+                .gyroscopic_forces_enabled(true)
+                .ccd_enabled(has_docking)
+                .additional_mass_properties(mprops)
+                .build();
+            let handle = pw.insert_body(rb);
+            let body_entity = app
+                .world_mut()
+                .spawn((
+                    SimBody {
+                        index,
+                        name: b.name.clone(),
+                        role: b.role,
+                        handle,
+                        mass_kg: b.mass_kg,
+                        inertia_kg_m2: j,
+                        com_body_m: com,
+                    },
+                    state,
+                    Wrench::default(),
+                ))
+                .id();
+            let mut part_entities = Vec::new();
+            for pc in &colliders {
+                let Some(shape) = primitive_shape(&pc.shape) else {
+                    return Err(loaded.error_at(
+                        &format!("bodies.{}.parts.{}", b.name, pc.part),
+                        format!("collider `{}` has a degenerate convex hull", pc.name),
+                    ));
+                };
+                let col = rp::ColliderBuilder::new(shape.clone())
+                    .position(conv::pose(&pc.pose_body))
+                    .density(0.0)
+                    .friction(0.3)
+                    .restitution(0.0)
+                    .build();
+                let ch = pw.insert_collider(col, Some(handle));
+                contacts.colliders.insert(
+                    ch,
+                    ColliderRef {
+                        body: index,
+                        full_name: format!("{}/{}", b.name, pc.name),
+                        docking: pc.role.is_docking(),
+                    },
+                );
+                let e = app
+                    .world_mut()
+                    .spawn(Part {
+                        body: body_entity,
+                        body_index: index,
+                        part: pc.part.clone(),
+                        name: pc.name.clone(),
+                        role: pc.role,
+                        collider: ch,
+                        shape,
+                        pose_body: pc.pose_body,
+                        bound_radius_m: pc.shape.bounding_radius_m(),
+                    })
+                    .id();
+                part_entities.push(e);
+            }
+            roster.bodies.push(body_entity);
+            roster.parts.push(part_entities);
+            roster.names.push(b.name.clone());
+            all_parts.push(colliders);
+        }
+        contacts.touching = vec![false; scene.bodies.len()];
+
+        // Parts of different bodies must not overlap at t = 0 unless marked.
+        let states: Vec<BodyState> = roster
+            .bodies
+            .iter()
+            .map(|e| app.world().get::<BodyState>(*e).expect("state").clone())
+            .collect();
+        for i in 0..all_parts.len() {
+            for j in i + 1..all_parts.len() {
+                let pi = states[i].body_pose(&Vector3::from(scene.bodies[i].com_m));
+                let pj = states[j].body_pose(&Vector3::from(scene.bodies[j].com_m));
+                for (ka, a) in all_parts[i].iter().enumerate() {
+                    for (kb, b) in all_parts[j].iter().enumerate() {
+                        if a.allow_initial_overlap || b.allow_initial_overlap {
+                            continue;
+                        }
+                        let ea = roster.parts[i][ka];
+                        let eb = roster.parts[j][kb];
+                        let sa = app.world().get::<Part>(ea).expect("part").shape.clone();
+                        let sb = app.world().get::<Part>(eb).expect("part").shape.clone();
+                        let d =
+                            shape_distance(&(pi * a.pose_body), &*sa, &(pj * b.pose_body), &*sb);
+                        if d <= 0.0 {
+                            return Err(loaded.error_at(
+                                &format!("bodies.{}.parts.{}", scene.bodies[j].name, b.part),
+                                format!(
+                                    "part `{}/{}` overlaps `{}/{}` at t = 0; move it or set `allow_initial_overlap: true`",
+                                    scene.bodies[j].name, b.name, scene.bodies[i].name, a.name
+                                ),
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+
+        let mut guarantees = Guarantees::default();
+        let idx = |n: &str| {
+            scene
+                .bodies
+                .iter()
+                .position(|b| b.name == n)
+                .expect("validated")
+        };
+        for g in &scene.guarantees {
+            match g {
+                GuaranteeSpec::MinDistance { name, a, b, min_m } => {
+                    guarantees.register(Box::new(MinDistance {
+                        name: name.clone(),
+                        a: idx(a),
+                        b: idx(b),
+                        min_m: *min_m,
+                    }))
+                }
+                GuaranteeSpec::KeepOutSphere {
+                    name,
+                    body,
+                    around,
+                    radius_m,
+                } => guarantees.register(Box::new(KeepOutSphere {
+                    name: name.clone(),
+                    body: idx(body),
+                    around: idx(around),
+                    radius_m: *radius_m,
+                })),
+            }
+        }
+
+        app.insert_resource(Physics {
+            world: pw,
+            substeps: scene.physics_substeps,
+        })
+        .insert_resource(Clock { step: 0, dt_s: dt })
+        .insert_resource(StepBudget(0))
+        .insert_resource(roster)
+        .insert_resource(contacts)
+        .insert_resource(guarantees)
+        .insert_resource(MonitorState::default())
+        .insert_resource(EventLog::default())
+        .insert_resource(Diagnostics::default())
+        .insert_resource(Recorder {
+            every: scene.record_every_steps,
+            files: None,
+            events_written: 0,
+            rows: 0,
+            last_row_step: None,
+            error: None,
+            history: Vec::new(),
+            force_row: false,
+        });
+        super::add_pipeline(&mut app);
+        app.finish();
+        app.cleanup();
+        // The monitor's view of t = 0.
+        {
+            use bevy::ecs::system::RunSystemOnce;
+            let w = app.world_mut();
+            w.run_system_once(super::monitor::distances)
+                .expect("monitor resources exist");
+            w.run_system_once(super::check_guarantees)
+                .expect("monitor resources exist");
+        }
+        Ok(Self {
+            app,
+            scene,
+            scene_file: loaded.file.clone(),
+            wall_s: 0.0,
+        })
+    }
+
+    /// Starts recording into `dir` (temporary names until [`Simulation::finish`]); writes the
+    /// header and the t = 0 row.
+    pub fn record_to(&mut self, dir: &Path) -> std::io::Result<()> {
+        let files = OutputFiles::create(dir)?;
+        self.app.world_mut().resource_mut::<Recorder>().files = Some(files);
+        super::output::write_header(self.app.world_mut());
+        super::output::record_now(self.app.world_mut());
+        Ok(())
+    }
+
+    /// Advances exactly `n` fixed steps.
+    pub fn step(&mut self, n: u64) {
+        let t0 = std::time::Instant::now();
+        let mut left = n;
+        while left > 0 {
+            let k = left.min(STEPS_PER_UPDATE);
+            self.app.world_mut().resource_mut::<StepBudget>().0 = k;
+            self.app.update();
+            left -= k;
+        }
+        self.wall_s += t0.elapsed().as_secs_f64();
+    }
+
+    /// Steps needed to cover `duration_s` (rounded to the nearest step).
+    pub fn steps_for(&self, duration_s: f64) -> u64 {
+        (duration_s / self.scene.dt_s).round().max(0.0) as u64
+    }
+
+    /// Simulated time, s.
+    pub fn t_s(&self) -> f64 {
+        self.app.world().resource::<Clock>().t_s()
+    }
+
+    /// Completed steps.
+    pub fn steps(&self) -> u64 {
+        self.app.world().resource::<Clock>().step
+    }
+
+    /// The f64 state of a body by name.
+    pub fn body(&self, name: &str) -> Option<BodyState> {
+        let roster = self.app.world().resource::<Roster>();
+        let i = roster.names.iter().position(|n| n == name)?;
+        self.app.world().get::<BodyState>(roster.bodies[i]).cloned()
+    }
+
+    /// The reference orbit's ECI state (r, v), if the scene is in orbit.
+    pub fn reference_state(&self) -> Option<(Vector3<f64>, Vector3<f64>)> {
+        self.app
+            .world()
+            .get_resource::<OrbitEnv>()
+            .map(|e| e.reference.state())
+    }
+
+    /// The monitor's results.
+    pub fn monitor(&self) -> &MonitorState {
+        self.app.world().resource::<MonitorState>()
+    }
+
+    /// Contacts so far.
+    pub fn contacts(&self) -> &ContactState {
+        self.app.world().resource::<ContactState>()
+    }
+
+    /// Guarantees and their status.
+    pub fn guarantees(&self) -> &Guarantees {
+        self.app.world().resource::<Guarantees>()
+    }
+
+    /// Every event raised so far (written or not).
+    pub fn events(&self) -> Vec<super::Event> {
+        let w = self.app.world();
+        let mut v = w.resource::<Recorder>().history.clone();
+        v.extend(w.resource::<EventLog>().pending.iter().cloned());
+        v
+    }
+
+    /// The run summary (the content of `summary.json`).
+    pub fn summary(&self) -> serde_json::Value {
+        let w = self.app.world();
+        let mon = w.resource::<MonitorState>();
+        let cs = w.resource::<ContactState>();
+        let g = w.resource::<Guarantees>();
+        let roster = w.resource::<Roster>();
+        let rec = w.resource::<Recorder>();
+        let steps = self.steps();
+        let overall = mon
+            .min_per_pair
+            .iter()
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(d, parts, t)| {
+                serde_json::json!({"value_m": d, "parts": [parts.0, parts.1], "t_s": t})
+            });
+        let pairs: Vec<_> = mon
+            .min_per_pair
+            .iter()
+            .zip(&mon.pairs)
+            .map(|((d, parts, t), p)| {
+                serde_json::json!({"a": roster.names[p.a], "b": roster.names[p.b],
+                    "min_distance_m": d, "parts": [parts.0, parts.1], "t_s": t})
+            })
+            .collect();
+        let finals: serde_json::Map<String, serde_json::Value> = roster
+            .bodies
+            .iter()
+            .zip(&roster.names)
+            .map(|(e, n)| {
+                let s = w.get::<BodyState>(*e).expect("state");
+                let q = s.att.quaternion();
+                (
+                    n.clone(),
+                    serde_json::json!({
+                        "pos_m": [s.pos_m.x, s.pos_m.y, s.pos_m.z],
+                        "vel_m_s": [s.vel_m_s.x, s.vel_m_s.y, s.vel_m_s.z],
+                        "att_wxyz": [q.w, q.i, q.j, q.k],
+                        "omega_rad_s": [s.omega_rad_s.x, s.omega_rad_s.y, s.omega_rad_s.z],
+                    }),
+                )
+            })
+            .collect();
+        let collisions: Vec<_> = cs
+            .collisions
+            .iter()
+            .map(|(t, a, b)| serde_json::json!({"t_s": t, "a": a, "b": b}))
+            .collect();
+        serde_json::json!({
+            "scene": self.scene.name,
+            "scene_file": self.scene_file,
+            "frame": "world: inertial axes, origin on the reference orbit; positions are centres of mass",
+            "dt_s": self.scene.dt_s,
+            "steps": steps,
+            "simulated_s": self.t_s(),
+            "wall_s": self.wall_s,
+            "steps_per_s": if self.wall_s > 0.0 { steps as f64 / self.wall_s } else { 0.0 },
+            "rows": rec.rows,
+            "events": rec.history.len(),
+            "min_distance": overall,
+            "pairs": pairs,
+            "first_contact_s": cs.first_contact_s,
+            "first_collision_s": cs.first_collision_s,
+            "collisions": collisions,
+            "contact_per_part": cs.per_part,
+            "guarantees": g.status,
+            "final_states": finals,
+            "monitor": {"exact_queries": mon.exact_queries, "pruned_pairs": mon.pruned_pairs},
+        })
+    }
+
+    /// Writes the last row, the summary, and renames the files into place.
+    pub fn finish(mut self) -> std::io::Result<serde_json::Value> {
+        super::output::record_now(self.app.world_mut());
+        let summary = self.summary();
+        let mut rec = self.app.world_mut().resource_mut::<Recorder>();
+        let err = rec.error.take();
+        if let Some(files) = rec.files.take() {
+            if let Some(e) = err {
+                files.abandon();
+                return Err(std::io::Error::other(e));
+            }
+            files.finish(&summary)?;
+        }
+        Ok(summary)
+    }
+}

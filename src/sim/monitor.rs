@@ -1,0 +1,291 @@
+//! The safety monitor: every step, the exact minimum distance between every pair of bodies'
+//! full geometry (parry, with bounding-sphere pruning), the closest part pair, and rapier's
+//! contacts named by part — docking contact (both parts docking parts) or collision.
+
+use super::{BodyState, Clock, EventLog, MonitorState, Part, Roster, SimBody, conv};
+use crate::guarantee::{BodyView, PairDistance};
+use bevy::prelude::*;
+use bevy_rapier3d::parry::query;
+use bevy_rapier3d::rapier::math::Pose;
+use bevy_rapier3d::rapier::prelude as rp;
+use nalgebra::Isometry3;
+use std::collections::{BTreeMap, HashMap};
+
+/// Who a collider is.
+#[derive(Debug, Clone)]
+pub struct ColliderRef {
+    /// Body index.
+    pub body: usize,
+    /// `body/collider` name.
+    pub full_name: String,
+    /// Part role is docking.
+    pub docking: bool,
+}
+
+/// A contact in progress.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ActiveContact {
+    /// Start time, s.
+    pub start_s: f64,
+    /// Docking contact (both parts docking parts) or collision.
+    pub docking: bool,
+    /// Peak normal force, N.
+    pub peak_force_n: f64,
+    /// Accumulated normal impulse, N·s.
+    pub impulse_ns: f64,
+}
+
+/// Per-part contact totals over the run.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct PartContactStats {
+    /// Peak normal contact force on this part, N.
+    pub peak_force_n: f64,
+    /// Total normal impulse on this part, N·s.
+    pub total_impulse_ns: f64,
+}
+
+/// Contact bookkeeping.
+#[derive(Resource, Debug, Default)]
+pub struct ContactState {
+    /// Collider → who.
+    pub colliders: HashMap<rp::ColliderHandle, ColliderRef>,
+    /// Per body index: in contact with another body this step.
+    pub touching: Vec<bool>,
+    /// Contacts in progress, keyed by the ordered pair of `body/collider` names.
+    pub active: BTreeMap<(String, String), ActiveContact>,
+    /// Totals per `body/collider`.
+    pub per_part: BTreeMap<String, PartContactStats>,
+    /// First contact of any kind, s.
+    pub first_contact_s: Option<f64>,
+    /// First collision (a contact that is not a docking contact), s.
+    pub first_collision_s: Option<f64>,
+    /// Every collision start: (t_s, part, part).
+    pub collisions: Vec<(f64, String, String)>,
+}
+
+impl ContactState {
+    /// Marks the bodies with an active contact against another body (called right after the
+    /// rapier step, before the f64 state update).
+    pub fn refresh_touching(&mut self, world: &rp::PhysicsWorld) {
+        self.touching.iter_mut().for_each(|t| *t = false);
+        for pair in world.narrow_phase.contact_pairs() {
+            if !pair.has_any_active_contact() {
+                continue;
+            }
+            let (Some(a), Some(b)) = (
+                self.colliders.get(&pair.collider1),
+                self.colliders.get(&pair.collider2),
+            ) else {
+                continue;
+            };
+            if a.body != b.body {
+                let (ia, ib) = (a.body, b.body);
+                self.touching[ia] = true;
+                self.touching[ib] = true;
+            }
+        }
+    }
+}
+
+/// World pose of every part, per body (f64).
+fn part_poses(
+    roster: &Roster,
+    bodies: &Query<(&SimBody, &BodyState)>,
+    parts: &Query<&Part>,
+) -> Vec<Vec<(Isometry3<f64>, f64)>> {
+    roster
+        .bodies
+        .iter()
+        .zip(&roster.parts)
+        .map(|(be, pes)| {
+            let (b, s) = bodies.get(*be).expect("roster body");
+            let body_pose = s.body_pose(&b.com_body_m);
+            pes.iter()
+                .map(|pe| {
+                    let p = parts.get(*pe).expect("roster part");
+                    (body_pose * p.pose_body, p.bound_radius_m)
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Exact minimum distance between two shapes at f64 poses: the relative pose is formed in f64
+/// so that parry's f32 works with small numbers whatever the world coordinates.
+pub fn shape_distance(
+    pose_a: &Isometry3<f64>,
+    a: &dyn rp::Shape,
+    pose_b: &Isometry3<f64>,
+    b: &dyn rp::Shape,
+) -> f64 {
+    let rel = pose_a.inv_mul(pose_b);
+    query::distance(&Pose::IDENTITY, a, &conv::pose(&rel), b).unwrap_or(f64::NAN as f32) as f64
+}
+
+/// Monitor system: full-geometry distances for every body pair.
+pub fn distances(
+    roster: Res<Roster>,
+    clock: Res<Clock>,
+    bodies: Query<(&SimBody, &BodyState)>,
+    parts: Query<&Part>,
+    mut mon: ResMut<MonitorState>,
+) {
+    let t = clock.t_s();
+    mon.bodies.clear();
+    for be in &roster.bodies {
+        let (b, s) = bodies.get(*be).expect("roster body");
+        mon.bodies.push(BodyView {
+            name: b.name.clone(),
+            pos_m: s.pos_m,
+            vel_m_s: s.vel_m_s,
+            att: s.att,
+            omega_rad_s: s.omega_rad_s,
+        });
+    }
+    let poses = part_poses(&roster, &bodies, &parts);
+    let n = roster.bodies.len();
+    let mut pairs = Vec::with_capacity(n * (n - 1) / 2);
+    let mut candidates: Vec<(f64, usize, usize)> = Vec::new();
+    let (mut exact, mut pruned) = (0u64, 0u64);
+    for i in 0..n {
+        for j in i + 1..n {
+            candidates.clear();
+            for (pi, (pa, ra)) in poses[i].iter().enumerate() {
+                for (pj, (pb, rb)) in poses[j].iter().enumerate() {
+                    let lb = (pa.translation.vector - pb.translation.vector).norm() - ra - rb;
+                    candidates.push((lb, pi, pj));
+                }
+            }
+            candidates.sort_by(|x, y| x.0.total_cmp(&y.0));
+            let mut best = (f64::INFINITY, 0, 0);
+            for (k, &(lb, pi, pj)) in candidates.iter().enumerate() {
+                if lb >= best.0 {
+                    pruned += (candidates.len() - k) as u64;
+                    break;
+                }
+                let a = parts.get(roster.parts[i][pi]).expect("part");
+                let b = parts.get(roster.parts[j][pj]).expect("part");
+                let d = shape_distance(&poses[i][pi].0, &*a.shape, &poses[j][pj].0, &*b.shape);
+                exact += 1;
+                if d < best.0 {
+                    best = (d, pi, pj);
+                }
+            }
+            let a = parts.get(roster.parts[i][best.1]).expect("part");
+            let b = parts.get(roster.parts[j][best.2]).expect("part");
+            pairs.push(PairDistance {
+                a: i,
+                b: j,
+                distance_m: best.0,
+                parts: (
+                    format!("{}/{}", roster.names[i], a.name),
+                    format!("{}/{}", roster.names[j], b.name),
+                ),
+            });
+        }
+    }
+    mon.exact_queries += exact;
+    mon.pruned_pairs += pruned;
+    if mon.min_per_pair.len() != pairs.len() {
+        mon.min_per_pair = pairs
+            .iter()
+            .map(|p| (f64::INFINITY, p.parts.clone(), t))
+            .collect();
+    }
+    for (k, p) in pairs.iter().enumerate() {
+        if p.distance_m < mon.min_per_pair[k].0 {
+            mon.min_per_pair[k] = (p.distance_m, p.parts.clone(), t);
+        }
+    }
+    mon.pairs = pairs;
+}
+
+/// Monitor system: rapier's contacts between bodies, named by part; start/end events, peak
+/// force and impulse per part, docking contact vs collision.
+pub fn contacts(
+    phys: Res<super::Physics>,
+    clock: Res<Clock>,
+    mut cs: ResMut<ContactState>,
+    mut log: ResMut<EventLog>,
+) {
+    let t = clock.t_s();
+    let dt = clock.dt_s;
+    let mut now: BTreeMap<(String, String), (bool, f64)> = BTreeMap::new();
+    for pair in phys.world.narrow_phase.contact_pairs() {
+        if !pair.has_any_active_contact() {
+            continue;
+        }
+        let (Some(a), Some(b)) = (
+            cs.colliders.get(&pair.collider1),
+            cs.colliders.get(&pair.collider2),
+        ) else {
+            continue;
+        };
+        if a.body == b.body {
+            continue;
+        }
+        let impulse: f64 = pair
+            .manifolds
+            .iter()
+            .flat_map(|m| m.points.iter())
+            .map(|p| p.data.impulse as f64)
+            .sum();
+        let docking = a.docking && b.docking;
+        let key = if (a.body, &a.full_name) <= (b.body, &b.full_name) {
+            (a.full_name.clone(), b.full_name.clone())
+        } else {
+            (b.full_name.clone(), a.full_name.clone())
+        };
+        let e = now.entry(key).or_insert((docking, 0.0));
+        e.1 += impulse;
+    }
+    // Ended contacts.
+    let ended: Vec<(String, String)> = cs
+        .active
+        .keys()
+        .filter(|k| !now.contains_key(*k))
+        .cloned()
+        .collect();
+    for k in ended {
+        let c = cs.active.remove(&k).expect("active");
+        log.push(
+            t,
+            "contact_end",
+            serde_json::json!({"a": k.0, "b": k.1, "docking": c.docking,
+                "duration_s": t - c.start_s, "peak_force_n": c.peak_force_n, "impulse_ns": c.impulse_ns}),
+        );
+    }
+    for (k, (docking, impulse)) in now {
+        let force = impulse / dt;
+        if !cs.active.contains_key(&k) {
+            cs.first_contact_s.get_or_insert(t);
+            log.push(
+                t,
+                "contact_start",
+                serde_json::json!({"a": k.0, "b": k.1, "docking": docking}),
+            );
+            if !docking {
+                cs.first_collision_s.get_or_insert(t);
+                cs.collisions.push((t, k.0.clone(), k.1.clone()));
+                log.push(t, "collision", serde_json::json!({"a": k.0, "b": k.1}));
+            }
+            cs.active.insert(
+                k.clone(),
+                ActiveContact {
+                    start_s: t,
+                    docking,
+                    peak_force_n: 0.0,
+                    impulse_ns: 0.0,
+                },
+            );
+        }
+        let c = cs.active.get_mut(&k).expect("active");
+        c.peak_force_n = c.peak_force_n.max(force);
+        c.impulse_ns += impulse;
+        for name in [&k.0, &k.1] {
+            let s = cs.per_part.entry(name.clone()).or_default();
+            s.peak_force_n = s.peak_force_n.max(force);
+            s.total_impulse_ns += impulse;
+        }
+    }
+}

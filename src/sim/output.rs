@@ -1,0 +1,288 @@
+//! The output contract: `trajectory.csv`, `events.jsonl`, `summary.json`.
+//!
+//! All three are written under a temporary name (`NAME.partial`) and renamed when the run
+//! finishes, so a crash never leaves a file that looks whole. Numbers are printed in Rust's
+//! shortest round-trip form, so the same run gives byte-identical files.
+
+use super::{BodyState, Clock, EventLog, Guarantees, MonitorState, Roster, SimBody};
+use bevy::prelude::*;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Extra per-step columns published by controllers and mechanisms (name with unit suffix).
+#[derive(Resource, Debug, Default, Clone)]
+pub struct Diagnostics {
+    /// Column names, e.g. `ctrl.h` or `dock.gap_m`.
+    pub names: Vec<String>,
+    /// Current values, same order.
+    pub values: Vec<f64>,
+}
+
+impl Diagnostics {
+    /// Registers a column and returns its index (registering twice returns the same index).
+    pub fn column(&mut self, name: &str) -> usize {
+        if let Some(i) = self.names.iter().position(|n| n == name) {
+            return i;
+        }
+        self.names.push(name.to_string());
+        self.values.push(f64::NAN);
+        self.names.len() - 1
+    }
+}
+
+/// Open output files of a run.
+pub struct OutputFiles {
+    /// Output directory.
+    pub dir: PathBuf,
+    traj: BufWriter<File>,
+    events: BufWriter<File>,
+}
+
+/// The recorder resource.
+#[derive(Resource)]
+pub struct Recorder {
+    /// Write a row every this many steps.
+    pub every: u32,
+    /// Files, when recording to disk.
+    pub files: Option<OutputFiles>,
+    /// Events already written.
+    pub events_written: usize,
+    /// Rows written.
+    pub rows: u64,
+    /// Step of the last row written.
+    pub last_row_step: Option<u64>,
+    /// First I/O error, if any (reported when the run finishes).
+    pub error: Option<String>,
+    /// All events of the run (kept for tests and the summary).
+    pub history: Vec<super::Event>,
+    /// Write a row at the next record call whatever the step.
+    pub force_row: bool,
+}
+
+const STATE_COLS: [&str; 13] = [
+    "px_m", "py_m", "pz_m", "vx_m_s", "vy_m_s", "vz_m_s", "qw", "qx", "qy", "qz", "wx_rad_s",
+    "wy_rad_s", "wz_rad_s",
+];
+
+fn partial(dir: &Path, name: &str) -> PathBuf {
+    dir.join(format!("{name}.partial"))
+}
+
+impl OutputFiles {
+    /// Creates the directory and the temporary files.
+    pub fn create(dir: &Path) -> std::io::Result<Self> {
+        std::fs::create_dir_all(dir)?;
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            traj: BufWriter::new(File::create(partial(dir, "trajectory.csv"))?),
+            events: BufWriter::new(File::create(partial(dir, "events.jsonl"))?),
+        })
+    }
+
+    /// Flushes, writes the summary and renames the three files into place.
+    pub fn finish(mut self, summary: &serde_json::Value) -> std::io::Result<()> {
+        self.traj.flush()?;
+        self.events.flush()?;
+        drop(self.traj);
+        drop(self.events);
+        let s = serde_json::to_string_pretty(summary).map_err(std::io::Error::other)?;
+        std::fs::write(partial(&self.dir, "summary.json"), s + "\n")?;
+        for n in ["trajectory.csv", "events.jsonl", "summary.json"] {
+            std::fs::rename(partial(&self.dir, n), self.dir.join(n))?;
+        }
+        Ok(())
+    }
+
+    /// Removes the temporary files (after a failure).
+    pub fn abandon(self) {
+        let dir = self.dir.clone();
+        drop(self);
+        for n in ["trajectory.csv", "events.jsonl", "summary.json"] {
+            let _ = std::fs::remove_file(partial(&dir, n));
+        }
+    }
+}
+
+/// The CSV header for the current roster, guarantees and diagnostics.
+pub fn header(roster: &Roster, g: &Guarantees, diag: &Diagnostics) -> String {
+    let mut cols = vec!["t_s".to_string()];
+    for name in &roster.names {
+        for c in STATE_COLS {
+            cols.push(format!("{name}.{c}"));
+        }
+    }
+    cols.push("min_distance_m".into());
+    cols.push("closest_parts".into());
+    if roster.names.len() > 2 {
+        for i in 0..roster.names.len() {
+            for j in i + 1..roster.names.len() {
+                cols.push(format!(
+                    "distance.{}.{}_m",
+                    roster.names[i], roster.names[j]
+                ));
+            }
+        }
+    }
+    for s in &g.status {
+        cols.push(format!("guarantee.{}.margin_{}", s.name, s.unit));
+    }
+    cols.extend(diag.names.iter().cloned());
+    cols.join(",")
+}
+
+/// Writes one row to `w`.
+fn write_row(
+    w: &mut impl Write,
+    t_s: f64,
+    states: &[(&SimBody, &BodyState)],
+    mon: &MonitorState,
+    g: &Guarantees,
+    diag: &Diagnostics,
+) -> std::io::Result<()> {
+    write!(w, "{t_s}")?;
+    for (_, s) in states {
+        let q = s.att.quaternion();
+        for v in [
+            s.pos_m.x,
+            s.pos_m.y,
+            s.pos_m.z,
+            s.vel_m_s.x,
+            s.vel_m_s.y,
+            s.vel_m_s.z,
+            q.w,
+            q.i,
+            q.j,
+            q.k,
+            s.omega_rad_s.x,
+            s.omega_rad_s.y,
+            s.omega_rad_s.z,
+        ] {
+            write!(w, ",{v}")?;
+        }
+    }
+    let best = mon
+        .pairs
+        .iter()
+        .min_by(|a, b| a.distance_m.total_cmp(&b.distance_m));
+    match best {
+        Some(p) => write!(w, ",{},{}|{}", p.distance_m, p.parts.0, p.parts.1)?,
+        None => write!(w, ",,")?,
+    }
+    if states.len() > 2 {
+        for p in &mon.pairs {
+            write!(w, ",{}", p.distance_m)?;
+        }
+    }
+    for s in &g.status {
+        write!(w, ",{}", s.last_margin)?;
+    }
+    for v in &diag.values {
+        write!(w, ",{v}")?;
+    }
+    writeln!(w)
+}
+
+/// Writes the current state as a row (and pending events) now, whatever the step.
+pub fn record_now(world: &mut World) {
+    use bevy::ecs::system::RunSystemOnce;
+    world.resource_mut::<Recorder>().force_row = true;
+    world
+        .run_system_once(record)
+        .expect("the record system's resources exist");
+}
+
+#[allow(clippy::too_many_arguments)]
+fn write_step(
+    rec: &mut Recorder,
+    step: u64,
+    t: f64,
+    states: &[(&SimBody, &BodyState)],
+    mon: &MonitorState,
+    g: &Guarantees,
+    diag: &Diagnostics,
+    log: &mut EventLog,
+) {
+    let pending: Vec<super::Event> = std::mem::take(&mut log.pending);
+    if let Some(files) = rec.files.as_mut() {
+        for e in &pending {
+            let line = serde_json::to_string(e).expect("event serialises");
+            if let Err(err) = writeln!(files.events, "{line}") {
+                rec.error.get_or_insert(err.to_string());
+            }
+        }
+    }
+    rec.history.extend(pending);
+    rec.events_written = rec.history.len();
+    if rec.last_row_step == Some(step) {
+        return;
+    }
+    if let Some(files) = rec.files.as_mut()
+        && let Err(err) = write_row(&mut files.traj, t, states, mon, g, diag)
+    {
+        rec.error.get_or_insert(err.to_string());
+    }
+    rec.rows += 1;
+    rec.last_row_step = Some(step);
+}
+
+/// Record system: a row every `every` steps, events as they happen.
+pub fn record(
+    clock: Res<Clock>,
+    roster: Res<Roster>,
+    bodies: Query<(&SimBody, &BodyState)>,
+    mon: Res<MonitorState>,
+    g: Res<Guarantees>,
+    diag: Res<Diagnostics>,
+    mut log: ResMut<EventLog>,
+    mut rec: ResMut<Recorder>,
+) {
+    let rec = &mut *rec;
+    let due = clock.step % u64::from(rec.every) == 0 || rec.force_row;
+    rec.force_row = false;
+    if !due {
+        if !log.pending.is_empty() {
+            let pending: Vec<super::Event> = std::mem::take(&mut log.pending);
+            if let Some(files) = rec.files.as_mut() {
+                for e in &pending {
+                    let line = serde_json::to_string(e).expect("event serialises");
+                    if let Err(err) = writeln!(files.events, "{line}") {
+                        rec.error.get_or_insert(err.to_string());
+                    }
+                }
+            }
+            rec.history.extend(pending);
+        }
+        return;
+    }
+    let states: Vec<(&SimBody, &BodyState)> = roster
+        .bodies
+        .iter()
+        .map(|e| bodies.get(*e).expect("roster body"))
+        .collect();
+    write_step(
+        rec,
+        clock.step,
+        clock.t_s(),
+        &states,
+        &mon,
+        &g,
+        &diag,
+        &mut log,
+    );
+}
+
+/// Writes the header line (called once, when recording starts).
+pub fn write_header(world: &mut World) {
+    let h = header(
+        world.resource::<Roster>(),
+        world.resource::<Guarantees>(),
+        world.resource::<Diagnostics>(),
+    );
+    let mut rec = world.resource_mut::<Recorder>();
+    if let Some(files) = rec.files.as_mut()
+        && let Err(e) = writeln!(files.traj, "{h}")
+    {
+        rec.error.get_or_insert(e.to_string());
+    }
+}
