@@ -184,6 +184,7 @@ impl Simulation {
                         mass_kg: b.mass_kg,
                         inertia_kg_m2: j,
                         com_body_m: com,
+                        inertia_inv: j.try_inverse().expect("validated positive definite"),
                     },
                     state,
                     Wrench::default(),

@@ -69,7 +69,7 @@ impl ContactState {
     pub fn refresh_touching(&mut self, world: &rp::PhysicsWorld) {
         self.touching.iter_mut().for_each(|t| *t = false);
         for pair in world.narrow_phase.contact_pairs() {
-            if !pair.has_any_active_contact() {
+            if !touching(pair) {
                 continue;
             }
             let (Some(a), Some(b)) = (
@@ -85,6 +85,18 @@ impl ContactState {
             }
         }
     }
+}
+
+/// A contact pair counts as touching when a contact point is at zero or negative distance or
+/// carries a normal impulse (rapier also keeps speculative points within its prediction
+/// distance: those are not contacts).
+fn touching(pair: &rp::ContactPair) -> bool {
+    pair.has_any_active_contact()
+        && pair
+            .manifolds
+            .iter()
+            .flat_map(|m| m.points.iter())
+            .any(|p| p.dist <= 0.0 || p.data.impulse > 0.0)
 }
 
 /// World pose of every part, per body (f64).
@@ -212,7 +224,7 @@ pub fn contacts(
     let dt = clock.dt_s;
     let mut now: BTreeMap<(String, String), (bool, f64)> = BTreeMap::new();
     for pair in phys.world.narrow_phase.contact_pairs() {
-        if !pair.has_any_active_contact() {
+        if !touching(pair) {
             continue;
         }
         let (Some(a), Some(b)) = (
