@@ -235,6 +235,7 @@ impl Simulation {
             all_parts.push(colliders);
         }
         contacts.touching = vec![false; scene.bodies.len()];
+        contacts.body_impulse = vec![Vector3::zeros(); scene.bodies.len()];
 
         // Parts of different bodies must not overlap at t = 0 unless marked.
         let states: Vec<BodyState> = roster

@@ -395,9 +395,15 @@ fn physics_step(
             let att = conv::naq(pose.rotation);
             s.att = att;
             s.pos_m = conv::na(pose.translation) + att * b.com_body_m;
-            s.vel_m_s = conv::na(rb.linvel());
+            let v_new = conv::na(rb.linvel());
+            // The contact (and joint) impulse on this body: its momentum change less what the
+            // applied forces gave it over the step.
+            contact.body_impulse[b.index] =
+                (v_new - s.vel_m_s) * b.mass_kg - (w.force_n + w.gravity_n) * dt;
+            s.vel_m_s = v_new;
             s.omega_rad_s = conv::na(rb.angvel());
         } else {
+            contact.body_impulse[b.index] = Vector3::zeros();
             let a_g0 = w.gravity_n / b.mass_kg;
             let a_c = w.force_n / b.mass_kg;
             let v0 = s.vel_m_s;

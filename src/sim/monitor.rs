@@ -40,8 +40,10 @@ pub struct ActiveContact {
 pub struct PartContactStats {
     /// Peak normal contact force on this part, N.
     pub peak_force_n: f64,
-    /// Total normal impulse on this part, N·s.
+    /// Sum over steps of the magnitude of the contact impulse on this part, N·s.
     pub total_impulse_ns: f64,
+    /// Net contact impulse on this part (vector sum), world frame, N·s.
+    pub net_impulse_ns: [f64; 3],
 }
 
 /// Contact bookkeeping.
@@ -51,6 +53,9 @@ pub struct ContactState {
     pub colliders: HashMap<rp::ColliderHandle, ColliderRef>,
     /// Per body index: in contact with another body this step.
     pub touching: Vec<bool>,
+    /// Per body index: contact impulse received this step (momentum change less the applied
+    /// forces' impulse), world frame, N·s.
+    pub body_impulse: Vec<nalgebra::Vector3<f64>>,
     /// Contacts in progress, keyed by the ordered pair of `body/collider` names.
     pub active: BTreeMap<(String, String), ActiveContact>,
     /// Totals per `body/collider`.
@@ -214,6 +219,11 @@ pub fn distances(
 
 /// Monitor system: rapier's contacts between bodies, named by part; start/end events, peak
 /// force and impulse per part, docking contact vs collision.
+///
+/// The impulse a body received is measured from its momentum (see `physics_step`), which is
+/// exact for the step rapier took; rapier's per-point normal impulses (which also carry its
+/// position-correction bias) only split it among the part pairs touching that body. Each pair's
+/// impulse is the mean of the two bodies' attributions (equal when the pair is the only contact).
 pub fn contacts(
     phys: Res<super::Physics>,
     clock: Res<Clock>,
@@ -222,7 +232,8 @@ pub fn contacts(
 ) {
     let t = clock.t_s();
     let dt = clock.dt_s;
-    let mut now: BTreeMap<(String, String), (bool, f64)> = BTreeMap::new();
+    // (pair key) → (docking, body a, body b, rapier's raw normal impulse)
+    let mut now: BTreeMap<(String, String), (bool, usize, usize, f64)> = BTreeMap::new();
     for pair in phys.world.narrow_phase.contact_pairs() {
         if !touching(pair) {
             continue;
@@ -236,21 +247,33 @@ pub fn contacts(
         if a.body == b.body {
             continue;
         }
-        let impulse: f64 = pair
+        let raw: f64 = pair
             .manifolds
             .iter()
             .flat_map(|m| m.points.iter())
-            .map(|p| p.data.impulse as f64)
+            .map(|p| p.data.impulse.max(0.0) as f64)
             .sum();
         let docking = a.docking && b.docking;
-        let key = if (a.body, &a.full_name) <= (b.body, &b.full_name) {
-            (a.full_name.clone(), b.full_name.clone())
+        let (key, ba, bb) = if (a.body, &a.full_name) <= (b.body, &b.full_name) {
+            ((a.full_name.clone(), b.full_name.clone()), a.body, b.body)
         } else {
-            (b.full_name.clone(), a.full_name.clone())
+            ((b.full_name.clone(), a.full_name.clone()), b.body, a.body)
         };
-        let e = now.entry(key).or_insert((docking, 0.0));
-        e.1 += impulse;
+        let e = now.entry(key).or_insert((docking, ba, bb, 0.0));
+        e.3 += raw;
     }
+    let mut raw_per_body = vec![0.0; cs.body_impulse.len()];
+    for (_, ba, bb, raw) in now.values() {
+        raw_per_body[*ba] += raw;
+        raw_per_body[*bb] += raw;
+    }
+    let share = |body: usize, raw: f64, cs: &ContactState| {
+        if raw_per_body[body] > 0.0 {
+            cs.body_impulse[body].norm() * raw / raw_per_body[body]
+        } else {
+            0.0
+        }
+    };
     // Ended contacts.
     let ended: Vec<(String, String)> = cs
         .active
@@ -267,7 +290,8 @@ pub fn contacts(
                 "duration_s": t - c.start_s, "peak_force_n": c.peak_force_n, "impulse_ns": c.impulse_ns}),
         );
     }
-    for (k, (docking, impulse)) in now {
+    for (k, (docking, ba, bb, raw)) in now {
+        let impulse = 0.5 * (share(ba, raw, &cs) + share(bb, raw, &cs));
         let force = impulse / dt;
         if !cs.active.contains_key(&k) {
             cs.first_contact_s.get_or_insert(t);
@@ -294,10 +318,18 @@ pub fn contacts(
         let c = cs.active.get_mut(&k).expect("active");
         c.peak_force_n = c.peak_force_n.max(force);
         c.impulse_ns += impulse;
-        for name in [&k.0, &k.1] {
+        for (name, body) in [(&k.0, ba), (&k.1, bb)] {
+            let vec = if raw_per_body[body] > 0.0 {
+                cs.body_impulse[body] * (raw / raw_per_body[body])
+            } else {
+                nalgebra::Vector3::zeros()
+            };
             let s = cs.per_part.entry(name.clone()).or_default();
             s.peak_force_n = s.peak_force_n.max(force);
             s.total_impulse_ns += impulse;
+            for (n, v) in s.net_impulse_ns.iter_mut().zip(vec.iter()) {
+                *n += v;
+            }
         }
     }
 }
