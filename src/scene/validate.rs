@@ -82,7 +82,7 @@ pub fn validate(s: &Scene) -> Check {
     for (i, b) in s.bodies.iter().enumerate() {
         if s.bodies[..i].iter().any(|o| o.name == b.name) {
             return fail(
-                format!("bodies.{}.name", b.name),
+                format!("bodies.{i}.name"),
                 format!("duplicate body name `{}`", b.name),
             );
         }
@@ -186,7 +186,7 @@ fn validate_body(b: &BodySpec) -> Check {
     for (i, port) in b.ports.iter().enumerate() {
         let pp = format!("{p}.ports.{}", port.name);
         if b.ports[..i].iter().any(|o| o.name == port.name) {
-            return fail(format!("{pp}.name"), "duplicate port name");
+            return fail(format!("{p}.ports.{i}.name"), "duplicate port name");
         }
         finite3(&format!("{pp}.pos_m"), &port.pos_m)?;
         let n = nalgebra::Vector3::from(port.axis).norm();
@@ -206,7 +206,7 @@ fn validate_body(b: &BodySpec) -> Check {
             );
         }
         if b.parts[..i].iter().any(|o| o.name() == part.name()) {
-            return fail(format!("{pp}.name"), "duplicate part name");
+            return fail(format!("{p}.parts.{i}.name"), "duplicate part name");
         }
         validate_part(&pp, b, part)?;
     }
