@@ -32,8 +32,10 @@ pub struct PairDistance {
     pub b: usize,
     /// Minimum distance between any part of `a` and any part of `b`, m (0 if touching).
     pub distance_m: f64,
-    /// Collider names of the closest pair: (`a`'s, `b`'s).
-    pub parts: (String, String),
+    /// Index (in scene order of colliders) of `a`'s part of the closest pair.
+    pub part_a: usize,
+    /// Index of `b`'s part of the closest pair.
+    pub part_b: usize,
 }
 
 /// What a guarantee may look at.

@@ -31,8 +31,10 @@ fn distance(
     );
     let loaded = load_scene_str(&text, "monitor", &[]).unwrap_or_else(|e| panic!("{e}"));
     let sim = Simulation::new(&loaded).unwrap_or_else(|e| panic!("{e}"));
-    let p = &sim.monitor().pairs[0];
-    (p.distance_m, p.parts.0.clone(), p.parts.1.clone())
+    let mon = sim.monitor();
+    let p = &mon.pairs[0];
+    let (a, b) = mon.pair_names(p);
+    (p.distance_m, a.to_string(), b.to_string())
 }
 
 const TOL: f64 = 1e-5;

@@ -549,7 +549,7 @@ mod tests {
     fn locate_by_name_and_index() {
         let (s, e) = locate(T, "bodies.b.mass_kg").unwrap();
         assert_eq!(&T[s..e], "2.0");
-        assert_eq!(line_col(T, s), (5, 27));
+        assert_eq!(line_col(T, s), (5, 26));
         let (s, e) = locate(T, "bodies[0].mass_kg").unwrap();
         assert_eq!(&T[s..e], "1.0");
         let (s, e) = locate(T, "bodies.b.p.1").unwrap();

@@ -313,7 +313,18 @@ impl Simulation {
         .insert_resource(roster)
         .insert_resource(contacts)
         .insert_resource(guarantees)
-        .insert_resource(MonitorState::default())
+        .insert_resource(MonitorState {
+            part_names: all_parts
+                .iter()
+                .zip(&scene.bodies)
+                .map(|(ps, b)| {
+                    ps.iter()
+                        .map(|p| format!("{}/{}", b.name, p.name))
+                        .collect()
+                })
+                .collect(),
+            ..Default::default()
+        })
         .insert_resource(EventLog::default())
         .insert_resource(Diagnostics::default())
         .insert_resource(Recorder {
@@ -434,17 +445,22 @@ impl Simulation {
         let overall = mon
             .min_per_pair
             .iter()
-            .min_by(|a, b| a.0.total_cmp(&b.0))
-            .map(|(d, parts, t)| {
-                serde_json::json!({"value_m": d, "parts": [parts.0, parts.1], "t_s": t})
+            .zip(&mon.pairs)
+            .min_by(|a, b| a.0.distance_m.total_cmp(&b.0.distance_m))
+            .map(|(m, p)| {
+                serde_json::json!({"value_m": m.distance_m,
+                    "parts": [mon.part_name(p.a, m.part_a), mon.part_name(p.b, m.part_b)],
+                    "t_s": m.t_s})
             });
         let pairs: Vec<_> = mon
             .min_per_pair
             .iter()
             .zip(&mon.pairs)
-            .map(|((d, parts, t), p)| {
+            .map(|(m, p)| {
                 serde_json::json!({"a": roster.names[p.a], "b": roster.names[p.b],
-                    "min_distance_m": d, "parts": [parts.0, parts.1], "t_s": t})
+                    "min_distance_m": m.distance_m,
+                    "parts": [mon.part_name(p.a, m.part_a), mon.part_name(p.b, m.part_b)],
+                    "t_s": m.t_s})
             })
             .collect();
         let finals: serde_json::Map<String, serde_json::Value> = roster

@@ -440,12 +440,38 @@ pub struct MonitorState {
     pub bodies: Vec<BodyView>,
     /// Pair distances at the last step.
     pub pairs: Vec<PairDistance>,
-    /// Smallest distance seen over the run, per pair (same order as `pairs`): (m, parts, t_s).
-    pub min_per_pair: Vec<(f64, (String, String), f64)>,
+    /// Smallest distance seen over the run, per pair (same order as `pairs`).
+    pub min_per_pair: Vec<PairMin>,
+    /// `body/collider` names, per body, in collider order.
+    pub part_names: Vec<Vec<String>>,
     /// Distance queries made (exact parry calls) over the run.
     pub exact_queries: u64,
     /// Part pairs skipped by bounding-sphere pruning over the run.
     pub pruned_pairs: u64,
+}
+
+/// The closest approach of one body pair over a run.
+#[derive(Debug, Clone)]
+pub struct PairMin {
+    /// Distance, m.
+    pub distance_m: f64,
+    /// Part of the first body.
+    pub part_a: usize,
+    /// Part of the second body.
+    pub part_b: usize,
+    /// When, s.
+    pub t_s: f64,
+}
+
+impl MonitorState {
+    /// `body/collider` name of a part.
+    pub fn part_name(&self, body: usize, part: usize) -> &str {
+        &self.part_names[body][part]
+    }
+    /// Names of the closest parts of a pair.
+    pub fn pair_names(&self, p: &PairDistance) -> (&str, &str) {
+        (self.part_name(p.a, p.part_a), self.part_name(p.b, p.part_b))
+    }
 }
 
 /// Evaluates guarantees.
@@ -541,8 +567,9 @@ pub mod bench_support {
         mon.pairs
             .iter()
             .map(|p| {
-                let (pa, a) = find(w, &p.parts.0);
-                let (pb, b) = find(w, &p.parts.1);
+                let (na, nb) = mon.pair_names(p);
+                let (pa, a) = find(w, na);
+                let (pb, b) = find(w, nb);
                 (pa, a, pb, b)
             })
             .collect()

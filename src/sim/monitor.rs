@@ -104,29 +104,6 @@ fn touching(pair: &rp::ContactPair) -> bool {
             .any(|p| p.dist <= 0.0 || p.data.impulse > 0.0)
 }
 
-/// World pose of every part, per body (f64).
-fn part_poses(
-    roster: &Roster,
-    bodies: &Query<(&SimBody, &BodyState)>,
-    parts: &Query<&Part>,
-) -> Vec<Vec<(Isometry3<f64>, f64)>> {
-    roster
-        .bodies
-        .iter()
-        .zip(&roster.parts)
-        .map(|(be, pes)| {
-            let (b, s) = bodies.get(*be).expect("roster body");
-            let body_pose = s.body_pose(&b.com_body_m);
-            pes.iter()
-                .map(|pe| {
-                    let p = parts.get(*pe).expect("roster part");
-                    (body_pose * p.pose_body, p.bound_radius_m)
-                })
-                .collect()
-        })
-        .collect()
-}
-
 /// Exact minimum distance between two shapes at f64 poses: the relative pose is formed in f64
 /// so that parry's f32 works with small numbers whatever the world coordinates.
 pub fn shape_distance(
@@ -136,85 +113,160 @@ pub fn shape_distance(
     b: &dyn rp::Shape,
 ) -> f64 {
     let rel = pose_a.inv_mul(pose_b);
-    query::distance(&Pose::IDENTITY, a, &conv::pose(&rel), b).unwrap_or(f64::NAN as f32) as f64
+    query::distance(&Pose::IDENTITY, a, &conv::pose(&rel), b).unwrap_or(f32::NAN) as f64
+}
+
+/// Buffers the distance system reuses from step to step.
+#[derive(Default)]
+pub struct DistanceScratch {
+    /// World pose and bounding radius of every part, per body.
+    poses: Vec<Vec<(Isometry3<f64>, f64)>>,
+    /// Shapes, per body (cloned handles, fetched once).
+    shapes: Vec<Vec<rp::SharedShape>>,
+    /// (lower bound, part a, part b) for the current body pair.
+    candidates: Vec<(f64, usize, usize)>,
 }
 
 /// Monitor system: full-geometry distances for every body pair.
+///
+/// For each body pair, the closest part pair of the previous step is computed exactly first
+/// (temporal coherence); then every other part pair whose bounding-sphere lower bound
+/// |c_a − c_b| − r_a − r_b is below the best distance so far, in increasing order of that
+/// bound. The result is the exact minimum (to parry's tolerance) with few exact queries.
 pub fn distances(
     roster: Res<Roster>,
     clock: Res<Clock>,
     bodies: Query<(&SimBody, &BodyState)>,
     parts: Query<&Part>,
     mut mon: ResMut<MonitorState>,
+    mut scratch: Local<DistanceScratch>,
 ) {
     let t = clock.t_s();
-    mon.bodies.clear();
-    for be in &roster.bodies {
-        let (b, s) = bodies.get(*be).expect("roster body");
-        mon.bodies.push(BodyView {
-            name: b.name.clone(),
-            pos_m: s.pos_m,
-            vel_m_s: s.vel_m_s,
-            att: s.att,
-            omega_rad_s: s.omega_rad_s,
-        });
-    }
-    let poses = part_poses(&roster, &bodies, &parts);
     let n = roster.bodies.len();
-    let mut pairs = Vec::with_capacity(n * (n - 1) / 2);
-    let mut candidates: Vec<(f64, usize, usize)> = Vec::new();
+    let sc = &mut *scratch;
+    if sc.shapes.len() != n {
+        sc.shapes = roster
+            .parts
+            .iter()
+            .map(|pes| {
+                pes.iter()
+                    .map(|e| parts.get(*e).expect("part").shape.clone())
+                    .collect()
+            })
+            .collect();
+        sc.poses = roster
+            .parts
+            .iter()
+            .map(|pes| Vec::with_capacity(pes.len()))
+            .collect();
+    }
+    if mon.bodies.len() != n {
+        mon.bodies = roster
+            .bodies
+            .iter()
+            .map(|be| {
+                let (b, s) = bodies.get(*be).expect("roster body");
+                BodyView {
+                    name: b.name.clone(),
+                    pos_m: s.pos_m,
+                    vel_m_s: s.vel_m_s,
+                    att: s.att,
+                    omega_rad_s: s.omega_rad_s,
+                }
+            })
+            .collect();
+    }
+    for (k, be) in roster.bodies.iter().enumerate() {
+        let (b, s) = bodies.get(*be).expect("roster body");
+        let v = &mut mon.bodies[k];
+        v.pos_m = s.pos_m;
+        v.vel_m_s = s.vel_m_s;
+        v.att = s.att;
+        v.omega_rad_s = s.omega_rad_s;
+        let body_pose = s.body_pose(&b.com_body_m);
+        let poses = &mut sc.poses[k];
+        poses.clear();
+        for pe in &roster.parts[k] {
+            let p = parts.get(*pe).expect("roster part");
+            poses.push((body_pose * p.pose_body, p.bound_radius_m));
+        }
+    }
+    let first = mon.pairs.len() != n * (n - 1) / 2;
+    if first {
+        mon.pairs.clear();
+    }
     let (mut exact, mut pruned) = (0u64, 0u64);
+    let mut k = 0;
     for i in 0..n {
         for j in i + 1..n {
-            candidates.clear();
-            for (pi, (pa, ra)) in poses[i].iter().enumerate() {
-                for (pj, (pb, rb)) in poses[j].iter().enumerate() {
+            let (pi, pj) = (&sc.poses[i], &sc.poses[j]);
+            let query = |a: usize, b: usize| {
+                shape_distance(&pi[a].0, &*sc.shapes[i][a], &pj[b].0, &*sc.shapes[j][b])
+            };
+            // Warm start from the previous closest pair.
+            let (mut best, mut ba, mut bb) = if first {
+                (f64::INFINITY, 0, 0)
+            } else {
+                let p = &mon.pairs[k];
+                exact += 1;
+                (query(p.part_a, p.part_b), p.part_a, p.part_b)
+            };
+            sc.candidates.clear();
+            for (a, (pa, ra)) in pi.iter().enumerate() {
+                for (b, (pb, rb)) in pj.iter().enumerate() {
                     let lb = (pa.translation.vector - pb.translation.vector).norm() - ra - rb;
-                    candidates.push((lb, pi, pj));
+                    if lb < best && !(a == ba && b == bb && !first) {
+                        sc.candidates.push((lb, a, b));
+                    } else {
+                        pruned += 1;
+                    }
                 }
             }
-            candidates.sort_by(|x, y| x.0.total_cmp(&y.0));
-            let mut best = (f64::INFINITY, 0, 0);
-            for (k, &(lb, pi, pj)) in candidates.iter().enumerate() {
-                if lb >= best.0 {
-                    pruned += (candidates.len() - k) as u64;
+            sc.candidates
+                .sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+            for (c, &(lb, a, b)) in sc.candidates.iter().enumerate() {
+                if lb >= best {
+                    pruned += (sc.candidates.len() - c) as u64;
                     break;
                 }
-                let a = parts.get(roster.parts[i][pi]).expect("part");
-                let b = parts.get(roster.parts[j][pj]).expect("part");
-                let d = shape_distance(&poses[i][pi].0, &*a.shape, &poses[j][pj].0, &*b.shape);
+                let d = query(a, b);
                 exact += 1;
-                if d < best.0 {
-                    best = (d, pi, pj);
+                if d < best {
+                    (best, ba, bb) = (d, a, b);
                 }
             }
-            let a = parts.get(roster.parts[i][best.1]).expect("part");
-            let b = parts.get(roster.parts[j][best.2]).expect("part");
-            pairs.push(PairDistance {
+            let pd = PairDistance {
                 a: i,
                 b: j,
-                distance_m: best.0,
-                parts: (
-                    format!("{}/{}", roster.names[i], a.name),
-                    format!("{}/{}", roster.names[j], b.name),
-                ),
-            });
+                distance_m: best,
+                part_a: ba,
+                part_b: bb,
+            };
+            if first {
+                mon.pairs.push(pd);
+                mon.min_per_pair.push(super::PairMin {
+                    distance_m: best,
+                    part_a: ba,
+                    part_b: bb,
+                    t_s: t,
+                });
+            } else {
+                mon.pairs[k] = pd;
+                let m = &mut mon.min_per_pair[k];
+                if best < m.distance_m {
+                    *m = super::PairMin {
+                        distance_m: best,
+                        part_a: ba,
+                        part_b: bb,
+                        t_s: t,
+                    };
+                }
+            }
+            k += 1;
         }
     }
     mon.exact_queries += exact;
     mon.pruned_pairs += pruned;
-    if mon.min_per_pair.len() != pairs.len() {
-        mon.min_per_pair = pairs
-            .iter()
-            .map(|p| (f64::INFINITY, p.parts.clone(), t))
-            .collect();
-    }
-    for (k, p) in pairs.iter().enumerate() {
-        if p.distance_m < mon.min_per_pair[k].0 {
-            mon.min_per_pair[k] = (p.distance_m, p.parts.clone(), t);
-        }
-    }
-    mon.pairs = pairs;
 }
 
 /// Monitor system: rapier's contacts between bodies, named by part; start/end events, peak

@@ -166,7 +166,10 @@ fn write_row(
         .iter()
         .min_by(|a, b| a.distance_m.total_cmp(&b.distance_m));
     match best {
-        Some(p) => write!(w, ",{},{}|{}", p.distance_m, p.parts.0, p.parts.1)?,
+        Some(p) => {
+            let (a, b) = mon.pair_names(p);
+            write!(w, ",{},{a}|{b}", p.distance_m)?
+        }
         None => write!(w, ",,")?,
     }
     if states.len() > 2 {
