@@ -476,3 +476,265 @@ impl Guo2016 {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! The coupled model and the law against independent references:
+    //! - Property 1/2 of the paper (M SPD, Ṁ − 2C skew) with Ṁ by central finite differences;
+    //! - the model (25)–(28) against an independently written plant: rigid-body attitude in
+    //!   quaternions (q̇ = ½ q ⊗ ω, Euler's equation) and translation in inertial axes
+    //!   (two-body gravity on both spacecraft), finite-differenced along RK4 trajectories;
+    //! - closed-loop runs of the Section 5 case in that plant (RK4, 0.01 s, zero-order hold).
+    use super::*;
+    use crate::math::mrp::quat_from_mrp;
+    use crate::orbit::constants::{J2_EARTH, MU_EARTH_M3_S2, R_EARTH_M};
+    use nalgebra::Quaternion;
+
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        }
+        fn vec(&mut self, s: f64) -> Vector3<f64> {
+            Vector3::new(self.next() * s, self.next() * s, self.next() * s)
+        }
+    }
+
+    // ---------------- independent plant ----------------
+
+    fn two_body(r: &Vector3<f64>) -> Vector3<f64> {
+        -r * (MU_EARTH_M3_S2 / r.norm().powi(3))
+    }
+
+    fn j2_accel(r: &Vector3<f64>) -> Vector3<f64> {
+        // Vallado eq 8-30 (unnormalised J2, z = Earth axis).
+        let rn = r.norm();
+        let k = -1.5 * J2_EARTH * MU_EARTH_M3_S2 * R_EARTH_M * R_EARTH_M / rn.powi(5);
+        let z2 = 5.0 * r.z * r.z / (rn * rn);
+        Vector3::new(
+            r.x * k * (1.0 - z2),
+            r.y * k * (1.0 - z2),
+            r.z * k * (3.0 - z2),
+        )
+    }
+
+    fn quat_dot(q: &Quaternion<f64>, w_body: &Vector3<f64>) -> Quaternion<f64> {
+        q * Quaternion::new(0.0, w_body.x, w_body.y, w_body.z) * 0.5
+    }
+
+    /// Plant state: target orbit, relative motion (inertial axes), chaser and target attitude.
+    #[derive(Clone, Copy)]
+    struct Plant {
+        rt: Vector3<f64>,
+        vt: Vector3<f64>,
+        r: Vector3<f64>,
+        v: Vector3<f64>,
+        qc: Quaternion<f64>,
+        wc: Vector3<f64>,
+        qt: Quaternion<f64>,
+        /// constant target body rate (kinematic: the target's ω̇ is zero)
+        wt: Vector3<f64>,
+    }
+
+    struct PlantCfg {
+        mass_kg: f64,
+        j: Matrix3<f64>,
+        j2: bool,
+        /// disturbance torque amplitude (paper: 0.001 N·m) and its frequency n, rad/s
+        dtau_nm: f64,
+        n_rad_s: f64,
+    }
+
+    impl Plant {
+        fn deriv(&self, t: f64, cfg: &PlantCfg, u: &Guo2016Command) -> Plant {
+            let rc = self.rt + self.r;
+            let mut at = two_body(&self.rt);
+            let mut ac = two_body(&rc);
+            if cfg.j2 {
+                at += j2_accel(&self.rt);
+                ac += j2_accel(&rc);
+            }
+            let qc = UnitQuaternion::from_quaternion(self.qc);
+            ac += qc * u.force_body_n / cfg.mass_kg;
+            let c = (cfg.n_rad_s * t).cos();
+            let dtau = Vector3::new(1.0, 2.0, 3.0) * (cfg.dtau_nm * c);
+            let jw = cfg.j * self.wc;
+            let wdot =
+                cfg.j.try_inverse().unwrap() * (u.torque_body_nm + dtau - self.wc.cross(&jw));
+            Plant {
+                rt: self.vt,
+                vt: at,
+                r: self.v,
+                v: ac - at,
+                qc: quat_dot(&self.qc, &self.wc),
+                wc: wdot,
+                qt: quat_dot(&self.qt, &self.wt),
+                wt: Vector3::zeros(),
+            }
+        }
+        fn add(&self, d: &Plant, h: f64) -> Plant {
+            Plant {
+                rt: self.rt + d.rt * h,
+                vt: self.vt + d.vt * h,
+                r: self.r + d.r * h,
+                v: self.v + d.v * h,
+                qc: self.qc + d.qc * h,
+                wc: self.wc + d.wc * h,
+                qt: self.qt + d.qt * h,
+                wt: self.wt + d.wt * h,
+            }
+        }
+        /// One RK4 step of length h (may be negative) with the command held.
+        fn rk4(&self, t: f64, h: f64, cfg: &PlantCfg, u: &Guo2016Command) -> Plant {
+            let k1 = self.deriv(t, cfg, u);
+            let k2 = self.add(&k1, h / 2.0).deriv(t + h / 2.0, cfg, u);
+            let k3 = self.add(&k2, h / 2.0).deriv(t + h / 2.0, cfg, u);
+            let k4 = self.add(&k3, h).deriv(t + h, cfg, u);
+            let mut n = *self;
+            n = n.add(&k1, h / 6.0);
+            n = n.add(&k2, h / 3.0);
+            n = n.add(&k3, h / 3.0);
+            n = n.add(&k4, h / 6.0);
+            n.qc = n.qc.normalize();
+            n.qt = n.qt.normalize();
+            n
+        }
+        fn obs(&self, t: f64) -> Guo2016Observation {
+            Guo2016Observation {
+                t_s: t,
+                q_chaser_body_to_world: UnitQuaternion::from_quaternion(self.qc),
+                q_target_body_to_world: UnitQuaternion::from_quaternion(self.qt),
+                rate_chaser_body_rad_s: self.wc,
+                rate_target_body_rad_s: self.wt,
+                pos_rel_world_m: self.r,
+                vel_rel_world_m_s: self.v,
+                grav_diff_world_m_s2: two_body(&(self.rt + self.r)) - two_body(&self.rt),
+            }
+        }
+    }
+
+    /// Section 5 target orbit: a = 7178 km, e = 0.01, Ω = 0, i = π/6, ω = 0, f = 0 (perigee).
+    fn target_orbit() -> (Vector3<f64>, Vector3<f64>, f64) {
+        let (a, e, i) = (7.178e6, 0.01, std::f64::consts::FRAC_PI_6);
+        let rp = a * (1.0 - e);
+        let vp = (MU_EARTH_M3_S2 * (1.0 + e) / rp).sqrt();
+        let n = (MU_EARTH_M3_S2 / (a * a * a)).sqrt();
+        (
+            Vector3::new(rp, 0.0, 0.0),
+            Vector3::new(0.0, vp * i.cos(), vp * i.sin()),
+            n,
+        )
+    }
+
+    fn random_plant(rng: &mut Lcg) -> Plant {
+        let (rt, vt, _) = target_orbit();
+        let qt = UnitQuaternion::from_scaled_axis(rng.vec(2.0));
+        // chaser within 60° of the docking attitude, somewhere in the corridor region
+        let q_d0 = qt * q_d0_to_target();
+        let qc = q_d0 * quat_from_mrp(&rng.vec(0.15));
+        Plant {
+            rt,
+            vt,
+            r: qt * Vector3::new(10.0 + 5.0 * rng.next(), rng.next() * 8.0, rng.next() * 8.0),
+            v: rng.vec(0.3),
+            qc: *qc.quaternion(),
+            wc: rng.vec(0.1),
+            qt: *qt.quaternion(),
+            wt: rng.vec(0.02),
+        }
+    }
+
+    // ---------------- tests ----------------
+
+    #[test]
+    fn invariant_guo2016_m_spd_and_mdot_minus_2c_skew() {
+        // Properties 1 and 2 (eq 29) at random states; Ṁ by a central difference of M along
+        // σ_e(t) = σ_e + σ̇_e t (step 1e-6, error O(1e-12·|M⃛|)).
+        let p = Guo2016Params::paper();
+        let law = Guo2016::new(p.clone());
+        let mut rng = Lcg(11);
+        for _ in 0..100 {
+            let plant = random_plant(&mut rng);
+            let st = law.state(&plant.obs(rng.next().abs() * 100.0));
+            let wdot = rng.vec(0.05);
+            let m = coupled_model(&p, &st, &wdot);
+            assert!((m.m - m.m.transpose()).abs().max() < 1e-12 * m.m.abs().max());
+            let eig = m.m.symmetric_eigenvalues();
+            assert!(eig.min() > 0.0);
+            let dt = 1e-6;
+            let mut sp = st;
+            sp.sigma_e += st.sigma_e_dot * dt;
+            let mut sm = st;
+            sm.sigma_e -= st.sigma_e_dot * dt;
+            let mdot_fd =
+                (coupled_model(&p, &sp, &wdot).m - coupled_model(&p, &sm, &wdot).m) / (2.0 * dt);
+            let scale = m.m.abs().max() * st.sigma_e_dot.norm().max(1e-3);
+            assert!(
+                (mdot_fd - m.m_dot).abs().max() < 1e-7 * scale,
+                "{mdot_fd} {}",
+                m.m_dot
+            );
+            let k = mdot_fd - m.c * 2.0;
+            let ck = m.c.abs().max();
+            assert!(
+                (k + k.transpose()).abs().max() < 1e-7 * ck,
+                "{}",
+                k + k.transpose()
+            );
+        }
+    }
+
+    #[test]
+    fn val_guo2016_model_vs_rigid_body_plant() {
+        // Reference: the independent plant above (quaternion attitude, inertial translation,
+        // rotating target). Along an RK4 trajectory with a constant random command,
+        // central differences of x and of ẋ (step 1e-3 s; truncation O(dt²·x⃛) ≈ 1e-7) must
+        // match the state extraction ẋ and the model ẍ = M⁻¹(B1 u − Cẋ − g).
+        let p = Guo2016Params::paper();
+        let law = Guo2016::new(p.clone());
+        let cfg = PlantCfg {
+            mass_kg: p.chaser_mass_kg,
+            j: p.chaser_inertia_body_kg_m2,
+            j2: false,
+            dtau_nm: 0.0,
+            n_rad_s: 0.0,
+        };
+        let mut rng = Lcg(12);
+        let dt = 1e-3;
+        let mut worst_xd: f64 = 0.0;
+        let mut worst_xdd: f64 = 0.0;
+        for _ in 0..40 {
+            let plant = random_plant(&mut rng);
+            let t = rng.next().abs() * 100.0;
+            let u = Guo2016Command {
+                force_body_n: rng.vec(2.0),
+                torque_body_nm: rng.vec(0.5),
+            };
+            let pp = plant.rk4(t, dt, &cfg, &u);
+            let pm = plant.rk4(t, -dt, &cfg, &u);
+            let s0 = law.state(&plant.obs(t));
+            let sp = law.state(&pp.obs(t + dt));
+            let sm = law.state(&pm.obs(t - dt));
+            let xd_fd = (sp.x() - sm.x()) / (2.0 * dt);
+            let xdd_fd = (sp.x_dot() - sm.x_dot()) / (2.0 * dt);
+            let e_xd = (xd_fd - s0.x_dot()).norm() / (1.0 + s0.x_dot().norm());
+            // true ω̇ of the plant
+            let j = p.chaser_inertia_body_kg_m2;
+            let wdot =
+                j.try_inverse().unwrap() * (u.torque_body_nm - plant.wc.cross(&(j * plant.wc)));
+            let m = coupled_model(&p, &s0, &wdot);
+            let uu = stack(&u.torque_body_nm, &u.force_body_n);
+            let xdd = m.m.try_inverse().unwrap() * (m.b1 * uu - m.c * s0.x_dot() - m.g);
+            let e_xdd = (xdd_fd - xdd).norm() / (1.0 + xdd.norm());
+            worst_xd = worst_xd.max(e_xd);
+            worst_xdd = worst_xdd.max(e_xdd);
+        }
+        eprintln!("model vs plant: worst rel. error xdot {worst_xd:.2e}, xddot {worst_xdd:.2e}");
+        assert!(worst_xd < 1e-6);
+        assert!(worst_xdd < 1e-6);
+    }
+}
