@@ -35,11 +35,12 @@
 //!
 //! # Control (eqs 32–33)
 //! `S = k1 x + β ẋ`, `β = k2/h² + k3`, `β̇ = −2 k2 ḣ/h³` (analytic `ḣ`),
-//! `u = B1⁻¹[Cẋ + g − β⁻¹(k1 Mẋ + β̇ Mẋ + ½ṀS) − k4‖B2‖ sat(S/ε) − k_r M S]`,
+//! `u = B1⁻¹[Cẋ + g − β⁻¹(k1 Mẋ + β̇ Mẋ + ½ṀS + k_r M S) − k4‖B2‖ sat(S/ε)]`,
 //! with `sgn` replaced by the component-wise saturation of boundary-layer width ε (Section 5),
 //! `‖B2‖ = 4/(1+|σ_e|²)` its exact spectral norm, and `k_r` an optional linear reaching gain that
 //! is **not in the paper** (`paper()` sets it to 0). The closed loop is
-//! `MṠ = −½ṀS − β(k4‖B2‖sat(S/ε) + k_r M S) + β B2 d`.
+//! `MṠ = −½ṀS − k_r M S − β k4‖B2‖sat(S/ε) + β B2 d` (the `k_r` term is divided by β so that
+//! its rate does not grow without bound near the wall, which would make any fixed step unstable).
 //! `ω̇` inside `g2` is the chaser angular acceleration the commanded torque produces,
 //! `J⁻¹(τ − ω×Jω)` (the disturbance torque is unknown): the attitude command is computed
 //! first, then the force (this is where the coupling enters).
@@ -85,7 +86,8 @@ pub struct Guo2016Params {
     /// Boundary-layer width ε of the saturation replacing `sgn S` (units of S). Paper: not
     /// given (Section 5 only says a saturation is used).
     pub boundary_layer: f64,
-    /// Optional linear reaching gain `k_r`, 1/s: adds `−k_r M S`. **Not in the paper**
+    /// Optional linear reaching gain `k_r`, 1/s: adds `−β⁻¹k_r M S` (closed loop
+    /// `Ṡ = −k_r S + …`). **Not in the paper**
     /// (`paper()` = 0); see the module doc.
     pub reaching_gain_per_s: f64,
     /// Corridor semi-axis `a` (eq 31), m. The corridor ends at the asymptotic plane `x = 2a`.
@@ -451,7 +453,7 @@ impl Guo2016 {
         let v_att = c1 * st.sigma_e_dot + n1
             - (m1 * st.sigma_e_dot * (p.k1_per_s + beta_dot) + m1_dot * s_att * 0.5) / beta
             - top(&sat) * (p.k4_n * b2_norm)
-            - m1 * s_att * p.reaching_gain_per_s;
+            - m1 * s_att * (p.reaching_gain_per_s / beta);
         let torque = mrp_g(&st.sigma_e).transpose() * v_att;
 
         // ω̇ produced by that torque, then the translation rows.
@@ -463,7 +465,7 @@ impl Guo2016 {
         let v_tr = bottom(&(model.c * xd + model.g))
             - st.r_e_dot_body_m_s * (mc * (p.k1_per_s + beta_dot) / beta)
             - bottom(&sat) * (p.k4_n * b2_norm)
-            - s_tr * (mc * p.reaching_gain_per_s);
+            - s_tr * (mc * p.reaching_gain_per_s / beta);
         let force = -v_tr;
 
         let v1 = 0.5 * s.dot(&(model.m * s));
@@ -859,13 +861,12 @@ mod tests {
                 break;
             }
             // Closed-loop sliding equation for the translation rows (M2 = mI, Ṁ2 = 0):
-            // Ṡ_tr = −β(k4‖B2‖ sat(S/ε) + k_r m S)/m  (d_b ≈ 0: differential J2 ~1e-8 m/s²).
+            // Ṡ_tr = −β k4‖B2‖ sat(S/ε)/m − k_r S  (d_b ≈ 0: differential J2 ~1e-8 m/s²).
             let b2 = 4.0 / (1.0 + top(&d.x).norm_squared());
             let sp = sum.s_tr_pred;
             let rate = sp.map(|v| {
-                -d.beta
-                    * (p.k4_n * b2 * (v / p.boundary_layer).clamp(-1.0, 1.0) / p.chaser_mass_kg
-                        + p.reaching_gain_per_s * v)
+                -d.beta * p.k4_n * b2 * (v / p.boundary_layer).clamp(-1.0, 1.0) / p.chaser_mass_kg
+                    - p.reaching_gain_per_s * v
             });
             sum.s_tr_pred = sp + rate * dt;
             plant = plant.rk4(t, dt, &cfg, &u);
@@ -881,7 +882,7 @@ mod tests {
     #[test]
     fn val_guo2016_sliding_equation_in_plant() {
         // Reference: the closed-loop sliding equation the law is built to enforce,
-        // M Ṡ = −½ṀS − β(k4‖B2‖ sat(S/ε) + k_r M S) (eq 35 proof, no disturbance), integrated
+        // M Ṡ = −½ṀS − k_r M S − β k4‖B2‖ sat(S/ε) (eq 35 proof, no disturbance), integrated
         // alongside the independent plant for the translation rows (M2 = m I, Ṁ2 = 0).
         // Paper gains, undisturbed, 100 s. The zero-order hold adds, during the initial
         // ẍ ≈ −k1 ẋ transient, an error ≈ ½ k1 dt |ṙ_e(0)| per component; the tolerance is
@@ -942,6 +943,27 @@ mod tests {
         assert!(b.first_exit_s.is_none() && b.min_h_m2 > 0.0);
         let beta_rel = p.k2_m4 / (a.min_h_m2 * a.min_h_m2);
         assert!((a.final_r_e_m - b.final_r_e_m).abs() < 10.0 * beta_rel * a.final_r_e_m + 1e-9);
+    }
+
+    #[test]
+    fn regress_guo2016_barrier_crossed_at_1ms_step() {
+        // Same variant as below (k_r = 1/s, aligned start) at a 1 ms step, 2.5 s. On the
+        // surface βẋ = S − k1x is continuous, so the approach speed v (tens of m/s) must be
+        // killed inside the layer h ≲ √k2 (δ ~ mm thick): a deceleration ~v²/δ ~ 1e5–1e6 m/s²
+        // over ~δ/v ~ 1e-4 s. No practical fixed step resolves that; the barrier is crossed.
+        // Measured: k2 = 0.02 exits at 1.922 s (k2 = 0: 0.511 s) with |F| up to 2.1e7 N; at
+        // 0.1 ms it exits at 0.524 s with 8.8e9 N (not run here for time); without σ_d(t)
+        // it exits at 0.511 s. Asserted: the chaser leaves the corridor with the barrier on.
+        let mut p = Guo2016Params::paper();
+        p.reaching_gain_per_s = 1.0;
+        let a = run_section5(&p, 2.5, 1e-3, Vector3::zeros(), true);
+        p.k2_m4 = 0.0;
+        let b = run_section5(&p, 2.5, 1e-3, Vector3::zeros(), true);
+        eprintln!(
+            "1 ms: k2=0.02 exit {:?} s, max |F| {:.3e} N; k2=0 exit {:?} s, max |F| {:.3e} N",
+            a.first_exit_s, a.max_force_n, b.first_exit_s, b.max_force_n
+        );
+        assert!(a.first_exit_s.is_some() && b.first_exit_s.is_some());
     }
 
     #[test]
