@@ -212,13 +212,11 @@ fn field_at(text: &str, line: usize, col: usize) -> String {
     let mut l = 1;
     for (i, ch) in text.char_indices() {
         if l == line {
-            let mut c = 1;
-            for (j, ch2) in text[i..].char_indices() {
+            for (c, (j, ch2)) in (1..).zip(text[i..].char_indices()) {
                 if c == col || ch2 == '\n' {
                     offset = i + j;
                     break;
                 }
-                c += 1;
             }
             break;
         }

@@ -230,6 +230,7 @@ fn write_step(
 }
 
 /// Record system: a row every `every` steps, events as they happen.
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 pub fn record(
     clock: Res<Clock>,
     roster: Res<Roster>,
@@ -241,7 +242,7 @@ pub fn record(
     mut rec: ResMut<Recorder>,
 ) {
     let rec = &mut *rec;
-    let due = clock.step % u64::from(rec.every) == 0 || rec.force_row;
+    let due = clock.step.is_multiple_of(u64::from(rec.every)) || rec.force_row;
     rec.force_row = false;
     if !due {
         if !log.pending.is_empty() {
