@@ -25,6 +25,9 @@
 //! |d‖Φ_rv‖/ds| (d Φ_rv/ds = Φ_vv). If only the CW trajectory is known, a continuity
 //! (bootstrap, Grönwall-type) argument closes the loop: if ρ_max > max|ρ_CW| + B(ρ_max, t),
 //! the true |ρ| can never reach ρ_max on [0, t] ([`cw_error_bound_from_cw_max`]).
+//! With a known separation history the time-varying bound |a₂(τ)| ≤ 3μ|ρ(τ)|²/(r0 − ρ_max)⁴
+//! can stay inside the integral ([`cw_linearisation_error_bound_sampled`]), much tighter over
+//! long horizons where the separation grows.
 //! Because ‖Φ_rv(s)‖ ≈ s for ns ≪ 1, the bound is ≈ 3μρ²t²/(2r0⁴) over short horizons; it is
 //! tight to a small factor when the separation is mostly radial (measured ratios in tests).
 
