@@ -11,8 +11,8 @@
 //! the Hill frame is ρ̈ = −2ω×ρ̇ − ω×(ω×ρ) + [a(r0+ρ) − a(r0)] (ω constant), and CW keeps the
 //! gravity difference to first order, Gρ (G = gravity-gradient tensor). The neglected part
 //! a₂(ρ) = a(r0+ρ) − a(r0) − Gρ is bounded by Taylor's theorem with integral remainder:
-//! a₂ = ∫₀¹ (1−s) D²a(r0 + sρ)[ρ, ρ] ds. For a = −μ r/|r|³ the second-order term at a point p
-//! is ½D²a(p)[u,u] = (3μ|u|²/(2|p|⁴))·[(1 − 3c²) p̂ + 2c·s·t̂] (c = cos∠(u, p), t̂ ⟂ p̂), whose
+//! a₂ = ∫₀¹ (1−s) D²a(r0 + sρ)(ρ, ρ) ds. For a = −μ r/|r|³ the second-order term at a point p
+//! is ½D²a(p)(u, u) = (3μ|u|²/(2|p|⁴))·[(1 − 3c²) p̂ + 2c·s·t̂] (c = cos∠(u, p), t̂ ⟂ p̂), whose
 //! norm (3μ|u|²/(2|p|⁴))·√(1 − 2c² + 5c⁴) is at most 3μ|u|²/|p|⁴ (c = ±1, radial). With
 //! |p| ≥ r0 − ρ_max and ∫₀¹(1−s)ds = ½:
 //!   |a₂| ≤ 3 μ ρ_max² / (r0 − ρ_max)⁴      (constant 3, attained radially as ρ → 0).
