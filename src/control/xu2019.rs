@@ -203,6 +203,9 @@ fn wrap_pi(a: f64) -> f64 {
     if w == -PI { PI } else { w }
 }
 
+/// One repulsor as the law sees it: `(Q diag, P diag, r_co (m), ∂r_co/∂p)`.
+type Repulsor = ([f64; 3], [f64; 3], Vector2<f64>, Matrix2<f64>);
+
 /// Radial-distance vector `r_co` (2-D part, m), its Jacobian wrt the lab position, given the
 /// distance `d`, its gradient, and the offset `q` from the shape centre.
 fn radial_vector(q: Vector2<f64>, d: f64, grad_d: Vector2<f64>) -> (Vector2<f64>, Matrix2<f64>) {
@@ -244,10 +247,7 @@ impl Xu2019Controller {
     }
 
     /// The two repulsors: (q diag, p diag, r_co, J) for obstacle and heart.
-    fn repulsors(
-        &self,
-        pos: Vector2<f64>,
-    ) -> [([f64; 3], [f64; 3], Vector2<f64>, Matrix2<f64>); 2] {
+    fn repulsors(&self, pos: Vector2<f64>) -> [Repulsor; 2] {
         let p = &self.params;
         let (d_o, g_o) = p.obstacle.radial_distance_with_gradient(pos, p.radial_form);
         let (r_o, j_o) = radial_vector(pos - p.obstacle.centre(), d_o, g_o);
