@@ -40,6 +40,20 @@
 //!   system gives poses only; how velocity was obtained is not stated).
 //!
 //! Fig. 13's claims are tested below against an independent RK4 integration of eq (3).
+//! Findings (numbers printed by the tests, `--nocapture`):
+//! - Ideal force, paper scenario: both the as-published law (eq 8, printed ∇) and the exact
+//!   one keep radial distances > 0 (obstacle ≥ 0.120 / 0.137 m, heart ≥ 0.050 m, the goal's own
+//!   value) and reach the goal (within 1 cm and 1° after 57.7 s / 51.6 s). Peak force ≈ 0.9 N.
+//! - 0.05 N nozzles through PWPF at 25 Hz vision: x and y lag early (50 % settling +5.5 s in
+//!   x, +4.9 s in y), as the paper says, but the thrust-limited run overtakes the unlimited
+//!   one after ≈ 20–35 s (90 % settling 7.7 s earlier in x, 4.1 s in y). Attitude lags
+//!   (+0.6 s at 50 %), it does not lead (the paper blames its lead on I_z, which this model
+//!   does not perturb). A continuously saturated run reproduces the PWPF run to ≈ 0.1 s:
+//!   saturation, not modulation, explains the difference.
+//! - The eq (8) potential is no barrier: with its true gradient the chaser crosses the
+//!   obstacle; with the printed gradient a start, centre and goal on one line give a trap.
+//!   V = φ_tot + kinetic energy rises by up to 1e-3 J per 10 ms step under the printed law;
+//!   it never rises under the exact law (Lyapunov).
 
 use crate::geometry::heart::HeartParams;
 use crate::geometry::superquadric::{RadialForm, SuperquadricParams};
@@ -165,7 +179,7 @@ impl Xu2019Setup {
 }
 
 /// What the controller sees (lab frame of the table).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Xu2019Observation {
     /// Time of the measurement (s).
     pub t_s: f64,
@@ -180,7 +194,7 @@ pub struct Xu2019Observation {
 }
 
 /// The command of eq (16).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Xu2019Command {
     /// Force `(Fx_n, Fy_n)` in the lab frame (N).
     pub force_lab_n: Vector2<f64>,
