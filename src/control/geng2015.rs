@@ -9,8 +9,8 @@
 //! State x = [ρ; q_rv]:
 //! - ρ = r_s + A_sᵀ p_s − r_t − A_tᵀ p_t: chaser port minus target port, expressed in the frame
 //!   chosen by [`RhoFrame`] (A = inertial→body DCM, p = port in its own body frame). The paper
-//!   writes f(*) in the chaser orbital frame F_o ([`RhoFrame::TargetLvlh`], the default: the
-//!   target's LVLH differs from the chaser's by ~4 µrad at the 27 m start); SPEC P2 proposes target
+//!   writes f(*) in the chaser orbital frame F_o ([`RhoFrame::TargetHill`], the default: the
+//!   target orbital frame differs from the chaser's by ~4 µrad at the 27 m start); SPEC P2 proposes target
 //!   body axes ([`RhoFrame::TargetBody`]). Port frames have the axes of their body (the paper
 //!   gives port positions only).
 //! - q_r = q_t⁻¹ ⊗ q_s (Hamilton, body→inertial quaternions), i.e. A(q_r) = A_s A_tᵀ maps target
@@ -73,9 +73,10 @@ pub enum Geng2015Law {
 /// Frame in which ρ, ρ̇ are expressed (see module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum RhoFrame {
-    /// Target orbital frame: z = −r̂ (nadir), y = −ĥ (negative orbit normal), x = y × z
-    /// (along-track). The paper's F_o choice (up to chaser vs target orbit, ~µrad here).
-    TargetLvlh,
+    /// Target orbital (Hill) frame: x radial out, y along-track, z orbit normal. The paper's
+    /// F_o choice (up to chaser vs target orbit, ~µrad here); the axis order is inferred from
+    /// Table 2, whose larger y gains (α1, α2, M3, M4) fit the along-track separation.
+    TargetHill,
     /// Target body axes (SPEC P2 [derived]).
     TargetBody,
 }
@@ -197,8 +198,20 @@ pub struct Geng2015Params {
     pub rho_frame: RhoFrame,
     /// Desired constant ρ_d (x_d = [ρ_d; 0]), m in `rho_frame`; zero = ports coincide.
     pub rho_des_m: Vector3<f64>,
+    /// How T2/M2 obtain ṡ = ë + λė (not measured; the paper is silent).
+    pub sdot_estimate: SdotEstimate,
     /// Table 2 gains.
     pub gains: Geng2015Gains,
+}
+
+/// Source of ṡ for the s = ė + λe laws (T2, M2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SdotEstimate {
+    /// Backward difference of s between calls: the true ṡ = w + Δ (saturation included), one
+    /// sample late.
+    BackwardDifference,
+    /// The model value ṡ = w (T2) or ν (M2), i.e. the commanded ṡ with Δ taken as zero.
+    IntegralState,
 }
 
 impl Geng2015Params {
@@ -214,8 +227,9 @@ impl Geng2015Params {
             mu_m3_s2: MU_EARTH_M3_S2,
             accel_max_m_s2: 0.2,
             torque_max_nm: 0.8,
-            rho_frame: RhoFrame::TargetLvlh,
+            rho_frame: RhoFrame::TargetHill,
             rho_des_m: Vector3::zeros(),
+            sdot_estimate: SdotEstimate::IntegralState,
             gains: Geng2015Gains::paper(),
         }
     }
@@ -227,21 +241,22 @@ pub fn gravity_m_s2(mu_m3_s2: f64, pos_eci_m: &Vector3<f64>) -> Vector3<f64> {
     -mu_m3_s2 / (r * r * r) * pos_eci_m
 }
 
-/// Target LVLH frame (z nadir, y = −orbit normal, x = y × z): (ECI→LVLH DCM, LVLH angular
-/// velocity in LVLH axes rad/s, its Keplerian derivative rad/s²).
-pub fn lvlh_frame(
+/// Target orbital (Hill) frame: x = r̂ (radial out), z = ĥ (orbit normal), y = z × x
+/// (along-track). Returns (ECI→frame DCM, frame angular velocity in frame axes rad/s, its
+/// Keplerian derivative rad/s²): ω = [0, 0, h/r²], ω̇ = [0, 0, −2h(r·v)/r⁴].
+pub fn hill_frame(
     pos_eci_m: &Vector3<f64>,
     vel_eci_m_s: &Vector3<f64>,
 ) -> (Matrix3<f64>, Vector3<f64>, Vector3<f64>) {
     let h = pos_eci_m.cross(vel_eci_m_s);
     let r = pos_eci_m.norm();
-    let z = -pos_eci_m / r;
-    let y = -h.normalize();
-    let x = y.cross(&z);
+    let x = pos_eci_m / r;
+    let z = h.normalize();
+    let y = z.cross(&x);
     let a = Matrix3::from_rows(&[x.transpose(), y.transpose(), z.transpose()]);
     let hn = h.norm();
-    let w = Vector3::new(0.0, -hn / (r * r), 0.0);
-    let wdot = Vector3::new(0.0, 2.0 * hn * pos_eci_m.dot(vel_eci_m_s) / r.powi(4), 0.0);
+    let w = Vector3::new(0.0, 0.0, hn / (r * r));
+    let wdot = Vector3::new(0.0, 0.0, -2.0 * hn * pos_eci_m.dot(vel_eci_m_s) / r.powi(4));
     (a, w, wdot)
 }
 
@@ -316,7 +331,7 @@ pub fn relative_state(p: &Geng2015Params, obs: &Geng2015Obs) -> PortRelState {
         - t.vel_eci_m_s
         - a_t.transpose() * wt.cross(&pt);
     let (a_f, w_f, w_f_dot) = match p.rho_frame {
-        RhoFrame::TargetLvlh => lvlh_frame(&t.pos_eci_m, &t.vel_eci_m_s),
+        RhoFrame::TargetHill => hill_frame(&t.pos_eci_m, &t.vel_eci_m_s),
         RhoFrame::TargetBody => {
             let jt = p.target_inertia_kg_m2;
             let jt_inv = jt.try_inverse().unwrap_or_else(Matrix3::zeros);
@@ -506,8 +521,10 @@ impl Geng2015Controller {
                     d6(&g.m2_lambda)
                 };
                 let s = e_dot + lam * e;
-                let s_dot = match self.last {
-                    Some((_, s_prev)) if dt > 0.0 => (s - s_prev) / dt,
+                let s_dot = match (p.sdot_estimate, self.last) {
+                    (SdotEstimate::BackwardDifference, Some((_, s_prev))) if dt > 0.0 => {
+                        (s - s_prev) / dt
+                    }
                     _ => self.integral,
                 };
                 let rate = if self.law == Geng2015Law::T2 {
@@ -798,14 +815,14 @@ pub fn disturbance_bounds(
     let (tt, tt_dot, jt_inv) = torque(&p.target_inertia_kg_m2, env.target_rate_max_rad_s);
     let (ps, pt) = (p.chaser_port_body_m.norm(), p.target_port_body_m.norm());
     let (frame_rate, target_rot) = match p.rho_frame {
-        RhoFrame::TargetLvlh => (thdot_max, env.target_rate_max_rad_s + thdot_max),
+        RhoFrame::TargetHill => (thdot_max, env.target_rate_max_rad_s + thdot_max),
         RhoFrame::TargetBody => (env.target_rate_max_rad_s, 0.0),
     };
     let chaser_rot = env.chaser_rate_max_rad_s + frame_rate;
     let xs = as_max + ps * js_inv * ts;
     let xt = at_max + pt * jt_inv * tt;
     let (frame_d, frame_chi) = match p.rho_frame {
-        RhoFrame::TargetLvlh => (0.0, 0.0),
+        RhoFrame::TargetHill => (0.0, 0.0),
         RhoFrame::TargetBody => (
             jt_inv * tt * env.rho_max_m,
             jt_inv * (tt_dot * env.rho_max_m + tt * env.rho_dot_max_m_s),
@@ -1030,13 +1047,13 @@ mod tests {
         n
     }
 
-    /// Table 1 initial states: both bodies aligned with their own LVLH (q_v0 = 0), chaser at rest
-    /// w.r.t. its LVLH, target tumbling at [−3, 2, 3] °/s w.r.t. its LVLH.
+    /// Table 1 initial states: both bodies aligned with their own orbital frame (q_v0 = 0), chaser at rest
+    /// w.r.t. its orbital frame, target tumbling at [−3, 2, 3] °/s w.r.t. its orbital frame.
     fn table1() -> (BodyStateEci, BodyStateEci) {
         let d = std::f64::consts::PI / 180.0;
         let body = |i: f64, raan: f64, nu: f64, rel_rate: Vector3<f64>| {
             let (r, v) = kepler_to_eci(7170.0e3, 0.05, i * d, raan * d, 10.0 * d, nu * d);
-            let (a, w, _) = lvlh_frame(&r, &v);
+            let (a, w, _) = hill_frame(&r, &v);
             let q = UnitQuaternion::from_rotation_matrix(
                 &nalgebra::Rotation3::from_matrix_unchecked(a.transpose()),
             );
@@ -1080,7 +1097,7 @@ mod tests {
         // B·B⁻¹ = I (closed-form block inverse) at random states, both ρ frames; G⁻¹G = I near
         // q_r0 → 0 and the 1/q_r0 growth of ‖G⁻¹‖ (det G = q_r0/8).
         let mut rng = Rng(7);
-        for frame in [RhoFrame::TargetLvlh, RhoFrame::TargetBody] {
+        for frame in [RhoFrame::TargetHill, RhoFrame::TargetBody] {
             let p = params(frame);
             for _ in 0..200 {
                 let obs = random_obs(&mut rng);
@@ -1138,7 +1155,7 @@ mod tests {
         let mut rng = Rng(11);
         let free: Load = &|_, _| (Vector3::zeros(), Vector3::zeros());
         let h = 2e-3;
-        for frame in [RhoFrame::TargetLvlh, RhoFrame::TargetBody] {
+        for frame in [RhoFrame::TargetHill, RhoFrame::TargetBody] {
             let p = params(frame);
             for _ in 0..20 {
                 let obs = random_obs(&mut rng);
@@ -1201,7 +1218,7 @@ mod tests {
         let mut rng = Rng(23);
         let h = 1e-3;
         let dist = Geng2015Disturbances::paper_periodic((MU / 7170.0e3f64.powi(3)).sqrt());
-        for frame in [RhoFrame::TargetLvlh, RhoFrame::TargetBody] {
+        for frame in [RhoFrame::TargetHill, RhoFrame::TargetBody] {
             let p = params(frame);
             let m = p.chaser_mass_kg;
             for k in 0..10 {
@@ -1254,5 +1271,136 @@ mod tests {
                 assert!(delta.fixed_rows::<3>(0).norm() > 10.0 * tol[0]);
             }
         }
+    }
+
+    /// One closed-loop run: samples at the controller period.
+    struct Run {
+        t: Vec<f64>,
+        /// [ρ m; ρ̇ m/s] in the ρ frame.
+        trans: Vec<Vector6<f64>>,
+        /// [relative attitude angles 2·q_rv deg; ω_r deg/s].
+        rot: Vec<Vector6<f64>>,
+        /// Applied u = [F N; T N·m].
+        u: Vec<Vector6<f64>>,
+        /// Exact Δ from the applied disturbances.
+        delta: Vec<Vector6<f64>>,
+        rate_max: (f64, f64),
+        rho_max: (f64, f64),
+    }
+
+    /// Closed loop on the Table 1 orbits: chaser under `law` (zero-order hold at `dt`),
+    /// target uncontrolled and tumbling, the paper's disturbances on both bodies, RK4 at `dt`.
+    fn closed_loop(law: Geng2015Law, frame: RhoFrame, linear: bool, t_end: f64, dt: f64) -> Run {
+        closed_loop_with(law, params(frame), linear, t_end, dt)
+    }
+
+    fn closed_loop_with(
+        law: Geng2015Law,
+        p: Geng2015Params,
+        linear: bool,
+        t_end: f64,
+        dt: f64,
+    ) -> Run {
+        let n = (MU / 7170.0e3f64.powi(3)).sqrt();
+        let dist = if linear {
+            Geng2015Disturbances::paper_linear(n)
+        } else {
+            Geng2015Disturbances::paper_periodic(n)
+        };
+        let mut ctrl = Geng2015Controller::new(law, p.clone());
+        let (s0, t0) = table1();
+        let mut obs = Geng2015Obs {
+            t_s: 0.0,
+            chaser: s0,
+            target: t0,
+        };
+        let steps = (t_end / dt).round() as usize;
+        let mut run = Run {
+            t: vec![],
+            trans: vec![],
+            rot: vec![],
+            u: vec![],
+            delta: vec![],
+            rate_max: (0.0, 0.0),
+            rho_max: (0.0, 0.0),
+        };
+        let deg = 180.0 / std::f64::consts::PI;
+        for k in 0..steps {
+            let t = k as f64 * dt;
+            obs.t_s = t;
+            let (f, tq) = ctrl.command(&obs);
+            let rel = relative_state(&p, &obs);
+            let (ac, tc) = dist.chaser(MU, &p, t, &obs.chaser);
+            let (at, tt) = dist.target(MU, &p, t, &obs.target);
+            run.t.push(t);
+            let (r, v) = (rel.rho_m, rel.rho_dot_m_s);
+            run.trans.push(Vector6::new(r.x, r.y, r.z, v.x, v.y, v.z));
+            let (a, w) = (rel.q_r.imag() * 2.0 * deg, rel.omega_r_rad_s * deg);
+            run.rot.push(Vector6::new(a.x, a.y, a.z, w.x, w.y, w.z));
+            run.u.push(Vector6::new(f.x, f.y, f.z, tq.x, tq.y, tq.z));
+            run.delta
+                .push(disturbance_effect(&p, &obs, &ac, &tc, &at, &tt));
+            run.rate_max.0 = run.rate_max.0.max(obs.chaser.rate_body_rad_s.norm());
+            run.rate_max.1 = run.rate_max.1.max(obs.target.rate_body_rad_s.norm());
+            run.rho_max.0 = run.rho_max.0.max(r.norm());
+            run.rho_max.1 = run.rho_max.1.max(v.norm());
+            let (pc, dc) = (p.clone(), dist.clone());
+            let m = p.chaser_mass_kg;
+            let ls = move |t: f64, bs: &BodyStateEci| {
+                let (a, tg) = dc.chaser(MU, &pc, t, bs);
+                (f / m + a, tq + tg)
+            };
+            let (pt, dtg) = (p.clone(), dist.clone());
+            let lt = move |t: f64, bt: &BodyStateEci| dtg.target(MU, &pt, t, bt);
+            obs = step_pair(t, &obs, dt, &p, &ls, &lt);
+        }
+        run
+    }
+
+    /// The paper's accuracy: |mean| + 3σ of each component over [t0, t1].
+    fn accuracy(t: &[f64], x: &[Vector6<f64>], t0: f64, t1: f64) -> Vector6<f64> {
+        let sel: Vec<&Vector6<f64>> = t
+            .iter()
+            .zip(x)
+            .filter(|(t, _)| **t >= t0 && **t <= t1)
+            .map(|(_, x)| x)
+            .collect();
+        let n = sel.len() as f64;
+        let mean = sel.iter().fold(Vector6::zeros(), |a, x| a + **x) / n;
+        let var = sel.iter().fold(Vector6::zeros(), |a, x| {
+            a + (**x - mean).component_mul(&(**x - mean))
+        }) / n;
+        mean.abs() + var.map(f64::sqrt) * 3.0
+    }
+
+    /// Chattering over [t0, t1] per actuator channel: (sign changes of u per second, reversals of
+    /// the increment Δu per second, total variation Σ|Δu| per second).
+    fn chattering(
+        t: &[f64],
+        u: &[Vector6<f64>],
+        t0: f64,
+        t1: f64,
+    ) -> (Vector6<f64>, Vector6<f64>, Vector6<f64>) {
+        let idx: Vec<usize> = (0..t.len()).filter(|&k| t[k] >= t0 && t[k] <= t1).collect();
+        let dur = t1 - t0;
+        let (mut sc, mut rev, mut tv) = (Vector6::zeros(), Vector6::zeros(), Vector6::zeros());
+        for i in 0..6 {
+            let mut last_inc = 0.0;
+            for w in idx.windows(2) {
+                let (a, b) = (u[w[0]][i], u[w[1]][i]);
+                if a * b < 0.0 {
+                    sc[i] += 1.0;
+                }
+                let inc = b - a;
+                if inc != 0.0 {
+                    if inc * last_inc < 0.0 {
+                        rev[i] += 1.0;
+                    }
+                    last_inc = inc;
+                }
+                tv[i] += inc.abs();
+            }
+        }
+        (sc / dur, rev / dur, tv / dur)
     }
 }
