@@ -5,14 +5,17 @@
 //! the standard twisting laws T1 (eq 5, s = e) and T2 (eq 6, s = ė + λe with an integral
 //! twisting term) and the modified twisting laws M1 (eq 11) and M2 (eq 13) that add linear terms.
 //!
-//! # Model (SPEC P2 [derived], checked against inertial finite differences in the tests)
+//! # Model (SPEC P2 \[derived\], checked against inertial finite differences in the tests)
 //! State x = [ρ; q_rv]:
 //! - ρ = r_s + A_sᵀ p_s − r_t − A_tᵀ p_t: chaser port minus target port, expressed in the frame
 //!   chosen by [`RhoFrame`] (A = inertial→body DCM, p = port in its own body frame). The paper
-//!   writes f(*) in the chaser orbital frame F_o ([`RhoFrame::TargetHill`], the default: the
-//!   target orbital frame differs from the chaser's by ~4 µrad at the 27 m start); SPEC P2 proposes target
-//!   body axes ([`RhoFrame::TargetBody`]). Port frames have the axes of their body (the paper
-//!   gives port positions only).
+//!   writes f(*) in the orbital frame F_o: [`RhoFrame::TargetHill`], the default (x radial,
+//!   y along-track, z orbit normal — the axis order inferred from Table 2's larger y gains; the
+//!   target's orbital frame differs from the chaser's by ~5 µrad at the 36.6 m start). SPEC P2
+//!   proposes target body axes ([`RhoFrame::TargetBody`]); with the 4.7 °/s tumble that frame
+//!   starts with |ρ̇| ≈ 3 m/s and needs centripetal/Coriolis accelerations above a_max, and every
+//!   law loses the ports in it (test `regress_geng2015_target_body_rho_frame_saturates`).
+//!   Port frames have the axes of their body (the paper gives port positions only).
 //! - q_r = q_t⁻¹ ⊗ q_s (Hamilton, body→inertial quaternions), i.e. A(q_r) = A_s A_tᵀ maps target
 //!   axes to chaser axes; canonicalised to q_r0 ≥ 0 (the short way round).
 //! - ω_r = ω_s − A(q_r) ω_t in chaser axes, so that q̇_rv = G ω_r with G = ½(q_r0 I + [q_rv×]).
@@ -27,7 +30,24 @@
 //! [`Q_R0_FLOOR`] and the actuator limits bound the command.
 //!
 //! The target is modelled torque-free in sys (ω̇_t = −J_t⁻¹ ω_t×J_tω_t); gravity is point-mass μ
-//! (as the paper's f(*)); disturbances (a_d, T_d, T_g) are not compensated — they form Δ.
+//! (as the paper's f(*)); disturbances (a_d, T_d, T_g) are not compensated — they form Δ
+//! ([`disturbance_effect`]).
+//!
+//! # Laws (signs for ë = sys + B u + Δ; x_d constant, so ẋ_d = ẍ_d = 0)
+//! - T1: u = B⁻¹[−sys − α1 sgn s − β1 sgn ṡ], s = e, ṡ = ė.
+//! - M1: u = B⁻¹[−sys − M1 sgn s − M2 sgn ṡ − M3 s − M4 ṡ], s = e.
+//! - T2: u = B⁻¹[−sys − λė + w], ẇ = −α2 sgn s − β2 sgn ṡ, s = ė + λe.
+//! - M2: u = B⁻¹[−sys − λė + ν], ν̇ = −K1 sgn s − K2 sgn ṡ − K3 s − K4 ṡ, s = ė + λe.
+//!
+//! sgn is the pure sign (no boundary layer). u is saturated per axis at m_s·a_max and T_max
+//! (the paper's "a·a_max/|a| on a saturated axis" is a per-axis clip). The controller is called
+//! at the caller's period and its command held; the paper does not give its step, and 50 ms
+//! reproduces Table 3's rotation columns for T1 and M1 (tests), so use 50 ms to compare with the
+//! paper. For T2/M2, ṡ = ë + λė is not measured; [`SdotEstimate`] chooses between the integral
+//! state (default: ṡ = w or ν, i.e. the commanded ṡ with Δ = 0) and the backward difference of
+//! s. With the difference (the true, saturated ṡ) M2's linear terms wind up during the saturated
+//! approach from 36.6 m and the loop diverges (test `regress_geng2015_m2_windup_…`). The paper
+//! has no anti-windup and none is added.
 use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
@@ -77,7 +97,7 @@ pub enum RhoFrame {
     /// F_o choice (up to chaser vs target orbit, ~µrad here); the axis order is inferred from
     /// Table 2, whose larger y gains (α1, α2, M3, M4) fit the along-track separation.
     TargetHill,
-    /// Target body axes (SPEC P2 [derived]).
+    /// Target body axes (SPEC P2 \[derived\]).
     TargetBody,
 }
 
@@ -489,9 +509,10 @@ impl Geng2015Controller {
     /// Command (force_body_n, torque_body_nm) in chaser body axes, saturated per axis at
     /// m_s·a_max and T_max (the paper's a·a_max/|a| rule on a saturated axis).
     ///
-    /// x_d is constant (ẋ_d = ẍ_d = 0). For T2/M2, ṡ = ë + λė is not measured: it is the
-    /// backward difference of s between calls (first call: the model value w or ν); the
-    /// integral state is advanced by backward Euler over the call interval.
+    /// x_d is constant (ẋ_d = ẍ_d = 0). For T2/M2, ṡ comes from `params.sdot_estimate` (the
+    /// difference needs a previous call; the first call uses w or ν); the integral state is
+    /// advanced by backward Euler over the interval since the previous call (none on the first
+    /// call or if `obs.t_s` did not advance).
     pub fn command(&mut self, obs: &Geng2015Obs) -> (Vector3<f64>, Vector3<f64>) {
         let p = &self.params;
         let g = &p.gains;
