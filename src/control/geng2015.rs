@@ -1702,4 +1702,23 @@ mod tests {
         assert!(convergence_time_bound_s(1.0, 0.8, 0.5, 0.1, 1.0, 1.0, 1.0, 0.0).is_none());
         assert!(convergence_time_bound_s(2.0, 0.4, 0.5, 0.1, 1.0, 1.0, 1.0, 0.0).is_none());
     }
+
+    #[test]
+    fn invariant_geng2015_params_serde_roundtrip() {
+        // Scene files carry these structs: a JSON round trip keeps every value, and unknown
+        // fields are refused.
+        let p = Geng2015Params::paper();
+        let back: Geng2015Params =
+            serde_json::from_str(&serde_json::to_string(&p).unwrap()).unwrap();
+        assert_eq!(back.gains.m2_k4, p.gains.m2_k4);
+        assert_eq!(back.chaser_inertia_kg_m2, p.chaser_inertia_kg_m2);
+        assert_eq!(back.rho_frame, p.rho_frame);
+        let mut v: serde_json::Value = serde_json::to_value(&p).unwrap();
+        v["bogus_m"] = serde_json::json!(1.0);
+        assert!(serde_json::from_value::<Geng2015Params>(v).is_err());
+        let d = Geng2015Disturbances::paper_periodic(1e-3);
+        let back: Geng2015Disturbances =
+            serde_json::from_str(&serde_json::to_string(&d).unwrap()).unwrap();
+        assert_eq!(back.chaser_form, AccelDisturbanceForm::Sine);
+    }
 }
