@@ -75,7 +75,14 @@
 //! lines tangent to the circle ‖ρ‖ = l: the barrier is {miss distance of the relative line = l,
 //! closest approach ahead}. A state is in the capture region iff the relative line enters the
 //! disc (or the pair is already in D): [`closest_approach`] gives the miss distance in closed
-//! form, [`barrier_function_m`] = miss − l (≤ 0: capture). With the L2 drift, [`classify_state`]
+//! form, [`barrier_function_m`] = miss − l (≤ 0: capture). The escape side is exact for any P:
+//! on the barrier the normal's velocity part is t_ca·m̂ (m̂: predicted miss direction), and E
+//! thrusting along m̂ makes d(miss)/dt ≥ 0 whatever P does. The capture side assumes P may
+//! react to E's current thrust (the upper value; with equal F/M P then cancels it): a P that
+//! reacts to the state only does not catch an E that brakes along the line of sight (the test
+//! `invariant_zhang2018_barrier_is_semipermeable` pins this: 100 m inside the barrier, the
+//! braking E passes at 7.1 km). For E's safety — the use made here — only the escape side
+//! matters. With the L2 drift, [`classify_state`]
 //! propagates both spacecraft thrust-free (the saddle play leaves the relative motion unchanged
 //! up to third-order gravity-gradient terms of the common displacement) and takes the minimum
 //! separation over a horizon. With F_p/M_p > F_e/M_e this test is not a barrier (P wins
@@ -1237,6 +1244,97 @@ mod tests {
                 (t_sign - (t_ca - lead)).abs() <= 2.0 * dt,
                 "t_sign {t_sign} t_ca {t_ca}"
             );
+        }
+    }
+
+    #[test]
+    fn invariant_zhang2018_barrier_is_semipermeable() {
+        // Reference: the saddle property of the adversarial game on the barrier
+        // {miss = l, closest approach ahead}. Its normal's velocity part is ∇_w miss = t_ca·m̂
+        // (m̂: predicted miss direction), so in continuous time
+        // d(miss)/dt = (F/M)·t_ca·(û·m̂ − v̂·m̂) (equal F/M): ≥ 0 whenever E plays u = m̂.
+        // Escape side: start δ = 100 m outside; E plays u* = m̂ (what the avoidance law does
+        // when engaged) against P's optimum (m̂), pure pursuit along the line of sight and four
+        // fixed directions: the separation must stay above l. RK4 / 2 s zero-order-hold errors
+        // are O((F/M)·dt·t_ca) ≈ 5 m ≪ δ/2, the bound checked; the differential L2 drift
+        // (~1e-7 m/s² over ~1e4 s) moves the miss by ~5 m.
+        // Capture side (δ inside): P captures if it mirrors E's current thrust (the upper value:
+        // with equal F/M the relative motion is then ballistic), against every E strategy; and a
+        // state-feedback P playing v = m̂ captures E playing u* = m̂. A state-feedback P does
+        // not capture an E that brakes along the line of sight (strategy 1): the closed-form
+        // capture region assumes P may react to E's thrust. Pinned here as a finding.
+        let base = p_state(&paper_initial_state_rot(&l2()));
+        let delta = 100.0;
+        for drift in [Drift::ForceFree, Drift::L2(l2())] {
+            let mut p = Zhang2018Params::paper();
+            p.drift = drift;
+            let l = p.capture_radius_m;
+            let (ap, ae) = (p.alpha_p_m_s2(), p.alpha_e_m_s2());
+            let mut ff = p.clone();
+            ff.drift = Drift::ForceFree;
+            let cases: &[(f64, f64)] = match p.drift {
+                Drift::ForceFree => &[(0.4, 2.0), (2.5, -2.0)],
+                Drift::L2(_) => &[(2.5, -2.0)],
+            };
+            for &(s5, w_t) in cases {
+                let xb = bup_state(&ff, &base, s5, w_t, PursuerRole::Adversarial);
+                let start = retrograde_path(
+                    &ff,
+                    &xb,
+                    &gamma_on_boundary(s5),
+                    PursuerRole::Adversarial,
+                    5000.0,
+                    1,
+                )[1]
+                .x;
+                let e = Vector2::new(s5.cos(), s5.sin());
+                // Strategy k of "the other side": 0 = m̂, 1 = line of sight (E: away from P,
+                // P: towards E), 2..5 fixed directions.
+                let other = |k: usize, x: &GameState, m_hat: f64| match k {
+                    0 => m_hat,
+                    1 => los_angle_s5_rad(x),
+                    _ => k as f64 * 1.3,
+                };
+                // mode 0: E = m̂, P = other(k); 1: P = m̂, E = other(k); 2: E = other(k), P = E.
+                let run = |x0: GameState, mode: u8, k: usize| {
+                    let mut x = x0;
+                    let mut min_sep = f64::INFINITY;
+                    for _ in 0..5_000 {
+                        let ca = closest_approach(&x);
+                        let sep = (rel_pos_m(&x) + rel_vel_m_s(&x) * ca.t_ca_s.min(2.0)).norm();
+                        min_sep = min_sep.min(sep);
+                        let m_hat = ca.s5_ca_rad;
+                        let (u, v) = match mode {
+                            0 => (m_hat, other(k, &x, m_hat)),
+                            1 => (other(k, &x, m_hat), m_hat),
+                            _ => (other(k, &x, m_hat), other(k, &x, m_hat)),
+                        };
+                        let pa = p.drift.rk4_step(&p_state(&x), &(dir(v) * ap), 2.0);
+                        let ea = p.drift.rk4_step(&e_state(&x), &(dir(u) * ae), 2.0);
+                        x = join(&pa, &ea);
+                    }
+                    min_sep
+                };
+                let shifted = |side: f64| {
+                    let mut x0 = start;
+                    x0[4] += side * delta * e[0];
+                    x0[5] += side * delta * e[1];
+                    x0
+                };
+                for k in 0..6 {
+                    let esc = run(shifted(1.0), 0, k);
+                    assert!(esc > l + 0.5 * delta, "escape side, P strategy {k}: {esc}");
+                    let cap = run(shifted(-1.0), 2, k);
+                    assert!(cap < l - 0.5 * delta, "informed P, E strategy {k}: {cap}");
+                }
+                let cap = run(shifted(-1.0), 1, 0);
+                assert!(cap < l - 0.5 * delta, "P m̂ vs E m̂: {cap}");
+                let brake = run(shifted(-1.0), 1, 1);
+                eprintln!(
+                    "semipermeable: s5 {s5}: E braking along the LOS vs P = m̂: min sep {brake:.0} m"
+                );
+                assert!(brake > l, "finding changed: {brake}");
+            }
         }
     }
 
