@@ -14,6 +14,8 @@ pub mod guarantee;
 pub mod math;
 pub mod orbit;
 pub mod report;
+#[cfg(feature = "sim")]
+pub mod reproduce;
 pub mod scene;
 #[cfg(feature = "sim")]
 pub mod sim;

@@ -41,6 +41,15 @@ enum Cmd {
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
     },
+    /// Reproduce a paper's headline result (all papers without a name): REPORT.md, plots,
+    /// claims.json under OUT/NAME.
+    Reproduce {
+        /// Paper (guo2016, xu2015, geng2015, zhang2018); omit to run every paper.
+        name: Option<String>,
+        /// Output directory.
+        #[arg(long, default_value = "out/reproduce")]
+        out: PathBuf,
+    },
     /// Measure steps/s of a scene against the bare rapier step and bare parry queries.
     Bench {
         /// Scene file (default scenes/free_drift.ron).
@@ -84,6 +93,7 @@ fn main() -> ExitCode {
                 ExitCode::SUCCESS
             }
         }
+        Cmd::Reproduce { name, out } => reproduce(name, &out),
         Cmd::Bench { scene, steps } => match rpod::bench::run(&scene, steps) {
             Ok(report) => {
                 println!("{report}");
@@ -201,5 +211,50 @@ fn run(
             eprintln!("error: writing outputs to {}: {e}", out.display());
             ExitCode::from(1)
         }
+    }
+}
+
+fn reproduce(name: Option<String>, out: &std::path::Path) -> ExitCode {
+    let names: Vec<String> = match name {
+        Some(n) => vec![n],
+        None => rpod::reproduce::PAPERS
+            .iter()
+            .map(|s| s.to_string())
+            .collect(),
+    };
+    let mut failed = false;
+    for n in &names {
+        let dir = out.join(n);
+        println!("== {n} → {}", dir.display());
+        if let Err(e) = rpod::reproduce::run(n, &dir) {
+            eprintln!("error: {n}: {e}");
+            failed = true;
+            continue;
+        }
+        let claims = std::fs::read_to_string(dir.join("claims.json"))
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+        for c in claims
+            .as_ref()
+            .and_then(|v| v.as_array())
+            .into_iter()
+            .flatten()
+        {
+            println!(
+                "  [{}] {}: {}",
+                if c["held"].as_bool() == Some(true) {
+                    "held"
+                } else {
+                    "NOT held"
+                },
+                c["id"].as_str().unwrap_or(""),
+                c["measured"].as_str().unwrap_or("")
+            );
+        }
+    }
+    if failed {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
     }
 }

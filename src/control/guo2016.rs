@@ -995,3 +995,11 @@ mod tests {
         assert!(c.h(&mid) < 0.0);
     }
 }
+
+/// How a scene asks for this law (extended by the simulation wiring of this paper).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSpec {
+    /// The body this law flies.
+    pub body: String,
+}

@@ -1372,3 +1372,11 @@ mod tests {
         assert!(off.first_engaged_s.is_none());
     }
 }
+
+/// How a scene asks for this law (extended by the simulation wiring of this paper).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSpec {
+    /// The body this law flies.
+    pub body: String,
+}

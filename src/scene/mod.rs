@@ -46,6 +46,9 @@ pub struct Scene {
     /// Invariants the monitor checks every step.
     #[serde(default)]
     pub guarantees: Vec<GuaranteeSpec>,
+    /// Control laws flying the bodies (each names the bodies it acts on).
+    #[serde(default)]
+    pub controllers: Vec<crate::control::ControllerSpec>,
 }
 
 fn one() -> u32 {

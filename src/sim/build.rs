@@ -131,11 +131,13 @@ impl Simulation {
                         (Vector3::from(*r_eci_m), Vector3::from(*v_eci_m_s))
                     }
                 };
-                app.insert_resource(OrbitEnv {
+                let env = OrbitEnv {
                     reference: crate::orbit::integrate::ReferenceOrbit::from_state(r, v, *j2),
                     j2: *j2,
                     gravity_gradient: *gravity_gradient,
-                });
+                };
+                app.insert_resource(super::Gravity(Box::new(env.clone())));
+                app.insert_resource(env);
                 Some((r, v))
             }
             Environment::FreeSpace => None,
@@ -338,6 +340,7 @@ impl Simulation {
             force_row: false,
         });
         super::add_pipeline(&mut app);
+        super::laws::install(&mut app, loaded)?;
         app.finish();
         app.cleanup();
         // The monitor's view of t = 0.

@@ -24,6 +24,7 @@
 //! same scene gives byte-identical outputs on every run.
 
 pub mod build;
+pub mod laws;
 pub mod monitor;
 pub mod output;
 
@@ -97,6 +98,29 @@ pub struct OrbitEnv {
     pub j2: bool,
     /// Apply gravity-gradient torques.
     pub gravity_gradient: bool,
+}
+
+/// A gravity field acting on every body's centre of mass, in the world frame. The physics
+/// step evaluates it twice per step (velocity Verlet), so it must be a function of position
+/// (and of the field's own time, advanced by [`GravityField::advance`]) only.
+pub trait GravityField: Send + Sync {
+    /// Acceleration at a world position, m/s², at the field's current time.
+    fn accel_m_s2(&self, pos_world_m: &Vector3<f64>) -> Vector3<f64>;
+    /// Moves the field's time on by `dt_s` (e.g. propagates a reference orbit).
+    fn advance(&mut self, dt_s: f64);
+}
+
+/// The scene's gravity field, if any (orbit scenes: [`OrbitEnv`]'s differential gravity).
+#[derive(Resource)]
+pub struct Gravity(pub Box<dyn GravityField>);
+
+impl GravityField for OrbitEnv {
+    fn accel_m_s2(&self, pos_world_m: &Vector3<f64>) -> Vector3<f64> {
+        crate::orbit::gravity::differential_accel(&self.reference.state().0, pos_world_m, self.j2)
+    }
+    fn advance(&mut self, dt_s: f64) {
+        self.reference.step(dt_s);
+    }
 }
 
 /// A spacecraft.
@@ -284,18 +308,20 @@ fn advance(world: &mut World) {
     world.resource_mut::<StepBudget>().0 = 0;
 }
 
-/// Environment: differential gravity (and J2) on every body, gravity-gradient torque.
-fn environment_orbit(
-    env: Option<Res<OrbitEnv>>,
+/// Environment: the gravity field on every body; in orbit, the gravity-gradient torque.
+fn environment_gravity(
+    gravity: Option<Res<Gravity>>,
+    orbit: Option<Res<OrbitEnv>>,
     mut q: Query<(&SimBody, &BodyState, &mut Wrench)>,
 ) {
-    let Some(env) = env else { return };
-    let (r_ref, _) = env.reference.state();
     for (b, s, mut w) in &mut q {
-        let a = crate::orbit::gravity::differential_accel(&r_ref, &s.pos_m, env.j2);
-        w.gravity_n += a * b.mass_kg;
-        if env.gravity_gradient {
-            let r = r_ref + s.pos_m;
+        if let Some(g) = &gravity {
+            w.gravity_n += g.0.accel_m_s2(&s.pos_m) * b.mass_kg;
+        }
+        if let Some(env) = &orbit
+            && env.gravity_gradient
+        {
+            let r = env.reference.state().0 + s.pos_m;
             let dcm_body_from_world = s.att.inverse().to_rotation_matrix().into_inner();
             let tb = crate::orbit::gravity::gravity_gradient_torque_body(
                 &r,
@@ -304,6 +330,14 @@ fn environment_orbit(
             );
             w.torque_nm += s.att * tb;
         }
+    }
+}
+
+/// Keeps the reference orbit used for gravity-gradient torques and frames in step with the
+/// gravity field (the field owns its own copy).
+fn advance_orbit(mut orbit: Option<ResMut<OrbitEnv>>, clock: Res<Clock>) {
+    if let Some(env) = orbit.as_mut() {
+        env.reference.step(clock.dt_s);
     }
 }
 
@@ -350,7 +384,7 @@ pub fn rotate_rk4(
 fn physics_step(
     mut phys: ResMut<Physics>,
     mut clock: ResMut<Clock>,
-    env: Option<ResMut<OrbitEnv>>,
+    gravity: Option<ResMut<Gravity>>,
     mut q: Query<(&SimBody, &mut BodyState, &mut Wrench)>,
     mut contact: ResMut<monitor::ContactState>,
 ) {
@@ -369,14 +403,11 @@ fn physics_step(
     for _ in 0..substeps {
         phys.world.step();
     }
-    // The reference orbit moves to t + dt first: gravity at the new positions needs it.
-    let (r_ref_new, j2) = match env {
-        Some(mut env) => {
-            env.reference.step(dt);
-            (Some(env.reference.state().0), env.j2)
-        }
-        None => (None, false),
-    };
+    // The gravity field moves to t + dt first: gravity at the new positions needs it.
+    let gravity = gravity.map(|mut g| {
+        g.0.advance(dt);
+        g
+    });
     // Which bodies touch something or are jointed: rapier is the truth for those.
     contact.refresh_touching(&phys.world);
     let world = &mut phys.world;
@@ -408,8 +439,8 @@ fn physics_step(
             let a_c = w.force_n / b.mass_kg;
             let v0 = s.vel_m_s;
             s.pos_m += v0 * dt + (a_g0 + a_c) * (0.5 * dt * dt);
-            let a_g1 = match r_ref_new {
-                Some(r) => crate::orbit::gravity::differential_accel(&r, &s.pos_m, j2),
+            let a_g1 = match &gravity {
+                Some(g) => g.0.accel_m_s2(&s.pos_m),
                 None => Vector3::zeros(),
             };
             s.vel_m_s = v0 + (a_g0 + a_g1) * (0.5 * dt) + a_c * dt;
@@ -523,8 +554,8 @@ pub fn add_pipeline(app: &mut App) {
             .chain(),
     );
     schedule.add_systems((
-        environment_orbit.in_set(Stage::Environment),
-        physics_step.in_set(Stage::Physics),
+        environment_gravity.in_set(Stage::Environment),
+        (physics_step, advance_orbit).chain().in_set(Stage::Physics),
         (monitor::distances, monitor::contacts, check_guarantees)
             .chain()
             .in_set(Stage::Monitor),
