@@ -73,7 +73,7 @@
 //! (zero-order hold), so the caller may step faster than h. Calls must not be spaced by more
 //! than h (the model assumes exactly h between samples).
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// Golden-section coefficient l1 = (3 − √5)/2 ≈ 0.382 (paper, eq. (21)).
@@ -124,7 +124,7 @@ pub fn quintic_reference(
 
 /// Parameters of the ACCM controller (per-axis identical), SI units.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default)]
 pub struct AccmParams {
     /// Sample period h, s [derived: paper silent; 0.1 s makes β0 = h²/m = 1e−4 s²/kg as in
     /// SPEC's reconstruction].
@@ -440,7 +440,7 @@ fn accm_axis_step(
 
 /// Parameters of the PD baseline, SI units.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default)]
 pub struct PdParams {
     /// Sample period h, s (same as ACCM).
     pub sample_period_s: f64,
@@ -500,6 +500,21 @@ impl Pd {
         }
     }
 
+    /// Reference position ξ_r (tof, m) at time `t_s`, or None before the first update.
+    pub fn reference_tof_m(&self, t_s: f64) -> Option<Vector3<f64>> {
+        let t0 = self.clock.t0_s?;
+        let p = &self.params;
+        Some(Vector3::from_fn(|i, _| {
+            quintic_reference(
+                self.clock.start_tof_m[i],
+                p.goal_tof_m[i],
+                p.reference_duration_s,
+                t_s - t0,
+            )
+            .0
+        }))
+    }
+
     /// One control call: runs a sample if one is due, otherwise returns the held command.
     pub fn update(&mut self, obs: &Xu2015Observation) -> Xu2015Command {
         let p = &self.params;
@@ -526,6 +541,402 @@ impl Pd {
         Xu2015Command {
             force_tof_n: self.clock.held,
         }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scene wiring, Bevy-free part: what a scene asks for, the target maneuver, the measurement
+// noise, the target orbital frame and the thrust-authority margin. The ECS systems that use
+// them are in `crate::sim::laws::xu2015`.
+
+/// Which of the paper's two controllers flies the chaser.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Xu2015Law {
+    /// Characteristic-model golden-section adaptive control ([`Accm`], params `accm`).
+    Accm,
+    /// The PD baseline ([`Pd`], params `pd`).
+    Pd,
+}
+
+/// The target's maneuver force, per axis of the target orbital frame:
+/// `F_t,i(t) = amplitude_n[i] · sin(omega_rad_s[i] · t + phase_rad[i])`, N, t in s from the
+/// start of the run. Paper §3: amplitudes (10, 4, 8) N, ω = (0.08, 0.05, 0.1) rad/s,
+/// φ = (π/6, π/4, π/2).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ManeuverSpec {
+    /// Amplitudes, N (tof x, y, z).
+    pub amplitude_n: [f64; 3],
+    /// Angular frequencies, rad/s.
+    pub omega_rad_s: [f64; 3],
+    /// Phases at t = 0, rad.
+    pub phase_rad: [f64; 3],
+}
+
+impl ManeuverSpec {
+    /// The paper's maneuver (see the type's docs).
+    pub fn paper() -> Self {
+        use std::f64::consts::PI;
+        Self {
+            amplitude_n: [10.0, 4.0, 8.0],
+            omega_rad_s: [0.08, 0.05, 0.1],
+            phase_rad: [PI / 6.0, PI / 4.0, PI / 2.0],
+        }
+    }
+
+    /// The force at time `t_s`, target orbital frame, N.
+    pub fn force_tof_n(&self, t_s: f64) -> Vector3<f64> {
+        Vector3::from_fn(|i, _| {
+            self.amplitude_n[i] * (self.omega_rad_s[i] * t_s + self.phase_rad[i]).sin()
+        })
+    }
+
+    /// Peak force per axis |amplitude|, N.
+    pub fn peak_n(&self) -> Vector3<f64> {
+        Vector3::from(self.amplitude_n).abs()
+    }
+}
+
+impl Default for ManeuverSpec {
+    fn default() -> Self {
+        Self::paper()
+    }
+}
+
+/// The relative-position measurement: sampled every `sample_period_s` of the flying law
+/// (the sensor and the discrete controller share the paper's period h), with independent
+/// zero-mean Gaussian noise of standard deviation `noise_sigma_m` per axis (target orbital
+/// frame), drawn from a generator seeded with `seed` (same scene, same noise). Default: no
+/// noise (the paper is silent on measurement noise).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SensorSpec {
+    /// Noise standard deviation per axis, m (≥ 0).
+    pub noise_sigma_m: f64,
+    /// Seed of the noise generator.
+    pub seed: u64,
+}
+
+impl Default for SensorSpec {
+    fn default() -> Self {
+        Self {
+            noise_sigma_m: 0.0,
+            seed: 1,
+        }
+    }
+}
+
+/// How a scene asks for this law (`controllers: [Xu2015((body: "chaser", target: "target",
+/// law: Accm, ...))]`). The controlled relative position is, in the target orbital frame of
+/// the reference orbit, ξ = C_tofᵀ (r_chaser − r_target) − `aim_offset_tof_m` (centres of
+/// mass, world frame); see `crate::sim::laws::xu2015` for the frame choice.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSpec {
+    /// The body this law flies (the chaser; the paper's 5 N per axis acts on it).
+    pub body: String,
+    /// The maneuvering target (its centre of mass is the origin of the relative position and
+    /// it receives `target_maneuver`).
+    pub target: String,
+    /// Which controller.
+    pub law: Xu2015Law,
+    /// ACCM parameters (used when `law: Accm`; default [`AccmParams::paper`]).
+    #[serde(default)]
+    pub accm: AccmParams,
+    /// PD parameters (used when `law: Pd`; default [`PdParams::paper`]).
+    #[serde(default)]
+    pub pd: PdParams,
+    /// Measurement noise (sampled at the law's period).
+    #[serde(default)]
+    pub sensor: SensorSpec,
+    /// The target's maneuver force, applied to the target body in the target orbital frame.
+    #[serde(default)]
+    pub target_maneuver: ManeuverSpec,
+    /// The point, relative to the target's centre of mass in the target orbital frame, that the
+    /// paper's relative-position origin is mapped to, m. Zero reproduces the paper's point-mass
+    /// reading literally (the goal [−0.01, 0, 0] m would put the centres of mass 1 cm apart);
+    /// a stand-off lets real spacecraft geometry end the run without overlapping.
+    #[serde(default)]
+    pub aim_offset_tof_m: [f64; 3],
+    /// Register the per-axis thrust-authority margin with the monitor (default true).
+    #[serde(default = "yes")]
+    pub thrust_authority_guarantee: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl SceneSpec {
+    /// Sample period of the flying law, s.
+    pub fn sample_period_s(&self) -> f64 {
+        match self.law {
+            Xu2015Law::Accm => self.accm.sample_period_s,
+            Xu2015Law::Pd => self.pd.sample_period_s,
+        }
+    }
+
+    /// Per-axis thrust limit of the flying law, N.
+    pub fn thrust_max_n(&self) -> f64 {
+        match self.law {
+            Xu2015Law::Accm => self.accm.thrust_max_n,
+            Xu2015Law::Pd => self.pd.thrust_max_n,
+        }
+    }
+
+    /// Field (relative to the spec) holding the flying law's sample period.
+    pub fn sample_period_field(&self) -> &'static str {
+        match self.law {
+            Xu2015Law::Accm => "accm.sample_period_s",
+            Xu2015Law::Pd => "pd.sample_period_s",
+        }
+    }
+
+    /// Physical checks; on failure the field path (relative to the spec) and the message.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let bad = |f: &str, m: String| Err((f.to_string(), m));
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        let a = &self.accm;
+        let checks: [(&str, f64); 6] = [
+            ("accm.sample_period_s", a.sample_period_s),
+            ("accm.mass_nominal_kg", a.mass_nominal_kg),
+            ("accm.thrust_max_n", a.thrust_max_n),
+            ("accm.reference_duration_s", a.reference_duration_s),
+            ("accm.eta_m", a.eta_m),
+            ("accm.lambda2_m2", a.lambda2_m2),
+        ];
+        for (f, v) in checks {
+            if !pos(v) {
+                return bad(f, format!("must be a positive number, got {v}"));
+            }
+        }
+        if a.shift_m.is_nan() || a.shift_m <= a.eta_m {
+            return bad(
+                "accm.shift_m",
+                format!(
+                    "the shift d must exceed η = {} m (so y = ξ + d stays away from zero), got {}",
+                    a.eta_m, a.shift_m
+                ),
+            );
+        }
+        if !(a.lambda1 > 0.0 && a.lambda1 < 2.0) {
+            return bad(
+                "accm.lambda1",
+                format!(
+                    "must lie in (0, 2) for a stable gradient update, got {}",
+                    a.lambda1
+                ),
+            );
+        }
+        for (f, b) in [
+            ("accm.alpha1_bounds", a.alpha1_bounds),
+            ("accm.alpha2_bounds", a.alpha2_bounds),
+            ("accm.gamma_bounds", a.gamma_bounds),
+        ] {
+            if b[0].is_nan() || b[1].is_nan() || b[0] > b[1] {
+                return bad(
+                    f,
+                    format!("must be (lower, upper) with lower ≤ upper, got {b:?}"),
+                );
+            }
+        }
+        if !(a.gamma_bounds[0] + a.lambda_ctrl_rel > 0.0) {
+            return bad(
+                "accm.gamma_bounds",
+                "γ_min + λ must be positive (the control divides by β̂ + λ)".into(),
+            );
+        }
+        let p = &self.pd;
+        let checks: [(&str, f64); 4] = [
+            ("pd.sample_period_s", p.sample_period_s),
+            ("pd.mass_nominal_kg", p.mass_nominal_kg),
+            ("pd.thrust_max_n", p.thrust_max_n),
+            ("pd.reference_duration_s", p.reference_duration_s),
+        ];
+        for (f, v) in checks {
+            if !pos(v) {
+                return bad(f, format!("must be a positive number, got {v}"));
+            }
+        }
+        for (f, v) in [("pd.kp_s2", p.kp_s2), ("pd.kd_s", p.kd_s)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(f, format!("must be a non-negative gain, got {v}"));
+            }
+        }
+        if !(self.sensor.noise_sigma_m.is_finite() && self.sensor.noise_sigma_m >= 0.0) {
+            return bad(
+                "sensor.noise_sigma_m",
+                format!(
+                    "must be a non-negative standard deviation in metres, got {}",
+                    self.sensor.noise_sigma_m
+                ),
+            );
+        }
+        let m = &self.target_maneuver;
+        for i in 0..3 {
+            if !(m.amplitude_n[i].is_finite()
+                && m.omega_rad_s[i].is_finite()
+                && m.phase_rad[i].is_finite())
+            {
+                return bad("target_maneuver", "every component must be finite".into());
+            }
+        }
+        if self.aim_offset_tof_m.iter().any(|v| !v.is_finite()) {
+            return bad("aim_offset_tof_m", "must be finite".into());
+        }
+        Ok(())
+    }
+}
+
+/// The target orbital frame of an orbit state (paper's o-frame, see `crate::orbit::elliptic`):
+/// columns are its axes in ECI, x = y × z (in-plane transverse), y = −ĥ (−orbit normal),
+/// z = −r̂ (to Earth's centre). `r_eci_m`, `v_eci_m_s`: the orbit's position and velocity.
+pub fn dcm_eci_from_tof_state(r_eci_m: &Vector3<f64>, v_eci_m_s: &Vector3<f64>) -> Matrix3<f64> {
+    let z = -r_eci_m.normalize();
+    let y = -r_eci_m.cross(v_eci_m_s).normalize();
+    let x = y.cross(&z);
+    Matrix3::from_columns(&[x, y, z])
+}
+
+/// Thrust-authority margin per axis at time `t_s`, m/s²: the chaser's maximum acceleration
+/// `thrust_max_n / mass_chaser_kg` less the target's maneuver acceleration
+/// |F_t,i(t)| / `mass_target_kg`. Negative: on that axis the chaser cannot match the target's
+/// acceleration at that instant (it falls behind whatever the control law).
+pub fn thrust_authority_margin_m_s2(
+    thrust_max_n: f64,
+    mass_chaser_kg: f64,
+    maneuver: &ManeuverSpec,
+    mass_target_kg: f64,
+    t_s: f64,
+) -> Vector3<f64> {
+    let a_max = thrust_max_n / mass_chaser_kg;
+    maneuver
+        .force_tof_n(t_s)
+        .map(|f| a_max - f.abs() / mass_target_kg)
+}
+
+/// Seeded standard-normal generator (SplitMix64 → Box–Muller), deterministic across runs and
+/// platforms; used for the measurement noise.
+#[derive(Debug, Clone)]
+pub struct GaussianNoise {
+    state: u64,
+    spare: Option<f64>,
+}
+
+impl GaussianNoise {
+    /// A generator seeded with `seed`.
+    pub fn new(seed: u64) -> Self {
+        Self {
+            state: seed,
+            spare: None,
+        }
+    }
+
+    fn next_u64(&mut self) -> u64 {
+        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform on (0, 1].
+    fn uniform(&mut self) -> f64 {
+        ((self.next_u64() >> 11) as f64 + 1.0) / (1u64 << 53) as f64
+    }
+
+    /// One N(0, 1) sample.
+    pub fn standard_normal(&mut self) -> f64 {
+        if let Some(s) = self.spare.take() {
+            return s;
+        }
+        let (u1, u2) = (self.uniform(), self.uniform());
+        let r = (-2.0 * u1.ln()).sqrt();
+        let (s, c) = (std::f64::consts::TAU * u2).sin_cos();
+        self.spare = Some(r * s);
+        r * c
+    }
+}
+
+#[cfg(test)]
+mod scene_tests {
+    //! References: the Keplerian frame of `crate::orbit::elliptic` (built from elements, not
+    //! from r × v), the moments of the standard normal law, and the paper's numbers.
+    use super::*;
+    use crate::orbit::elliptic::EllipticOrbit;
+
+    /// The tof built from (r, v) equals `EllipticOrbit::dcm_eci_from_tof(f)` built from the
+    /// elements, along the P1 orbit (orthonormal, right-handed, same axes to round-off).
+    #[test]
+    fn val_xu2015_tof_from_state_matches_elements() {
+        let o = EllipticOrbit::xu2015();
+        for k in 0..50 {
+            let f = o.true_anomaly_at(k as f64 * 300.0);
+            let (r, v) = o.eci_state(f);
+            let a = dcm_eci_from_tof_state(&r, &v);
+            let b = o.dcm_eci_from_tof(f);
+            assert!((a - b).amax() < 1e-12, "f = {f}: {}", (a - b).amax());
+            assert!((a.transpose() * a - Matrix3::identity()).amax() < 1e-14);
+            assert!((a.determinant() - 1.0).abs() < 1e-14);
+        }
+    }
+
+    /// Paper numbers: peak maneuver accelerations (10, 4, 8)/200 m/s²; the 5 N chaser has a
+    /// positive margin on every axis at 90 and 100 kg and a negative one on x only at 110 kg
+    /// (5/110 − 10/200 = −4.5e−3 m/s²), reached where |sin| = 1.
+    #[test]
+    fn val_xu2015_thrust_authority_margins() {
+        let m = ManeuverSpec::paper();
+        let worst = |mc: f64| {
+            (0..=30_000).fold(Vector3::repeat(f64::INFINITY), |acc, k| {
+                let g = thrust_authority_margin_m_s2(5.0, mc, &m, 200.0, k as f64 * 0.01);
+                acc.zip_map(&g, f64::min)
+            })
+        };
+        for mc in [90.0, 100.0] {
+            assert!(worst(mc).min() > 0.0, "{mc} kg: {:?}", worst(mc));
+        }
+        let w = worst(110.0);
+        let exact = 5.0 / 110.0 - 10.0 / 200.0;
+        assert!(w.x < 0.0 && (w.x - exact).abs() < 1e-8, "x {}", w.x);
+        assert!(w.y > 0.0 && w.z > 0.0);
+    }
+
+    /// Gaussian noise: same seed, same sequence; sample mean and variance within 5 standard
+    /// errors of 0 and 1 (SE of the mean 1/√n, of the variance √(2/n)).
+    #[test]
+    fn invariant_gaussian_noise_moments_and_determinism() {
+        let n = 200_000;
+        let mut g = GaussianNoise::new(7);
+        let xs: Vec<f64> = (0..n).map(|_| g.standard_normal()).collect();
+        let mut g2 = GaussianNoise::new(7);
+        assert!(xs.iter().take(100).all(|x| *x == g2.standard_normal()));
+        let mean = xs.iter().sum::<f64>() / n as f64;
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+        let nf = n as f64;
+        assert!(mean.abs() < 5.0 / nf.sqrt(), "mean {mean}");
+        assert!((var - 1.0).abs() < 5.0 * (2.0 / nf).sqrt(), "var {var}");
+    }
+
+    /// A scene spec with only the required fields takes the paper's values; validation
+    /// rejects a shift inside Ω and negative noise with the field named.
+    #[test]
+    fn regress_scene_spec_defaults_and_validation() {
+        let s: SceneSpec =
+            ron::from_str(r#"(body: "chaser", target: "target", law: Accm)"#).expect("parses");
+        assert_eq!(s.accm.sample_period_s, 0.1);
+        assert_eq!(s.pd.kp_s2, PdParams::paper().kp_s2);
+        assert_eq!(s.target_maneuver, ManeuverSpec::paper());
+        assert!(s.validate().is_ok());
+        let mut b = s.clone();
+        b.accm.shift_m = 0.4;
+        assert_eq!(b.validate().unwrap_err().0, "accm.shift_m");
+        let mut b = s.clone();
+        b.sensor.noise_sigma_m = -1.0;
+        assert_eq!(b.validate().unwrap_err().0, "sensor.noise_sigma_m");
+        let p: Result<SceneSpec, _> =
+            ron::from_str(r#"(body: "c", target: "t", law: Accm, accm: (eta: 1.0))"#);
+        assert!(p.is_err(), "unknown field accepted");
     }
 }
 
@@ -897,12 +1308,4 @@ mod tests {
             assert!(s.max_err_axis_m.x > 1.0, "x error {}", s.max_err_axis_m.x);
         }
     }
-}
-
-/// How a scene asks for this law (extended by the simulation wiring of this paper).
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SceneSpec {
-    /// The body this law flies.
-    pub body: String,
 }
