@@ -640,12 +640,13 @@ pub struct SceneSpec {
     pub target: String,
     /// Which controller.
     pub law: Xu2015Law,
-    /// ACCM parameters (used when `law: Accm`; default [`AccmParams::paper`]).
+    /// ACCM parameters (used when `law: Accm`; default [`AccmParams::paper`]; boxed to keep
+    /// the scene's controller list compact).
     #[serde(default)]
-    pub accm: AccmParams,
+    pub accm: Box<AccmParams>,
     /// PD parameters (used when `law: Pd`; default [`PdParams::paper`]).
     #[serde(default)]
-    pub pd: PdParams,
+    pub pd: Box<PdParams>,
     /// Measurement noise (sampled at the law's period).
     #[serde(default)]
     pub sensor: SensorSpec,
@@ -740,7 +741,13 @@ impl SceneSpec {
                 );
             }
         }
-        if !(a.gamma_bounds[0] + a.lambda_ctrl_rel > 0.0) {
+        if a.lambda_ctrl_rel.is_nan() || a.lambda_ctrl_rel < 0.0 {
+            return bad(
+                "accm.lambda_ctrl_rel",
+                format!("must be ≥ 0, got {}", a.lambda_ctrl_rel),
+            );
+        }
+        if a.gamma_bounds[0] + a.lambda_ctrl_rel <= 0.0 {
             return bad(
                 "accm.gamma_bounds",
                 "γ_min + λ must be positive (the control divides by β̂ + λ)".into(),

@@ -8,7 +8,11 @@
 //! paper's model describes. Terminal accuracy = |ξ − goal| over the last 100 s (t ≥ 200 s),
 //! sampled at the control period h = 0.1 s.
 
-use crate::control::xu2015::{Xu2015Law, dcm_eci_from_tof_state};
+use crate::control::xu2015::{
+    Accm, AccmParams, ManeuverSpec, Pd, PdParams, Xu2015Law, Xu2015Observation,
+    dcm_eci_from_tof_state,
+};
+use crate::orbit::elliptic::{EllipticOrbit, RelStateTof, rk4_step_relative};
 use crate::scene::{SceneError, load_scene_str};
 use crate::sim::Simulation;
 use crate::sim::laws::xu2015::{Xu2015Loops, Xu2015Sample};
@@ -222,6 +226,72 @@ pub fn run_loaded(
         frame_tilt_end_rad,
         target_drift_end_m: tgt.pos_m.norm(),
     })
+}
+
+/// Terminal RMS and max of |ξ − goal| (last 100 s), m, of the paper's relative model in the
+/// tof (`orbit::elliptic`, RK4 at h = 0.1 s, thrust held in the rotating frame, maneuver
+/// continuous) flown by a fresh controller from ξ0 = [−20, 0, 5] m at rest: the f64 reference
+/// the ECS run is compared with (the colleague's numbers of `control::xu2015`).
+pub fn relative_model_terminal(law: Xu2015Law, mass_chaser_kg: f64) -> (f64, f64) {
+    let mut accm = Accm::new(AccmParams::paper());
+    let mut pd = Pd::new(PdParams::paper());
+    let orbit = EllipticOrbit::xu2015();
+    let man = ManeuverSpec::paper();
+    let (h, n, m_t) = (0.1, 3000usize, 200.0);
+    let goal = Vector3::new(-0.01, 0.0, 0.0);
+    let mut x = RelStateTof::new(-20.0, 0.0, 5.0, 0.0, 0.0, 0.0);
+    let (mut se2, mut cnt, mut mx) = (0.0, 0usize, 0.0f64);
+    for k in 0..n {
+        let t = k as f64 * h;
+        let p = Vector3::new(x[0], x[1], x[2]);
+        if t >= TERMINAL_FROM_S - 1e-9 {
+            let e = (p - goal).norm();
+            se2 += e * e;
+            mx = mx.max(e);
+            cnt += 1;
+        }
+        let obs = Xu2015Observation {
+            t_s: t,
+            pos_tof_m: p,
+        };
+        let u = match law {
+            Xu2015Law::Accm => accm.update(&obs).force_tof_n,
+            Xu2015Law::Pd => pd.update(&obs).force_tof_n,
+        };
+        x = rk4_step_relative(&x, t, h, &orbit, |ts| {
+            u / mass_chaser_kg - man.force_tof_n(ts) / m_t
+        });
+    }
+    ((se2 / cnt as f64).sqrt(), mx)
+}
+
+/// Bound on the acceleration difference between the ECS plant and the f64 relative model,
+/// m/s²: thrust (≤ 5√3 N) and maneuver held in the inertial frame over a step of `dt_s` while
+/// the model holds them in the tof, which turns by ḟ dt (mean direction error ḟ dt / 2), plus
+/// the mid-step sampling of the maneuver (|F̈| dt² / 24 / m_t).
+pub fn model_difference_bound_m_s2(dt_s: f64, mass_chaser_kg: f64) -> f64 {
+    let orbit = EllipticOrbit::xu2015();
+    let f_dot_max = (0..=300)
+        .map(|k| orbit.f_dot_rad_s(orbit.true_anomaly_at(k as f64)))
+        .fold(0.0, f64::max);
+    let man = ManeuverSpec::paper();
+    let a_thrust = 5.0 * 3f64.sqrt() / mass_chaser_kg;
+    let a_man = man.peak_n().norm() / 200.0;
+    let fddot = (0..3)
+        .map(|i| man.amplitude_n[i] * man.omega_rad_s[i].powi(2))
+        .fold(0.0, f64::max)
+        / 200.0;
+    (a_thrust + a_man) * f_dot_max * dt_s / 2.0 + fddot * dt_s * dt_s / 24.0
+}
+
+/// Velocity the chaser unavoidably loses on x over one half-period of the maneuver when its
+/// authority `a_max` is below the peak `a_peak` (m/s²): ∫ max(0, a_peak |sin θ| − a_max) dθ/ω.
+pub fn velocity_deficit_per_peak_m_s(a_peak: f64, a_max: f64, omega_rad_s: f64) -> f64 {
+    let n = 100_000;
+    let d = std::f64::consts::PI / n as f64;
+    (0..n)
+        .map(|j| (a_peak * ((j as f64 + 0.5) * d).sin() - a_max).max(0.0) * d / omega_rad_s)
+        .sum()
 }
 
 /// One claim of the paper (the `claims.json` contract of DESIGN.md).
@@ -473,6 +543,7 @@ fn report_markdown(r: &AllRuns, cl: &[ClaimOut]) -> String {
             if c.held { "✔ held" } else { "✘ NOT held" }
         ));
     }
+    s.push_str(&method_text());
     s.push_str("\n## Cases\n\n");
     s.push_str("| case | chaser kg | terminal RMS m | terminal max m | max per axis (x, y, z) m | RMS thrust N | x saturated (last 100 s) | first collision s | min distance m |\n|---|---|---|---|---|---|---|---|---|\n");
     let rows: [(&str, &CaseRun); 8] = [
@@ -504,5 +575,121 @@ fn report_markdown(r: &AllRuns, cl: &[ClaimOut]) -> String {
                 .map_or("?".into(), |d| format!("{d:.3}"))
         ));
     }
+    s.push_str(&comparison_text(r));
+    s
+}
+
+fn method_text() -> String {
+    "\n## Set-up and choices\n\n\
+- **Scenario** (paper §3): target orbit perigee altitude 200 km, e = 0.7, f0 = −150°, i = 30°, \
+Ω = 60°, ω = 0, two-body gravity (no J2: the paper's model is Keplerian); target 200 kg with \
+F_t = [10 sin(0.08t+π/6), 4 sin(0.05t+π/4), 8 sin(0.1t+π/2)] N in the target orbital frame; \
+chaser 100 kg (90, 110 kg cases), ≤ 5 N per axis; only relative position measured, every \
+h = 0.1 s, no noise (configurable: `sensor: (noise_sigma_m, seed)`); ξ0 = [−20, 0, 5] m, goal \
+[−0.01, 0, 0] m, 300 s. Controllers and every reconstructed choice: `src/control/xu2015.rs`.\n\
+- **Frames.** World: inertial axes, origin on the reference orbit = the target's unforced orbit. \
+The controller, the maneuver and the thrust limit live in the target orbital frame (tof: x in-plane \
+transverse, y = −orbit normal, z to Earth's centre) **of the reference orbit**, rebuilt each step \
+from its (r, v): that is the paper's model (relative dynamics built on the target's Keplerian orbit, \
+the maneuver a disturbance). The origin of ξ is the actual (maneuvering) target's centre of mass. \
+The maneuvering target's own osculating tof is tilted from it by the angle given below.\n\
+- **Aim point.** The paper's goal would put the centres of mass 1 cm apart; with real geometry \
+(target: 1.2 × 1.0 × 1.0 m bus, two 2-panel wings, antenna; chaser: 0.8 m bus, two 2-panel wings) \
+ξ is measured from a point 3 m behind the target's centre of mass in the tof (`aim_offset_tof_m`), \
+so the chaser ends with a 2.0 m bus-to-bus gap. The gravity-gradient difference this offset makes \
+is ≈ 3μ/R³ · 3 m ≈ 1.5e−7 m/s². The 110 kg point-mass variant moves the aim point 10 m toward \
+Earth as well, so the bodies cannot touch and the run is the paper's point-mass problem.\n\
+- **Step.** dt = 0.1 s = h: in the inertial world frame the physics is differential gravity \
+(gradient ≈ 1.7e−8 s⁻², velocity Verlet), the held thrust (exact) and the maneuver (period ≥ 63 s, \
+applied at its mid-step value). A run is 3000 steps. `tests/val_xu2015.rs` checks that \
+dt = 0.02 s gives the same terminal RMS within the plant-difference bound below.\n\
+- **Attitude.** Nobody controls it (the paper has none): both bodies start aligned with the tof and \
+turning with it at ḟ0 = 8.28e−5 rad/s; gravity-gradient torque acts.\n\
+- **Thrust-authority guarantee** (`thrust_authority_{x,y,z}`, m/s²): 5 N / m_c − |F_t,i(t)| / 200 kg, \
+checked every step by the monitor; negative = no law can hold the relative position on that axis.\n"
+        .to_string()
+}
+
+fn comparison_text(r: &AllRuns) -> String {
+    let orbit = EllipticOrbit::xu2015();
+    let f_dot_max = (0..=300)
+        .map(|k| orbit.f_dot_rad_s(orbit.true_anomaly_at(k as f64)))
+        .fold(0.0, f64::max);
+    let da = model_difference_bound_m_s2(0.1, 90.0);
+    let mut s = format!(
+        "\n## ECS run vs the f64 relative model\n\n\
+The law's author measured the closed loop on the paper's relative model in the tof (RK4 at \
+0.1 s, thrust held in the rotating frame). The ECS plant differs from it only by: thrust and \
+maneuver held fixed in the inertial frame over a step while the tof turns by ḟ dt (≤ {:.1e} rad \
+here), the mid-step sampling of the maneuver, and the exact differential gravity on the \
+target's drift from its unforced orbit — together ≤ {da:.1e} m/s², {:.1e} of the 0.05 m/s² \
+maneuver that sets the terminal error.\n\n\
+| case | ECS terminal RMS m | f64 model RMS m | relative difference | ECS max m | f64 max m |\n|---|---|---|---|---|---|\n",
+        f_dot_max * 0.1,
+        da / 0.05
+    );
+    let cases: [(&str, &CaseRun); 6] = [
+        ("ACCM 100 kg", &r.nominal[0]),
+        ("PD 100 kg", &r.nominal[1]),
+        ("ACCM 90 kg", &r.m90[0]),
+        ("PD 90 kg", &r.m90[1]),
+        ("ACCM 110 kg (point-mass)", &r.m110_point_mass[0]),
+        ("PD 110 kg (point-mass)", &r.m110_point_mass[1]),
+    ];
+    let mut rel = Vec::new();
+    for (name, c) in cases {
+        let (rms, mx) = relative_model_terminal(c.law, c.mass_chaser_kg);
+        rel.push((c.terminal_rms_m() - rms) / rms);
+        s.push_str(&format!(
+            "| {name} | {} | {} | {:.2e} | {} | {} |\n",
+            e(c.terminal_rms_m()),
+            e(rms),
+            rel[rel.len() - 1],
+            e(c.terminal_max_m()),
+            e(mx)
+        ));
+    }
+    let nominal_rel = rel[..4].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let c = &r.nominal[0];
+    s.push_str(&format!(
+        "\nAt 90 and 100 kg the ECS and the model agree to {nominal_rel:.1e} (relative), \
+below the plant-difference fraction {:.1e}: the author's f64 numbers hold in the ECS. At \
+110 kg PD agrees to {:.1e}; ACCM's saturated limit cycle (bang-bang on x, identification fed \
+by saturated data) amplifies the small plant differences: {:.1e}. \
+At the end of the run the target has drifted {:.1} m from its unforced orbit and its osculating \
+tof is tilted {:.2e} rad from the reference tof the controller uses ({:.1e} m on the 3.01 m \
+stand-off: where the aim point sits, not an error of the law; {:.1e} m on the paper's literal \
+1 cm goal).\n",
+        da / 0.05,
+        rel[5].abs(),
+        rel[4].abs(),
+        c.target_drift_end_m,
+        c.frame_tilt_end_rad,
+        c.frame_tilt_end_rad * 3.01,
+        c.frame_tilt_end_rad * 0.01
+    ));
+    let a_max = 5.0 / 110.0;
+    let dv = velocity_deficit_per_peak_m_s(0.05, a_max, 0.08);
+    s.push_str(&format!(
+        "\n## +10 % chaser mass\n\n\
+At 110 kg the x authority is 5/110 = {a_max:.5} m/s² against the maneuver's peak 10/200 = 0.05 m/s² \
+(worst registered margin {:.3e} m/s²). Near each x peak the chaser loses at least {dv:.4} m/s \
+of relative velocity whatever the law; both controllers (same high nominal gain) answer with a \
+saturated oscillation on x of up to {:.1} m (ACCM) / {:.1} m (PD), saturated for {:.1} % / {:.1} % \
+of the last 100 s, while y and z keep their nominal accuracy. With the real geometry on the \
+approach line the excursion exceeds the 2 m gap: the monitor reports the collision (parts and time \
+in the claims table), after which the run is a contact problem the paper does not model.\n",
+        worst(&r.m110_point_mass[0], "thrust_authority_x"),
+        r.m110_point_mass[0].terminal_max_axis_m().x,
+        r.m110_point_mass[1].terminal_max_axis_m().x,
+        100.0 * r.m110_point_mass[0].terminal_saturation_x(5.0),
+        100.0 * r.m110_point_mass[1].terminal_saturation_x(5.0),
+    ));
+    s.push_str(
+        "\n## Reproduce\n\n```sh\nrpod reproduce xu2015 --out out/reproduce\n\
+rpod run scenes/xu2015_accm.ron   # or xu2015_pd, xu2015_{accm,pd}_m90, xu2015_{accm,pd}_m110\n\
+cargo test --release --test val_xu2015\n```\n\
+Each case's `trajectory.csv`, `events.jsonl` and `summary.json` are in `cases/<case>/`.\n",
+    );
     s
 }

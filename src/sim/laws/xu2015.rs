@@ -10,8 +10,9 @@
 //! y = −ĥ, x = y × z. That is the paper's model: its relative dynamics use R, ḟ, f̈ of the
 //! target's Keplerian orbit and treat the maneuver as a disturbance (`crate::orbit::elliptic`).
 //! The maneuvering target's own osculating frame differs from it by the tilt its maneuver
-//! velocity gives the orbit (≈ Δv / v ≈ 0.5 m/s / 3.5 km/s ≈ 1.5e−4 rad after 300 s), i.e.
-//! 3 mm on the 20 m start and 2e−6 m on the 1 cm goal; `rpod reproduce xu2015` reports it.
+//! velocity (≈ 0.6 m/s against ≈ 3.5 km/s) and its ≈ 190 m drift give the orbit: 2.9e−4 rad
+//! after 300 s (measured by `rpod reproduce xu2015`), i.e. 9e−4 m on the 3 m stand-off of the
+//! bundled scenes and 3e−6 m on the paper's literal 1 cm goal.
 //!
 //! # What runs each step (dt = scene `dt_s`, h = the law's `sample_period_s`, h/dt integer)
 //! - **Sense**: ξ = Cᵀ (r_chaser − r_target) − aim_offset (f64 truth, centres of mass); at
@@ -34,8 +35,9 @@
 //!
 //! # Outputs
 //! Columns (prefix `xu2015.`; `xu2015_N.` for the N-th controller after the first):
-//! `xi_tof_{x,y,z}_m` (true ξ), `meas_tof_{x,y,z}_m` (last measurement),
-//! `ref_tof_{x,y,z}_m` (reference), `thrust_tof_{x,y,z}_n` (held command),
+//! `xi_tof_{x,y,z}_m` (true ξ at the row's time), `meas_tof_{x,y,z}_m` (last measurement),
+//! `ref_tof_{x,y,z}_m` (reference at that sample), `thrust_tof_{x,y,z}_n` (the command held
+//! over the step that ends at the row's time; the t = 0 row has no measurement yet: NaN),
 //! `target_force_tof_{x,y,z}_n` (the maneuver applied over the step), and for ACCM the identified `alpha1_{x,y,z}`,
 //! `alpha2_{x,y,z}`, `gamma_{x,y,z}` (dimensionless) and `shift_{x,y,z}_m`. The per-sample
 //! history is kept in [`Xu2015Loops`] for tests and `rpod reproduce`.
@@ -190,8 +192,8 @@ pub fn install(
         ));
     }
     let law = match spec.law {
-        Xu2015Law::Accm => LawState::Accm(Box::new(Accm::new(spec.accm.clone()))),
-        Xu2015Law::Pd => LawState::Pd(Box::new(Pd::new(spec.pd.clone()))),
+        Xu2015Law::Accm => LawState::Accm(Box::new(Accm::new((*spec.accm).clone()))),
+        Xu2015Law::Pd => LawState::Pd(Box::new(Pd::new((*spec.pd).clone()))),
     };
     let first = !app.world().contains_resource::<Xu2015Loops>();
     if first {
@@ -202,6 +204,7 @@ pub fn install(
                 sense.in_set(Stage::Sense),
                 control.in_set(Stage::Control),
                 actuate.in_set(Stage::Actuate),
+                observe.in_set(Stage::Monitor),
             ),
         );
     }
@@ -232,10 +235,42 @@ pub fn install(
             names.push(format!("{prefix}.shift_{a}_m"));
         }
     }
-    let cols = {
+    let cols: Vec<usize> = {
         let mut diag = app.world_mut().resource_mut::<Diagnostics>();
         names.iter().map(|n| diag.column(n)).collect()
     };
+    // The t = 0 row is written before the first step: give it the true ξ, zero thrust, the
+    // maneuver at t = 0 and the initial estimates (no measurement or reference exists yet: NaN).
+    let xi0 = {
+        let w = app.world();
+        let roster = w.resource::<Roster>();
+        let (r, v) = w.resource::<OrbitEnv>().reference.state();
+        let c = dcm_eci_from_tof_state(&r, &v);
+        let sc = w.get::<BodyState>(roster.bodies[chaser]);
+        let st = w.get::<BodyState>(roster.bodies[target]);
+        match (sc, st) {
+            (Some(a), Some(b)) => {
+                c.transpose() * (a.pos_m - b.pos_m) - Vector3::from(spec.aim_offset_tof_m)
+            }
+            _ => Vector3::repeat(f64::NAN),
+        }
+    };
+    {
+        let mut vals: Vec<f64> = xi0.iter().copied().collect();
+        vals.extend([f64::NAN; 6]);
+        vals.extend([0.0; 3]);
+        vals.extend(spec.target_maneuver.force_tof_n(0.0).iter());
+        if spec.law == Xu2015Law::Accm {
+            for j in 0..3 {
+                vals.extend([spec.accm.theta0[j]; 3]);
+            }
+            vals.extend([0.0; 3]);
+        }
+        let mut diag = app.world_mut().resource_mut::<Diagnostics>();
+        for (i, v) in cols.iter().zip(vals) {
+            diag.values[*i] = v;
+        }
+    }
     if spec.thrust_authority_guarantee {
         let (mc, mt) = (
             loaded.scene.bodies[chaser].mass_kg,
@@ -298,7 +333,7 @@ fn sense(
         lp.dcm_world_from_tof = c;
         lp.xi_tof_m =
             c.transpose() * (sc.pos_m - st.pos_m) - Vector3::from(lp.spec.aim_offset_tof_m);
-        if clock.step % lp.steps_per_sample == 0 {
+        if clock.step.is_multiple_of(lp.steps_per_sample) {
             let sigma = lp.spec.sensor.noise_sigma_m;
             let noise = if sigma > 0.0 {
                 Vector3::from_fn(|_, _| sigma * lp.noise.standard_normal())
@@ -343,6 +378,30 @@ fn control(clock: Res<Clock>, mut loops: ResMut<Xu2015Loops>) {
             target_force_tof_n: lp.spec.target_maneuver.force_tof_n(t),
             estimates,
         });
+    }
+}
+
+/// Monitor: the ξ columns at the end of the step (the row's time), after the physics.
+fn observe(
+    orbit: Res<OrbitEnv>,
+    roster: Res<Roster>,
+    states: Query<&BodyState>,
+    loops: Res<Xu2015Loops>,
+    mut diag: ResMut<Diagnostics>,
+) {
+    let (r, v) = orbit.reference.state();
+    let c = dcm_eci_from_tof_state(&r, &v);
+    for lp in &loops.0 {
+        let (Ok(sc), Ok(st)) = (
+            states.get(roster.bodies[lp.chaser]),
+            states.get(roster.bodies[lp.target]),
+        ) else {
+            continue;
+        };
+        let xi = c.transpose() * (sc.pos_m - st.pos_m) - Vector3::from(lp.spec.aim_offset_tof_m);
+        for (k, i) in lp.cols[..3].iter().enumerate() {
+            diag.values[*i] = xi[k];
+        }
     }
 }
 
