@@ -2,7 +2,15 @@
 //! scenes), `rpod bench` (steps/s against the bare rapier and parry floor).
 
 use clap::{Parser, Subcommand};
+use std::io::Write;
 use std::path::PathBuf;
+
+/// println! that does not panic when stdout is closed (e.g. piped into `head`).
+macro_rules! out {
+    ($($t:tt)*) => {{
+        let _ = writeln!(std::io::stdout().lock(), $($t)*);
+    }};
+}
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -41,6 +49,8 @@ enum Cmd {
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
     },
+    /// Run a trials campaign (or `trials merge` shard outputs).
+    Trials(TrialsCmd),
     /// Reproduce a paper's headline result (all papers without a name): REPORT.md, plots,
     /// claims.json under OUT/NAME.
     Reproduce {
@@ -61,6 +71,133 @@ enum Cmd {
     },
 }
 
+#[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true)]
+struct TrialsCmd {
+    #[command(subcommand)]
+    merge: Option<TrialsSub>,
+    /// Trials file (RON).
+    file: Option<PathBuf>,
+    /// Worker threads (default: the machine's cores).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Run only shard i of n (`--shard 3/10`): trials whose index % n == i.
+    #[arg(long)]
+    shard: Option<String>,
+    /// Output directory (default: out/trials/<campaign name>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+#[derive(Subcommand)]
+enum TrialsSub {
+    /// Join the outputs of shards into one trials.csv, summary.json and envelope plot.
+    Merge {
+        /// The trials file the shards ran.
+        file: PathBuf,
+        /// Shard output directories.
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+        /// Merged output directory.
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+fn trials(cmd: TrialsCmd) -> ExitCode {
+    if let Some(TrialsSub::Merge { file, shards, out }) = cmd.merge {
+        let c = match rpod::trials::load(&file) {
+            Ok(c) => c,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(2);
+            }
+        };
+        return match rpod::trials::merge(&c, &shards, &out) {
+            Ok(n) => {
+                out!("merged {n} trials into {}", out.display());
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        };
+    }
+    let Some(file) = cmd.file else {
+        eprintln!("error: name a trials file (or `rpod trials merge`)");
+        return ExitCode::from(2);
+    };
+    let shard = match cmd.shard.as_deref().map(|s| {
+        s.split_once('/')
+            .and_then(|(i, n)| Some((i.parse::<usize>().ok()?, n.parse::<usize>().ok()?)))
+            .filter(|(i, n)| *n > 0 && i < n)
+    }) {
+        None => (0, 1),
+        Some(Some(s)) => s,
+        Some(None) => {
+            eprintln!("error: --shard takes i/n with 0 ≤ i < n, e.g. --shard 0/4");
+            return ExitCode::from(2);
+        }
+    };
+    let c = match rpod::trials::load(&file) {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let jobs = cmd
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let out = cmd
+        .out
+        .unwrap_or_else(|| PathBuf::from("out/trials").join(&c.spec.name));
+    let opts = rpod::trials::RunOptions {
+        jobs,
+        shard,
+        out: out.clone(),
+        progress: true,
+    };
+    match rpod::trials::run(&c, &opts) {
+        Ok(st) => {
+            out!(
+                "{}: ran {} trials ({} resumed) on {jobs} jobs in {:.1} s: {:.2} trials/s, {:.0} steps/s",
+                c.spec.name,
+                st.ran,
+                st.resumed,
+                st.wall_s,
+                st.ran as f64 / st.wall_s.max(1e-9),
+                st.steps as f64 / st.wall_s.max(1e-9)
+            );
+            if let Ok(text) = std::fs::read_to_string(out.join("summary.json"))
+                && let Ok(v) = serde_json::from_str::<serde_json::Value>(&text)
+            {
+                out!(
+                    "outcomes {}; capture probability {:.3} (95 % Wilson [{:.3}, {:.3}])",
+                    v["outcomes"],
+                    v["capture_probability"].as_f64().unwrap_or(f64::NAN),
+                    v["capture_probability_95ci_wilson"][0]
+                        .as_f64()
+                        .unwrap_or(f64::NAN),
+                    v["capture_probability_95ci_wilson"][1]
+                        .as_f64()
+                        .unwrap_or(f64::NAN)
+                );
+            }
+            out!(
+                "wrote {}/{{trials.csv, summary.json, capture_envelope.png, capture_envelope.svg}}",
+                out.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(1)
+        }
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.cmd {
@@ -74,7 +211,7 @@ fn main() -> ExitCode {
             let mut bad = false;
             for s in &scenes {
                 match load_and_build(s, &set) {
-                    Ok(sim) => println!(
+                    Ok(sim) => out!(
                         "{}: ok ({} bodies, dt = {} s, duration = {} s)",
                         s.display(),
                         sim.scene.bodies.len(),
@@ -94,9 +231,10 @@ fn main() -> ExitCode {
             }
         }
         Cmd::Reproduce { name, out } => reproduce(name, &out),
+        Cmd::Trials(cmd) => trials(cmd),
         Cmd::Bench { scene, steps } => match rpod::bench::run(&scene, steps) {
             Ok(report) => {
-                println!("{report}");
+                out!("{report}");
                 ExitCode::SUCCESS
             }
             Err(e) => {
@@ -159,7 +297,7 @@ fn run(
     match sim.finish() {
         Ok(summary) => {
             let md = &summary["min_distance"];
-            println!(
+            out!(
                 "{}: {} steps, {:.2} s simulated in {:.2} s wall ({:.0} steps/s)",
                 summary["scene"].as_str().unwrap_or(""),
                 summary["steps"],
@@ -168,7 +306,7 @@ fn run(
                 summary["steps_per_s"].as_f64().unwrap_or(0.0)
             );
             if !md.is_null() {
-                println!(
+                out!(
                     "min distance {:.4} m between {} and {} at t = {:.2} s",
                     md["value_m"].as_f64().unwrap_or(f64::NAN),
                     md["parts"][0].as_str().unwrap_or(""),
@@ -179,16 +317,16 @@ fn run(
             match summary["first_collision_s"].as_f64() {
                 Some(t) => {
                     let c = &summary["collisions"][0];
-                    println!(
+                    out!(
                         "COLLISION at t = {t:.2} s: {} hit {}",
                         c["a"].as_str().unwrap_or(""),
                         c["b"].as_str().unwrap_or("")
                     );
                 }
-                None => println!("no collision"),
+                None => out!("no collision"),
             }
             for g in summary["guarantees"].as_array().into_iter().flatten() {
-                println!(
+                out!(
                     "guarantee {}: {} (worst margin {:.4} {} at t = {:.2} s)",
                     g["name"].as_str().unwrap_or(""),
                     if g["held"].as_bool() == Some(true) {
@@ -201,7 +339,7 @@ fn run(
                     g["worst_margin_t_s"].as_f64().unwrap_or(f64::NAN)
                 );
             }
-            println!(
+            out!(
                 "wrote {}/{{trajectory.csv, events.jsonl, summary.json}}",
                 out.display()
             );
@@ -225,7 +363,7 @@ fn reproduce(name: Option<String>, out: &std::path::Path) -> ExitCode {
     let mut failed = false;
     for n in &names {
         let dir = out.join(n);
-        println!("== {n} → {}", dir.display());
+        out!("== {n} → {}", dir.display());
         if let Err(e) = rpod::reproduce::run(n, &dir) {
             eprintln!("error: {n}: {e}");
             failed = true;
@@ -240,7 +378,7 @@ fn reproduce(name: Option<String>, out: &std::path::Path) -> ExitCode {
             .into_iter()
             .flatten()
         {
-            println!(
+            out!(
                 "  [{}] {}: {}",
                 if c["held"].as_bool() == Some(true) {
                     "held"

@@ -203,8 +203,8 @@ impl Simulation {
                 let col = rp::ColliderBuilder::new(shape.clone())
                     .position(conv::pose(&pc.pose_body))
                     .density(0.0)
-                    .friction(0.3)
-                    .restitution(0.0)
+                    .friction(b.friction as f32)
+                    .restitution(b.restitution as f32)
                     .build();
                 let ch = pw.insert_collider(col, Some(handle));
                 contacts.colliders.insert(
@@ -325,6 +325,10 @@ impl Simulation {
                         .collect()
                 })
                 .collect(),
+            part_docking: all_parts
+                .iter()
+                .map(|ps| ps.iter().map(|p| p.role.is_docking()).collect())
+                .collect(),
             ..Default::default()
         })
         .insert_resource(EventLog::default())
@@ -340,6 +344,7 @@ impl Simulation {
             force_row: false,
         });
         super::add_pipeline(&mut app);
+        super::docking::install(&mut app, loaded)?;
         super::laws::install(&mut app, loaded)?;
         app.finish();
         app.cleanup();
@@ -502,6 +507,7 @@ impl Simulation {
             "events": rec.history.len(),
             "min_distance": overall,
             "pairs": pairs,
+            "min_clearance_non_docking_m": mon.min_clearance_per_pair.iter().copied().fold(f64::INFINITY, f64::min),
             "first_contact_s": cs.first_contact_s,
             "first_collision_s": cs.first_collision_s,
             "collisions": collisions,
@@ -509,6 +515,7 @@ impl Simulation {
             "guarantees": g.status,
             "final_states": finals,
             "monitor": {"exact_queries": mon.exact_queries, "pruned_pairs": mon.pruned_pairs},
+            "docking": w.get_resource::<super::docking::Docking>().map(super::docking::summary),
         })
     }
 
