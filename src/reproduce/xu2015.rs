@@ -13,6 +13,7 @@ use crate::control::xu2015::{
     dcm_eci_from_tof_state,
 };
 use crate::orbit::elliptic::{EllipticOrbit, RelStateTof, rk4_step_relative};
+use crate::report::{Claim, Dash, Figure, LineStyle, Plot, write_atomic, write_claims_json};
 use crate::scene::{SceneError, load_scene_str};
 use crate::sim::Simulation;
 use crate::sim::laws::xu2015::{Xu2015Loops, Xu2015Sample};
@@ -294,29 +295,8 @@ pub fn velocity_deficit_per_peak_m_s(a_peak: f64, a_max: f64, omega_rad_s: f64) 
         .sum()
 }
 
-/// One claim of the paper (the `claims.json` contract of DESIGN.md).
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct ClaimOut {
-    /// Short slug.
-    pub id: String,
-    /// The claim in one sentence.
-    pub claim: String,
-    /// The paper's value or statement, or null.
-    pub paper: Option<String>,
-    /// What this run measured, with units.
-    pub measured: String,
-    /// Whether it held.
-    pub held: bool,
-}
-
-fn claim(id: &str, text: &str, paper: Option<&str>, measured: String, held: bool) -> ClaimOut {
-    ClaimOut {
-        id: id.into(),
-        claim: text.into(),
-        paper: paper.map(str::to_string),
-        measured,
-        held,
-    }
+fn claim(id: &str, text: &str, paper: Option<&str>, measured: String, held: bool) -> Claim {
+    Claim::new(id, text, paper, measured, held)
 }
 
 /// Every case of the reproduction.
@@ -376,7 +356,7 @@ fn worst(run: &CaseRun, name: &str) -> f64 {
 }
 
 /// The claims of the paper, measured on `r`.
-pub fn claims(r: &AllRuns) -> Vec<ClaimOut> {
+pub fn claims(r: &AllRuns) -> Vec<Claim> {
     let mut out = Vec::new();
     for (pair, m) in [(&r.nominal, 100), (&r.m90, 90)] {
         let (a, p) = (&pair[0], &pair[1]);
@@ -512,21 +492,15 @@ pub fn claims(r: &AllRuns) -> Vec<ClaimOut> {
 pub fn run(out: &Path) -> Result<(), String> {
     let runs = run_all(Some(&out.join("cases")))?;
     let cl = claims(&runs);
-    let json = serde_json::to_string_pretty(&cl).map_err(|e| e.to_string())?;
-    write(out, "claims.json", &(json + "\n"))?;
-    let md = report_markdown(&runs, &cl);
-    write(out, "REPORT.md", &md)?;
+    write_claims_json(&out.join("claims.json"), &cl).map_err(|e| e.to_string())?;
+    let figures = write_figures(out, &runs)?;
+    let md = report_markdown(&runs, &cl, &figures);
+    write_atomic(&out.join("REPORT.md"), md.as_bytes()).map_err(|e| e.to_string())?;
     Ok(())
 }
 
-fn write(dir: &Path, name: &str, text: &str) -> Result<(), String> {
-    let tmp = dir.join(format!("{name}.partial"));
-    std::fs::write(&tmp, text).map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
-    std::fs::rename(&tmp, dir.join(name)).map_err(|e| format!("cannot write {name}: {e}"))
-}
-
 /// REPORT.md text.
-fn report_markdown(r: &AllRuns, cl: &[ClaimOut]) -> String {
+fn report_markdown(r: &AllRuns, cl: &[Claim], figures: &[(String, String)]) -> String {
     let mut s = String::new();
     s.push_str("# Xu & Hu (2015): ACCM vs PD, rendezvous with a maneuvering target on an e = 0.7 orbit\n\n");
     let held = cl.iter().filter(|c| c.held).count();
@@ -574,6 +548,11 @@ fn report_markdown(r: &AllRuns, cl: &[ClaimOut]) -> String {
                 .as_f64()
                 .map_or("?".into(), |d| format!("{d:.3}"))
         ));
+    }
+    s.push_str("\n## Figures\n");
+    for (file, caption) in figures {
+        let alt = file.trim_end_matches(".png");
+        s.push_str(&format!("\n{caption}\n\n![{alt}]({file})\n"));
     }
     s.push_str(&comparison_text(r));
     s
@@ -732,4 +711,227 @@ on, PD is at least as accurate (the thrust of both loops is then mostly noise).\
         None => "\nACCM stays more accurate than PD at every noise level tried.\n".to_string(),
     });
     s
+}
+
+/// Series (t, value) of one quantity of a run's samples.
+fn series<'a>(
+    c: &'a CaseRun,
+    from_s: f64,
+    f: impl Fn(&Xu2015Sample) -> f64 + 'a,
+) -> impl Iterator<Item = (f64, f64)> + 'a {
+    c.samples
+        .iter()
+        .filter(move |s| s.t_s >= from_s - 1e-9)
+        .map(move |s| (s.t_s, f(s)))
+}
+
+fn dashed() -> LineStyle {
+    LineStyle {
+        dash: Dash::Dashed,
+        ..LineStyle::default()
+    }
+}
+
+/// Writes the figures into `out`; returns (file, caption) in report order.
+pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, String> {
+    let (a, p) = (&r.nominal[0], &r.nominal[1]);
+    let goal = a.goal_tof_m;
+    let mut figs: Vec<(String, String, Figure)> = Vec::new();
+    let err = move |s: &Xu2015Sample| (s.xi_tof_m - goal).norm();
+    // Fig. 2: relative distance, with zooms on the last 100 s.
+    let fig = Figure::new("Relative distance |ξ| (target orbital frame), chaser 100 kg")
+        .cols(2)
+        .plot(
+            Plot::new("|ξ| over the run")
+                .x_label("t [s]")
+                .y_label("|ξ| [m]")
+                .log_y()
+                .line("ACCM", series(a, 0.0, |s| s.xi_tof_m.norm()))
+                .line_styled("PD", series(p, 0.0, |s| s.xi_tof_m.norm()), dashed()),
+        )
+        .plot(
+            Plot::new("terminal error |ξ − goal| over the run")
+                .x_label("t [s]")
+                .y_label("|ξ − goal| [m]")
+                .log_y()
+                .line("ACCM", series(a, 0.0, err))
+                .line_styled("PD", series(p, 0.0, err), dashed()),
+        )
+        .plot(
+            Plot::new("ACCM, last 100 s")
+                .x_label("t [s]")
+                .y_label("|ξ − goal| [m]")
+                .line("ACCM", series(a, TERMINAL_FROM_S, err)),
+        )
+        .plot(
+            Plot::new("PD, last 100 s")
+                .x_label("t [s]")
+                .y_label("|ξ − goal| [m]")
+                .line_styled("PD", series(p, TERMINAL_FROM_S, err), dashed()),
+        );
+    figs.push((
+        "relative_distance".into(),
+        "Relative distance (paper Fig. 2) with the last 100 s of each controller".into(),
+        fig,
+    ));
+    // Fig. 3: relative position per axis, full run and last 100 s.
+    let mut fig =
+        Figure::new("Relative position ξ per axis (target orbital frame), chaser 100 kg").cols(2);
+    for (i, ax) in ["x", "y", "z"].iter().enumerate() {
+        fig.push(
+            Plot::new(format!("ξ_{ax}"))
+                .x_label("t [s]")
+                .y_label(format!("ξ_{ax} [m]"))
+                .line("ACCM", series(a, 0.0, move |s| s.xi_tof_m[i]))
+                .line_styled("PD", series(p, 0.0, move |s| s.xi_tof_m[i]), dashed())
+                .line_styled(
+                    "reference",
+                    series(a, 0.0, move |s| s.reference_tof_m[i]),
+                    LineStyle {
+                        dash: Dash::Dotted,
+                        ..LineStyle::default()
+                    },
+                ),
+        );
+        fig.push(
+            Plot::new(format!("ξ_{ax} − goal_{ax}, last 100 s"))
+                .x_label("t [s]")
+                .y_label(format!("ξ_{ax} − goal_{ax} [m]"))
+                .line(
+                    "ACCM",
+                    series(a, TERMINAL_FROM_S, move |s| s.xi_tof_m[i] - goal[i]),
+                )
+                .line_styled(
+                    "PD",
+                    series(p, TERMINAL_FROM_S, move |s| s.xi_tof_m[i] - goal[i]),
+                    dashed(),
+                ),
+        );
+    }
+    figs.push((
+        "relative_position".into(),
+        "Relative position per axis (paper Fig. 3); right: error to the goal over the last 100 s"
+            .into(),
+        fig,
+    ));
+    // Fig. 4: thrust.
+    let mut fig = Figure::new("Chaser thrust u (target orbital frame), chaser 100 kg, limit ±5 N");
+    for (i, ax) in ["x", "y", "z"].iter().enumerate() {
+        fig.push(
+            Plot::new(format!("u_{ax}"))
+                .x_label("t [s]")
+                .y_label(format!("u_{ax} [N]"))
+                .line("ACCM", series(a, 0.0, move |s| s.thrust_tof_n[i]))
+                .line_styled("PD", series(p, 0.0, move |s| s.thrust_tof_n[i]), dashed())
+                .hline(5.0, "+5 N")
+                .hline(-5.0, "−5 N"),
+        );
+    }
+    figs.push((
+        "thrust".into(),
+        "Control thrust (paper Fig. 4), ACCM and PD".into(),
+        fig,
+    ));
+    // Identified parameters.
+    let mut fig = Figure::new("ACCM identified characteristic parameters, chaser 100 kg");
+    let est = |k: usize, i: usize| {
+        series(a, 0.0, move |s| {
+            s.estimates.map_or(f64::NAN, |e| match k {
+                0 => e[i].alpha1,
+                1 => e[i].alpha2,
+                _ => e[i].gamma,
+            })
+        })
+    };
+    for (k, name) in ["α̂1", "α̂2", "γ̂ = β̂/β0"].iter().enumerate() {
+        let mut pl = Plot::new(name.to_string())
+            .x_label("t [s]")
+            .y_label(format!("{name} [-]"));
+        for (i, ax) in ["x", "y", "z"].iter().enumerate() {
+            pl = pl.line(format!("axis {ax}"), est(k, i));
+        }
+        fig.push(pl);
+    }
+    figs.push((
+        "parameters".into(),
+        "Identified parameters α̂1, α̂2, γ̂ per axis (projection box α1 ∈ [1.5, 2.02], α2 ∈ [−1.02, −0.5], γ ∈ [0.85, 1.15])".into(),
+        fig,
+    ));
+    // Mass cases.
+    let cases: [(&str, &CaseRun); 6] = [
+        ("ACCM 90 kg", &r.m90[0]),
+        ("ACCM 100 kg", &r.nominal[0]),
+        ("ACCM 110 kg (point-mass)", &r.m110_point_mass[0]),
+        ("PD 90 kg", &r.m90[1]),
+        ("PD 100 kg", &r.nominal[1]),
+        ("PD 110 kg (point-mass)", &r.m110_point_mass[1]),
+    ];
+    let mut pl = Plot::new("terminal error |ξ − goal|")
+        .x_label("t [s]")
+        .y_label("|ξ − goal| [m]")
+        .log_y();
+    for (name, c) in cases {
+        let st = if name.starts_with("PD") {
+            dashed()
+        } else {
+            LineStyle::default()
+        };
+        pl = pl.line_styled(name, series(c, 0.0, err), st);
+    }
+    let pm = &r.m110_point_mass[0];
+    let need: Vec<(f64, f64)> =
+        series(pm, 0.0, |s| s.target_force_tof_n.x / 200.0 * 110.0).collect();
+    let fig = Figure::new("Chaser mass 90 / 100 / 110 kg")
+        .plot(pl)
+        .plot(
+            Plot::new("110 kg, x axis: thrust vs the force needed to follow the target")
+                .x_label("t [s]")
+                .y_label("force [N]")
+                .line("ACCM u_x", series(pm, 0.0, |s| s.thrust_tof_n.x))
+                .line_styled("m_c F_t,x / m_t (needed)", need, dashed())
+                .hline(5.0, "+5 N")
+                .hline(-5.0, "−5 N"),
+        )
+        .plot(
+            Plot::new("full-geometry chaser–target distance")
+                .x_label("t [s]")
+                .y_label("distance [m]")
+                .line(
+                    "100 kg ACCM",
+                    a.distance_m
+                        .iter()
+                        .enumerate()
+                        .map(|(k, d)| (k as f64 * 0.1, *d)),
+                )
+                .line(
+                    "110 kg ACCM (real geometry)",
+                    r.m110_geometry[0]
+                        .distance_m
+                        .iter()
+                        .enumerate()
+                        .map(|(k, d)| (k as f64 * 0.1, *d)),
+                )
+                .line_styled(
+                    "110 kg PD (real geometry)",
+                    r.m110_geometry[1]
+                        .distance_m
+                        .iter()
+                        .enumerate()
+                        .map(|(k, d)| (k as f64 * 0.1, *d)),
+                    dashed(),
+                ),
+        );
+    figs.push((
+        "mass_cases".into(),
+        "Mass cases: terminal error, the x thrust at 110 kg against the force needed to follow the target's maneuver, and the monitor's full-geometry distance".into(),
+        fig,
+    ));
+    let mut list = Vec::new();
+    for (stem, caption, fig) in figs {
+        let file = format!("{stem}.png");
+        fig.write_png(&out.join(&file))
+            .map_err(|e| format!("cannot write {file}: {e}"))?;
+        list.push((file, caption));
+    }
+    Ok(list)
 }
