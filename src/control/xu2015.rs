@@ -5,7 +5,7 @@
 //!
 //! The paper's equations were lost in extraction; every formula below is the
 //! reconstruction of SPEC.md §P1 from the characteristic-model literature (Wu, Hu, Xie 2007;
-//! Meng & Wu 2009) and is marked **[derived]** where it is a choice, not a quotation.
+//! Meng & Wu 2009) and is marked **\[derived\]** where it is a choice, not a quotation.
 //!
 //! # Plant and model (per axis, decoupled, paper eqs. (9)–(11))
 //! Each axis of the target-orbital-frame (tof) relative position ξ obeys
@@ -14,7 +14,7 @@
 //! `ξ(k+1) = α1 ξ(k) + α2 ξ(k−1) + β u(k) + q(k)`, α1 = 2 + h²a, α2 = −1, β = h²b,
 //! q = h²(g + δ).
 //!
-//! # Modified compression (paper eqs. (12)–(18)) [derived]
+//! # Modified compression (paper eqs. (12)–(18)) \[derived\]
 //! Ω = {|ξ| ≤ η}. Outside Ω, q is absorbed into the characteristic parameters
 //! (α1' = α1 + q/ξ). Inside Ω that would blow up, so the characteristic variable is
 //! shifted away from zero, ζ = ξ + d with d > η, and q is absorbed into the parameters of the
@@ -26,7 +26,7 @@
 //! y_r(k), y_r(k+1)); shifting each sample by its own D would inject a jump of d into the
 //! regression when ξ crosses ∂Ω.
 //!
-//! # Identification (normalised gradient with projection) [derived]
+//! # Identification (normalised gradient with projection) \[derived\]
 //! θ = [α1, α2, γ], β = γ β0, β0 = h²/m_nominal (scaling β by β0 makes the third regressor
 //! O(h²u/m) comparable in the update; raw β ≈ 1e−4 s²/kg would never move):
 //! `θ̂(k) = Π{θ̂(k−1) + λ1 φ ε / (λ2 + φᵀφ)}`, φ = [y(k−1), y(k−2), β0 u(k−1)],
@@ -43,7 +43,7 @@
 //! (zero velocity and acceleration at both ends) over `reference_duration_s`, then held
 //! [derived: SPEC notes that regulating straight to the goal saturates and limit-cycles].
 //!
-//! # PD baseline [derived]
+//! # PD baseline \[derived\]
 //! u = sat(m_nominal [ξ̈_r − k_p e − k_d ė]), e = ξ − ξ_r, ė = (e(k) − e(k−1))/h (backward
 //! difference of the measured position minus that of the reference). Gains: the paper gives
 //! none. We use `k_p = (l1·2 − l2)/h² = 0.146/h²`, `k_d = l2/h = 0.618/h`: with these the PD
@@ -64,7 +64,7 @@
 //! The ACCM gain comes from the compression: α̂1 + α̂2 − 1 tracks q/y, so u1 cancels the
 //! maneuver; γ̂ barely moves in closed loop (its regressor β0 u ≈ 5e−4 m against
 //! y ≥ 0.5 m), so mass errors are absorbed by the α̂'s, not identified. Sensitivity to the
-//! [derived] λ at 100 kg (RMS): λ = 0 → 5.5e−5 m, 0.01 → 6.4e−5 m, 0.1 → 3.4e−4 m. A
+//! \[derived\] λ at 100 kg (RMS): λ = 0 → 5.5e−5 m, 0.01 → 6.4e−5 m, 0.1 → 3.4e−4 m. A
 //! conventional PD (ω_n = 1 rad/s, ζ = 1) gives 4.9e−2 m.
 //!
 //! # Sampling
@@ -72,6 +72,13 @@
 //! position; a call with `t_s < t0 + k h` (next sample not reached) returns the held command
 //! (zero-order hold), so the caller may step faster than h. Calls must not be spaced by more
 //! than h (the model assumes exactly h between samples).
+//!
+//! # In the simulation
+//! [`SceneSpec`] (bottom of this file) is how a scene flies either law; the ECS wiring
+//! (`crate::sim::laws::xu2015`) measures ξ in the reference orbit's target orbital frame,
+//! applies the target's maneuver and registers the thrust-authority margins. The bundled
+//! scenes `scenes/xu2015_*.ron` reproduce the numbers above to a few 1e−6 (relative) at 90
+//! and 100 kg (`tests/val_xu2015.rs`, `rpod reproduce xu2015`).
 
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};

@@ -6,7 +6,7 @@
 //! the target's *unforced* orbit (target starts at the origin with zero relative velocity).
 //! The controller works in the **target orbital frame (tof) of the reference orbit**, built
 //! every step from the reference state (r, v) by
-//! [`dcm_eci_from_tof_state`](crate::control::xu2015::dcm_eci_from_tof_state): z = −r̂,
+//! [`crate::control::xu2015::dcm_eci_from_tof_state`]: z = −r̂,
 //! y = −ĥ, x = y × z. That is the paper's model: its relative dynamics use R, ḟ, f̈ of the
 //! target's Keplerian orbit and treat the maneuver as a disturbance (`crate::orbit::elliptic`).
 //! The maneuvering target's own osculating frame differs from it by the tilt its maneuver
