@@ -764,14 +764,18 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
         .plot(
             Plot::new("ACCM, last 100 s")
                 .x_label("t [s]")
-                .y_label("|ξ − goal| [m]")
-                .line("ACCM", series(a, TERMINAL_FROM_S, err)),
+                .y_label("|ξ − goal| [µm]")
+                .line("ACCM", series(a, TERMINAL_FROM_S, move |s| 1e6 * err(s))),
         )
         .plot(
             Plot::new("PD, last 100 s")
                 .x_label("t [s]")
-                .y_label("|ξ − goal| [m]")
-                .line_styled("PD", series(p, TERMINAL_FROM_S, err), dashed()),
+                .y_label("|ξ − goal| [mm]")
+                .line_styled(
+                    "PD",
+                    series(p, TERMINAL_FROM_S, move |s| 1e3 * err(s)),
+                    dashed(),
+                ),
         );
     figs.push((
         "relative_distance".into(),
@@ -782,15 +786,17 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
     let mut fig =
         Figure::new("Relative position ξ per axis (target orbital frame), chaser 100 kg").cols(2);
     for (i, ax) in ["x", "y", "z"].iter().enumerate() {
+        // y stays within millimetres of zero: plot it in mm.
+        let (k, unit) = if i == 1 { (1e3, "mm") } else { (1.0, "m") };
         fig.push(
             Plot::new(format!("ξ_{ax}"))
                 .x_label("t [s]")
-                .y_label(format!("ξ_{ax} [m]"))
-                .line("ACCM", series(a, 0.0, move |s| s.xi_tof_m[i]))
-                .line_styled("PD", series(p, 0.0, move |s| s.xi_tof_m[i]), dashed())
+                .y_label(format!("ξ_{ax} [{unit}]"))
+                .line("ACCM", series(a, 0.0, move |s| k * s.xi_tof_m[i]))
+                .line_styled("PD", series(p, 0.0, move |s| k * s.xi_tof_m[i]), dashed())
                 .line_styled(
                     "reference",
-                    series(a, 0.0, move |s| s.reference_tof_m[i]),
+                    series(a, 0.0, move |s| k * s.reference_tof_m[i]),
                     LineStyle {
                         dash: Dash::Dotted,
                         ..LineStyle::default()
@@ -800,14 +806,14 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
         fig.push(
             Plot::new(format!("ξ_{ax} − goal_{ax}, last 100 s"))
                 .x_label("t [s]")
-                .y_label(format!("ξ_{ax} − goal_{ax} [m]"))
+                .y_label(format!("ξ_{ax} − goal_{ax} [mm]"))
                 .line(
                     "ACCM",
-                    series(a, TERMINAL_FROM_S, move |s| s.xi_tof_m[i] - goal[i]),
+                    series(a, TERMINAL_FROM_S, move |s| 1e3 * (s.xi_tof_m[i] - goal[i])),
                 )
                 .line_styled(
                     "PD",
-                    series(p, TERMINAL_FROM_S, move |s| s.xi_tof_m[i] - goal[i]),
+                    series(p, TERMINAL_FROM_S, move |s| 1e3 * (s.xi_tof_m[i] - goal[i])),
                     dashed(),
                 ),
         );
