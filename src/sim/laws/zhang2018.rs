@@ -142,8 +142,9 @@ pub fn install(
     path: &str,
     spec: &SceneSpec,
 ) -> Result<(), SceneError> {
-    let body = super::body_index(loaded, path, "body", &spec.body)?;
+    // The spec is the newtype content of `Zhang2018((...))`: its fields are under `path.0`.
     let field = |f: &str| format!("{path}.0.{f}");
+    let body = super::body_index(loaded, &format!("{path}.0"), "body", &spec.body)?;
     spec.validate()
         .map_err(|(f, m)| loaded.error_at(&field(&f), m))?;
     let Environment::SunEarthL2(env) = &loaded.scene.environment else {
