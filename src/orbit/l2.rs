@@ -32,6 +32,14 @@
 //!   1 au = 1.495 978 707·10¹¹ m (IAU 2012), and the primaries sit at X_S = −A·μ2/(μ1+μ2),
 //!   X_B = +A·μ1/(μ1+μ2). The eccentricity e = 0.01670862 is not used (circular model).
 //!
+//! # Scenes (floating origin)
+//! [`L2EnvSpec`] is the `SunEarthL2` environment of a scene and [`L2Centre`] its formation
+//! centre: the world frame of such a scene is non-rotating (the `rot` axes at t = 0), with its
+//! origin on the centre's f64 trajectory; [`L2Centre::differential_accel_world_m_s2`] is the
+//! differential Sun + EMB gravity, and [`L2Centre::world_to_rot`] / [`L2Centre::rot_to_world`]
+//! convert body states for the controllers. In `rot` the primaries are fixed, so the inertial
+//! gravity of the Sun and the EMB moving on their circles is the `rot` gravity rotated by n t.
+//!
 //! # Propagator
 //! Classic fixed-step RK4 ([`rk4_step`]) with the thrust acceleration held constant over the
 //! step (zero-order hold, as a sampled controller applies it). Local error O((n·dt)⁵) with
@@ -588,5 +596,90 @@ mod tests {
             let scale = if j < 2 { scale } else { dv.norm() };
             assert!((fd - an).norm() < 1e-4 * scale, "col {j}: fd {fd} an {an}");
         }
+    }
+
+    #[test]
+    fn invariant_l2_world_rot_round_trip() {
+        // world_to_rot ∘ rot_to_world is the identity at any time (pure rotations and the
+        // ω × ρ term); checked after 3 days of centre motion (frame angle n t ≈ 0.05 rad).
+        // Round-off: the rot state is ~1.5e11 m (ulp 3e-5 m).
+        let spec = L2EnvSpec {
+            centre_pos_l2c_m: [87_028_563.409, -24_004_062.937],
+            centre_vel_l2c_m_s: [8.640_877, 121.265_276],
+            model: L2Params::paper(),
+        };
+        let mut c = L2Centre::new(&spec, 600.0);
+        for _ in 0..432 {
+            c.advance();
+        }
+        let rho = Vector3::new(-55.0, -735_449.692, 0.0);
+        let rho_dot = Vector3::new(0.5, 0.34, 0.0);
+        let s = c.world_to_rot(&rho, &rho_dot);
+        let (r2, v2) = c.rot_to_world(&s);
+        assert!((r2 - rho).norm() < 1e-4, "{}", (r2 - rho).norm());
+        assert!((v2 - rho_dot).norm() < 1e-10, "{}", (v2 - rho_dot).norm());
+        // At t = 0 the world axes are the rot axes and rel_rot_to_world adds n ẑ × ρ.
+        let n = spec.model.mean_motion_rad_s();
+        let (r0, v0) =
+            L2Centre::rel_rot_to_world(&spec.model, &Vector4::new(0.0, -20_000.0, 0.0, 0.0));
+        assert_eq!(r0, Vector3::new(0.0, -20_000.0, 0.0));
+        assert!((v0 - Vector3::new(n * 20_000.0, 0.0, 0.0)).norm() < 1e-18);
+    }
+
+    #[test]
+    fn val_l2_differential_gravity_is_the_gravity_gradient() {
+        // Reference: the gravity-gradient tensor of `drift_jacobian` (checked against finite
+        // differences above) less the centrifugal n²I: for |ρ| = 10 km the differential
+        // acceleration is G ρ up to the second-order term ~ (3/2)(μ/r⁴)|ρ|² ≈ 1e-5 relative
+        // (r ≈ 1.5e9 m from the EMB). At t > 0 the result is G ρ_rot rotated by n t.
+        let spec = L2EnvSpec {
+            centre_pos_l2c_m: [87_028_563.409, -24_004_062.937],
+            centre_vel_l2c_m_s: [8.640_877, 121.265_276],
+            model: L2Params::paper(),
+        };
+        let p = &spec.model;
+        let n = p.mean_motion_rad_s();
+        let mut c = L2Centre::new(&spec, 3600.0);
+        for steps in [0usize, 240] {
+            for _ in 0..steps {
+                c.advance();
+            }
+            let th = c.frame_angle_rad();
+            let (g, _) = p.drift_jacobian(&c.state_rot);
+            let g = g - Matrix2::identity() * (n * n);
+            for rho_rot in [Vector2::new(1.0e4, 0.0), Vector2::new(-3.0e3, 9.0e3)] {
+                let rho_w = rot3(&Vector3::new(rho_rot[0], rho_rot[1], 0.0), th);
+                let a = c.differential_accel_world_m_s2(&rho_w);
+                let expect_rot = g * rho_rot;
+                let expect = rot3(&Vector3::new(expect_rot[0], expect_rot[1], 0.0), th);
+                assert!(
+                    (a - expect).norm() < 1e-4 * expect.norm(),
+                    "t {} s: {a} vs {expect}",
+                    c.t_s()
+                );
+            }
+            // Out of plane: both primaries pull towards z = 0, a_z = −(μ1/r1³ + μ2/r2³) z.
+            let a = c.differential_accel_world_m_s2(&Vector3::new(0.0, 0.0, 1.0e4));
+            let pos = Vector2::new(c.state_rot[0], c.state_rot[1]);
+            let r1 = (pos - p.sun_pos_rot_m()).norm();
+            let r2 = (pos - p.emb_pos_rot_m()).norm();
+            let az = -(p.mu_sun_m3_s2 / r1.powi(3) + p.mu_emb_m3_s2 / r2.powi(3)) * 1.0e4;
+            assert!((a[2] - az).abs() < 1e-4 * az.abs(), "{} vs {az}", a[2]);
+        }
+    }
+
+    #[test]
+    fn invariant_l2_env_spec_validation() {
+        let mut spec = L2EnvSpec {
+            centre_pos_l2c_m: [87_028_563.409, -24_004_062.937],
+            centre_vel_l2c_m_s: [8.640_877, 121.265_276],
+            model: L2Params::paper(),
+        };
+        assert!(spec.validate().is_ok());
+        spec.centre_vel_l2c_m_s[1] = f64::NAN;
+        assert_eq!(spec.validate().unwrap_err().0, "centre_vel_l2c_m_s");
+        spec.centre_vel_l2c_m_s[1] = 0.0;
+        spec.model.mu_emb_m3_s2 = -1.0;
+        assert_eq!(spec.validate().unwrap_err().0, "model.mu_emb_m3_s2");
     }
 }
