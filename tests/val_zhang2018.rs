@@ -137,6 +137,40 @@ fn val_zhang2018_floating_origin_matches_rotating_frame() {
     // Paper's Fig. 2 shows H > 0, = 0 and < 0; the change is at 8.24 d (1 008 s before the
     // closest approach, see `control::zhang2018` tests).
     assert!((tr.t_s[ecs_changes[0]] / 86_400.0 - 8.243).abs() < 0.01);
+    // Finding (claim `zhang2018-h-sign-marks-collision`, not held): the paper reads H < 0 as
+    // the collision region, but the pair never comes within l: the smallest separation of the
+    // thrust-free scenario (refined inside the 60 s steps) is > 1000 km.
+    let (min_sep, t_min) = refined_min_separation(&tr, ip, ie);
+    eprintln!(
+        "thrust-free closest approach {:.1} km at {:.3} d",
+        min_sep / 1e3,
+        t_min / 86_400.0
+    );
+    assert!(min_sep > 1.0e6, "{min_sep}");
+    assert!(t_min > tr.t_s[ecs_changes[0]]);
+}
+
+#[test]
+fn val_zhang2018_fig3_thrust_reverses() {
+    // Fig. 3: P's optimal thrust on the barrier path from the BUP (paper's P state and line of
+    // sight, adversarial game, L2 model) over 365 days backward. Reference for the direction
+    // at τ = 0: the line of sight s5 (P thrusts towards E, eq (6) with the sign of the
+    // adversarial game); the paper's statement checked: F_p's components rise and fall and
+    // reverse (F_p cos v* changes sign at least once).
+    use rpod::control::zhang2018::{
+        bup_state, gamma_on_boundary, los_angle_s5_rad, retrograde_path,
+    };
+    let p = Zhang2018Params::paper();
+    let x0 = paper_initial_state_rot(&L2Params::paper());
+    let s5 = los_angle_s5_rad(&x0);
+    let role = PursuerRole::Adversarial;
+    let xb = bup_state(&p, &p_state(&x0), s5, 0.0, role);
+    let path = retrograde_path(&p, &xb, &gamma_on_boundary(s5), role, 3600.0, 365 * 24);
+    assert!((path[0].v_rad - s5).sin().abs() < 1e-12);
+    let fx: Vec<f64> = path.iter().map(|s| s.v_rad.cos()).collect();
+    let reversals = fx.windows(2).filter(|w| w[0] * w[1] < 0.0).count();
+    eprintln!("Fig. 3: F_p cos v* changes sign {reversals} times over 365 d");
+    assert!(reversals >= 1);
 }
 
 /// Largest distance of any collider point from the centre of mass of the scenes' spacecraft:
