@@ -28,6 +28,8 @@
 //! thrust-free run uses dt = 60 s (14 400 steps; Verlet's error at n·dt ≈ 1.2e-5 is far below
 //! the checks). The whole file runs in a few seconds in release.
 
+#![cfg(feature = "sim")]
+
 use nalgebra::Vector2;
 use rpod::control::zhang2018::{
     Drift, PlannedManeuver, PursuerRole, ThrustSegment, Zhang2018Params, boundary_value_history,
