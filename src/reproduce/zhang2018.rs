@@ -918,11 +918,5 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
     ));
     rep.write(out)
         .map_err(|e| format!("cannot write the report: {e}"))?;
-    let held = claims.iter().filter(|c| c.held).count();
-    println!(
-        "zhang2018: {held} of {} claims held; wrote {}/REPORT.md",
-        claims.len(),
-        out.display()
-    );
     Ok(())
 }
