@@ -141,6 +141,9 @@ impl Simulation {
                 Some((r, v))
             }
             Environment::FreeSpace => None,
+            Environment::SunEarthL2(spec) => {
+                super::laws::zhang2018::install_environment(&mut app, spec, dt)
+            }
         };
 
         let mut roster = Roster::default();
