@@ -15,7 +15,7 @@
 //! Runtime: the representative runs (T1 and T2 200 s, M1 and M2 100 s, one inertia case 100 s,
 //! linear disturbance) are made once and shared; `rpod reproduce geng2015` runs all 32 scenes.
 
-use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3, Vector6};
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use rpod::control::geng2015::{
     BodyStateEci, Geng2015Controller, Geng2015Disturbances, Geng2015Law, Geng2015Obs,
     gravity_gradient_torque_nm, relative_state,
@@ -23,8 +23,8 @@ use rpod::control::geng2015::{
 use rpod::orbit::constants::MU_EARTH_M3_S2;
 use rpod::orbit::kepler::ClassicalElements;
 use rpod::reproduce::geng2015::{
-    CaseResult, INERTIA_WINDOW, accuracy, eq10_bound_s, observed_convergence_s, run_case,
-    scene_file, window,
+    CaseResult, INERTIA_WINDOW, accuracy, eq10_bound_s, observed_convergence_s,
+    paper_model_overrides, run_case, scene_file, window,
 };
 use rpod::scene::{load_scene_file, load_scene_str};
 use rpod::sim::Simulation;
@@ -90,7 +90,11 @@ fn val_geng2015_table1_initial_states() {
                     .params,
                 &observation(0.0, (r0, v0), &s, &t),
             );
-            assert!((rel.rho_m.norm() - 36.55).abs() < 0.1, "{}", rel.rho_m.norm());
+            assert!(
+                (rel.rho_m.norm() - 36.55).abs() < 0.1,
+                "{}",
+                rel.rho_m.norm()
+            );
         }
     }
 }
@@ -121,7 +125,14 @@ fn unpack(y: &S13) -> BodyStateEci {
 
 /// RK4 step of one rigid body under point-mass gravity plus a force and torque held constant in
 /// ECI over the step (as the testbed holds its wrench over a step).
-fn rk4(y: &S13, h: f64, m: f64, j: &Matrix3<f64>, f_eci: Vector3<f64>, tq_eci: Vector3<f64>) -> S13 {
+fn rk4(
+    y: &S13,
+    h: f64,
+    m: f64,
+    j: &Matrix3<f64>,
+    f_eci: Vector3<f64>,
+    tq_eci: Vector3<f64>,
+) -> S13 {
     let j_inv = j.try_inverse().unwrap();
     let d = |y: &S13| {
         let r: Vector3<f64> = y.fixed_rows::<3>(0).into();
@@ -206,10 +217,19 @@ fn val_geng2015_wiring_matches_independent_integration() {
             t,
         );
         let td = rpod::control::geng2015::torque_disturbance_nm(dist.torque_scale_nm, n, t);
-        let tg_s = gravity_gradient_torque_nm(MU_EARTH_M3_S2, &cs.pos_eci_m, &cs.att_body_to_eci, &js);
-        let tg_t = gravity_gradient_torque_nm(MU_EARTH_M3_S2, &ct.pos_eci_m, &ct.att_body_to_eci, &jt);
+        let tg_s =
+            gravity_gradient_torque_nm(MU_EARTH_M3_S2, &cs.pos_eci_m, &cs.att_body_to_eci, &js);
+        let tg_t =
+            gravity_gradient_torque_nm(MU_EARTH_M3_S2, &ct.pos_eci_m, &ct.att_body_to_eci, &jt);
         let (qs, qt) = (cs.att_body_to_eci, ct.att_body_to_eci);
-        ys = rk4(&ys, h, ms, &js, qs * (f_b + a_s * ms), qs * (tq_b + td + tg_s));
+        ys = rk4(
+            &ys,
+            h,
+            ms,
+            &js,
+            qs * (f_b + a_s * ms),
+            qs * (tq_b + td + tg_s),
+        );
         yt = rk4(&yt, h, mt, &jt, qt * (a_t * mt), qt * (td + tg_t));
         sim.step(1);
         let reference = sim.reference_state().unwrap();
@@ -230,7 +250,10 @@ fn val_geng2015_wiring_matches_independent_integration() {
         worst.1 = worst.1.max((a.q_r.inverse() * b.q_r).angle().to_degrees());
     }
     let start = 36.55;
-    println!("worst |Δρ| {:.3e} m, worst Δangle {:.3e} deg", worst.0, worst.1);
+    println!(
+        "worst |Δρ| {:.3e} m, worst Δangle {:.3e} deg",
+        worst.0, worst.1
+    );
     // The ports closed from 36.6 m; the two runs agree to better than 1 mm and 1e-3 deg.
     let end = relative_state(
         &params,
@@ -253,7 +276,11 @@ fn invariant_geng2015_scene_errors_are_located() {
     let text = std::fs::read_to_string(&path).unwrap();
     for (from, to, field) in [
         ("period_s: 0.05", "period_s: 0.033", "period_s"),
-        ("chaser_port: \"dock\"", "chaser_port: \"nope\"", "chaser_port"),
+        (
+            "chaser_port: \"dock\"",
+            "chaser_port: \"nope\"",
+            "chaser_port",
+        ),
         ("target: \"target\",\n", "target: \"chaser\",\n", "target"),
     ] {
         let bad = text.replacen(from, to, 1);
@@ -265,4 +292,248 @@ fn invariant_geng2015_scene_errors_are_located() {
         assert!(e.line > 0, "{field}: not located: {e}");
         assert!(e.to_string().contains(field), "{e}");
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Claims (Table 3, §3.3, geometry, eq 10) on representative runs, made once and shared.
+// ---------------------------------------------------------------------------------------------
+
+use Geng2015Law::{M1, M2, T1, T2};
+
+/// Paper-model runs (5 cm spheres instead of the geometry) of the four laws under the linear
+/// and the periodic disturbance, each to the end of its accuracy window.
+fn paper_runs() -> &'static Vec<((Geng2015Law, bool), CaseResult)> {
+    static RUNS: OnceLock<Vec<((Geng2015Law, bool), CaseResult)>> = OnceLock::new();
+    RUNS.get_or_init(|| {
+        let pm = paper_model_overrides();
+        let mut v = vec![];
+        for linear in [true, false] {
+            for law in [T1, M1, T2, M2] {
+                let form = if linear { "linear" } else { "periodic" };
+                let r = run_case(&scene_file(law, form, None), &pm, None, window(law)).unwrap();
+                v.push(((law, linear), r));
+            }
+        }
+        v
+    })
+}
+
+fn run(law: Geng2015Law, linear: bool) -> &'static CaseResult {
+    &paper_runs()
+        .iter()
+        .find(|((l, lin), _)| *l == law && *lin == linear)
+        .unwrap()
+        .1
+}
+
+#[test]
+fn val_geng2015_m1_vs_t1_position() {
+    // Claim: M1 position accuracy ≥ 5× better than T1 on every axis (paper ≈ 10×). Also the
+    // rotation columns of T1 and M1 against the paper's Table 3 (the rotation loop does not see
+    // a_d, so both cases share them): within 35 % (measured 0–31 %).
+    let paper_rot_t1 = [1.041e-3, 0.480e-3, 0.458e-3, 3.029e-2, 1.328e-2, 1.329e-2];
+    let paper_rot_m1 = [3.621e-5, 4.892e-5, 3.537e-5, 6.829e-4, 13.720e-4, 9.098e-4];
+    for linear in [true, false] {
+        let (t1, m1) = (run(T1, linear), run(M1, linear));
+        for i in 0..3 {
+            let r = t1.accuracy[i] / m1.accuracy[i];
+            println!("linear={linear} T1/M1 ρ[{i}] = {r:.1}");
+            assert!(r >= 5.0, "T1/M1 position ratio {r} on axis {i}");
+        }
+        for i in 0..6 {
+            for (acc, paper) in [
+                (t1.accuracy[6 + i], paper_rot_t1[i]),
+                (m1.accuracy[6 + i], paper_rot_m1[i]),
+            ] {
+                assert!(
+                    (acc / paper - 1.0).abs() < 0.35,
+                    "rot[{i}] {acc} vs paper {paper}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn val_geng2015_m2_vs_t2() {
+    // Claim "M2 better than T2": holds along-track (y) in position and velocity, and on every
+    // rotation channel, in both cases; it does NOT hold on x and z position (ratio T2/M2 ≈ 1.0
+    // with the linear a_d, 0.44–0.49 with the periodic one): claims.json records held = false.
+    for linear in [true, false] {
+        let (t2, m2) = (run(T2, linear), run(M2, linear));
+        let r: Vec<f64> = (0..6).map(|i| t2.accuracy[i] / m2.accuracy[i]).collect();
+        println!("linear={linear} T2/M2 [ρ; V] {r:.2?}");
+        assert!(r[1] > 1.0 && r[4] > 1.0, "along-track {r:?}");
+        for i in 9..12 {
+            assert!(m2.accuracy[i] < t2.accuracy[i], "ω_r[{}]", i - 9);
+        }
+        if !linear {
+            // The refutation, measured: T2 beats M2 on radial and normal position.
+            assert!(r[0] < 1.0 && r[2] < 1.0, "{r:?}");
+        }
+    }
+}
+
+#[test]
+fn val_geng2015_m1_vs_m2() {
+    // Claim (Table 3, §2.3): M1 better than M2 on position, M2 better than M1 on velocity,
+    // every axis, both cases.
+    for linear in [true, false] {
+        let (m1, m2) = (run(M1, linear), run(M2, linear));
+        for i in 0..3 {
+            assert!(m1.accuracy[i] < m2.accuracy[i], "position {i}");
+            assert!(m2.accuracy[3 + i] < m1.accuracy[3 + i], "velocity {i}");
+        }
+    }
+}
+
+#[test]
+fn val_geng2015_chattering() {
+    // Claim: markedly less chattering for M. Total variation of the applied command per second
+    // over the accuracy window: M1 ≥ 5× below T1 on every channel; M2 ≥ 5× below T2 on the
+    // torques but only 1.2–4.5× on the forces (claims.json: held = false for "every channel").
+    // Sign changes per second are not lower on every channel (held = false as well).
+    for linear in [true, false] {
+        let (t1, m1, t2, m2) = (
+            run(T1, linear),
+            run(M1, linear),
+            run(T2, linear),
+            run(M2, linear),
+        );
+        for i in 0..6 {
+            assert!(m1.tv_per_s[i] * 5.0 <= t1.tv_per_s[i], "TV M1 vs T1 [{i}]");
+            assert!(m2.tv_per_s[i] < t2.tv_per_s[i], "TV M2 vs T2 [{i}]");
+            if i >= 3 {
+                assert!(m2.tv_per_s[i] * 5.0 <= t2.tv_per_s[i], "TV M2 vs T2 [{i}]");
+            }
+        }
+        let fewer = |a: &CaseResult, b: &CaseResult| {
+            (0..6).all(|i| b.sign_changes_per_s[i] < a.sign_changes_per_s[i])
+        };
+        assert!(
+            !(fewer(t1, m1) && fewer(t2, m2)),
+            "sign changes now lower everywhere: update the claim"
+        );
+    }
+}
+
+#[test]
+fn val_geng2015_inertia_order_of_magnitude() {
+    // Claim (§3.3, Tables 4–7): with J_s, J_t perturbed by ±10 % (model nominal) the M1/M2
+    // accuracies over 70–100 s keep their order of magnitude: within a factor 10 of the
+    // nominal run's accuracy over the same window, every column (measured 0.34–5.8).
+    let pm = paper_model_overrides();
+    for law in [M1, M2] {
+        let nominal = run(law, true);
+        for tag in ["jsp10_jtp10", "jsm10_jtm10"] {
+            let r = run_case(
+                &scene_file(law, "linear", Some(tag)),
+                &pm,
+                None,
+                INERTIA_WINDOW,
+            )
+            .unwrap();
+            for i in 0..12 {
+                let x: Vec<f64> = nominal
+                    .series
+                    .trans
+                    .iter()
+                    .chain(&nominal.series.rot)
+                    .map(|v| v[i % 6])
+                    .collect();
+                let n = nominal.series.t.len();
+                let x = if i < 6 { &x[..n] } else { &x[n..] };
+                let nom = accuracy(&nominal.series.t, x, INERTIA_WINDOW.0, INERTIA_WINDOW.1);
+                let q = r.accuracy[i] / nom;
+                assert!(q > 0.1 && q < 10.0, "{law:?} {tag} column {i}: ratio {q}");
+            }
+        }
+    }
+}
+
+#[test]
+fn val_geng2015_full_geometry_collides_before_the_ports_meet() {
+    // Claim "the ports meet with contact only between docking parts": refuted. Flying the
+    // scene's full geometry (buses, wings, cone, slot), M1 approaches from 36.6 m along the
+    // Hill frame while the target tumbles at 4.7 °/s, and the buses touch at 28.5 s with the
+    // ports still 1.1 m apart (a collision: neither part is a docking part). The paper-model run
+    // of the same scene docks to < 1 mm with the spheres never touching.
+    let full = run_case(&scene_file(M1, "linear", None), &[], None, window(M1)).unwrap();
+    assert!(!full.collisions.is_empty());
+    let (t_c, a, b) = &full.collisions[0];
+    assert!(
+        !a.contains("cone") && !a.contains("slot") && !b.contains("cone") && !b.contains("slot")
+    );
+    let (d, _, _, t_d) = full.closest.clone().unwrap();
+    assert!(
+        d <= 1e-3 && *t_c <= t_d + 0.02,
+        "closest {d} at {t_d}, collision at {t_c}"
+    );
+    let before: f64 = full
+        .series
+        .t
+        .iter()
+        .zip(&full.series.port_distance_m)
+        .filter(|(t, _)| **t < *t_c)
+        .map(|(_, d)| *d)
+        .fold(f64::INFINITY, f64::min);
+    assert!(before > 0.5, "ports {before} m apart at first contact");
+    for linear in [true, false] {
+        for law in [T1, M1, T2, M2] {
+            let r = run(law, linear);
+            assert!(r.collisions.is_empty() && r.first_contact_s.is_none());
+            assert!(*r.series.port_distance_m.last().unwrap() < 1e-3, "{law:?}");
+            // Spheres of 5 cm: the centres stay > 0.1 m apart.
+            assert!(r.closest.as_ref().unwrap().0 > 0.0);
+        }
+    }
+}
+
+#[test]
+fn val_geng2015_eq10_bound_vs_observed() {
+    // Eq (10) per channel (premises: α − β − D > 0, β > D; D from the disturbance bounds),
+    // against the observed convergence time (last exit of |s_i| from 10× its window accuracy).
+    // M1 translation with the linear a_d: premises fail (D grows with t), consistent with the
+    // twisting-condition finding of the law's tests. Where the bound exists it holds, but it is
+    // 3–10 orders of magnitude above the observed 15–50 s: uninformative.
+    for linear in [true, false] {
+        for law in [M1, M2] {
+            let r = run(law, linear);
+            for i in 0..6 {
+                let s: Vec<f64> = r.series.s.iter().map(|v| v[i]).collect();
+                let band = 10.0 * accuracy(&r.series.t[..s.len()], &s, r.window_s.0, r.window_s.1);
+                let obs = observed_convergence_s(&r.series, i, band);
+                assert!(
+                    obs > 1.0 && obs < r.window_s.0,
+                    "{law:?} ch{i} converged at {obs}"
+                );
+                match eq10_bound_s(r, i) {
+                    Some(b) => assert!(b >= obs * 100.0, "{law:?} ch{i}: {b} vs {obs}"),
+                    None => assert!(law == M1 && linear && i < 3, "{law:?} ch{i} premises"),
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn regress_geng2015_deterministic() {
+    // Same scene, same outputs: two 10 s runs give bit-identical series.
+    let pm = paper_model_overrides();
+    let a = run_case(
+        &scene_file(T2, "periodic", None),
+        &pm,
+        Some(10.0),
+        (5.0, 10.0),
+    )
+    .unwrap();
+    let b = run_case(
+        &scene_file(T2, "periodic", None),
+        &pm,
+        Some(10.0),
+        (5.0, 10.0),
+    )
+    .unwrap();
+    assert_eq!(a.series.trans, b.series.trans);
+    assert_eq!(a.series.u, b.series.u);
 }

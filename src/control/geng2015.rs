@@ -1730,7 +1730,8 @@ mod tests {
 /// The controller's model takes the chaser mass and both inertias from the scene bodies unless
 /// `model_chaser_inertia_diag_kg_m2` / `model_target_inertia_diag_kg_m2` say otherwise (the
 /// ±10 % inertia cases of Tables 4–7 perturb the bodies and keep the model nominal). Port
-/// positions are the scene ports' origins less the body's centre of mass.
+/// positions are the scene ports' origins less the body's centre of mass. (The larger optional
+/// blocks are boxed to keep [`crate::control::ControllerSpec`] small; scenes write them plainly.)
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneSpec {
@@ -1765,16 +1766,16 @@ pub struct SceneSpec {
     pub torque_max_nm: f64,
     /// Diagonal of the chaser inertia the controller assumes, kg·m² (default: the body's).
     #[serde(default)]
-    pub model_chaser_inertia_diag_kg_m2: Option<[f64; 3]>,
+    pub model_chaser_inertia_diag_kg_m2: Option<Box<[f64; 3]>>,
     /// Diagonal of the target inertia the controller assumes, kg·m² (default: the body's).
     #[serde(default)]
-    pub model_target_inertia_diag_kg_m2: Option<[f64; 3]>,
+    pub model_target_inertia_diag_kg_m2: Option<Box<[f64; 3]>>,
     /// Gains (default Table 2).
     #[serde(default)]
-    pub gains: Option<Geng2015Gains>,
+    pub gains: Option<Box<Geng2015Gains>>,
     /// The paper's disturbances on both bodies (default none).
     #[serde(default)]
-    pub disturbance: Option<DisturbanceSpec>,
+    pub disturbance: Option<Box<DisturbanceSpec>>,
 }
 
 /// The disturbances of §1/§3.1 as a scene writes them: a_d on each body in its own axes (form

@@ -23,6 +23,19 @@ use nalgebra::Vector6;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+/// `--set` overrides that turn a bundled scene into the paper's model: each body's geometry
+/// becomes a 5 cm sphere at its centre of mass (the paper has no geometry; the spheres never
+/// come closer than the 1.25 m centre distance of the docked pair). Mass, inertia, ports,
+/// orbits, law and disturbances are unchanged.
+pub fn paper_model_overrides() -> Vec<String> {
+    ["target", "chaser"]
+        .iter()
+        .map(|b| {
+            format!("bodies.{b}.parts=[Bus(name: \"com_sphere\", shape: Sphere(radius_m: 0.05))]")
+        })
+        .collect()
+}
+
 /// Directory of the bundled scenes.
 pub fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
@@ -118,12 +131,7 @@ pub fn accuracy(t: &[f64], x: &[f64], t0: f64, t1: f64) -> f64 {
 }
 
 /// (sign changes per second, total variation per second) of each channel of `u` over [t0, t1].
-pub fn chattering(
-    t: &[f64],
-    u: &[Vector6<f64>],
-    t0: f64,
-    t1: f64,
-) -> (Vector6<f64>, Vector6<f64>) {
+pub fn chattering(t: &[f64], u: &[Vector6<f64>], t0: f64, t1: f64) -> (Vector6<f64>, Vector6<f64>) {
     let idx: Vec<usize> = (0..t.len().min(u.len()))
         .filter(|&k| t[k] >= t0 - 1e-9 && t[k] <= t1 + 1e-9)
         .collect();
@@ -145,15 +153,19 @@ pub fn chattering(
 /// measures it over `window_s`.
 pub fn run_case(
     path: &Path,
+    overrides: &[String],
     duration_s: Option<f64>,
     window_s: (f64, f64),
 ) -> Result<CaseResult, String> {
-    let loaded = load_scene_file(path, &[]).map_err(|e| e.to_string())?;
+    let loaded = load_scene_file(path, overrides).map_err(|e| e.to_string())?;
     let mut sim = Simulation::new(&loaded).map_err(|e| e.to_string())?;
     let duration = duration_s.unwrap_or(loaded.scene.duration_s);
     let (law, period, chaser, target, params) = {
         let rt = sim.app.world().resource::<Geng2015Runtime>();
-        let lp = rt.loops.first().ok_or("the scene has no geng2015 controller")?;
+        let lp = rt
+            .loops
+            .first()
+            .ok_or("the scene has no geng2015 controller")?;
         let names = &sim.scene.bodies;
         (
             lp.controller.law,
@@ -299,8 +311,7 @@ pub fn paper_inertia(tag: &str, law: Geng2015Law, linear: bool) -> [f64; 12] {
             2.993, 2.725, 2.800, 8.761, 7.921, 8.245, 2.294, 4.828, 5.579, 4.823, 10.070, 8.314,
         ],
         ("jsp10_jtm10", M2, true) => [
-            11.710, 13.480, 10.120, 4.360, 4.176, 3.936, 0.820, 10.300, 10.350, 1.534, 2.079,
-            6.931,
+            11.710, 13.480, 10.120, 4.360, 4.176, 3.936, 0.820, 10.300, 10.350, 1.534, 2.079, 6.931,
         ],
         ("jsp10_jtm10", M1, false) => [
             2.873, 2.841, 2.845, 8.538, 8.377, 8.346, 2.294, 4.828, 5.579, 4.823, 10.070, 8.314,
@@ -409,7 +420,13 @@ fn e3(x: f64) -> String {
     }
 }
 
-fn claim(id: &str, text: &str, paper: Option<&str>, measured: String, held: bool) -> serde_json::Value {
+fn claim(
+    id: &str,
+    text: &str,
+    paper: Option<&str>,
+    measured: String,
+    held: bool,
+) -> serde_json::Value {
     serde_json::json!({"id": id, "claim": text, "paper": paper, "measured": measured, "held": held})
 }
 
@@ -430,24 +447,39 @@ pub fn run(out: &Path) -> Result<(), String> {
          orbit is the reference orbit; the chaser's own elements put it 36.6 m away), target \
          tumbling at [−3, 2, 3] °/s, point-mass gravity, environment gravity-gradient torque, the \
          paper's a_d and T_d on both bodies, dt = 0.01 s, controller period 50 ms (command held), \
-         per-axis saturation 48 N and 0.8 N·m. ρ in the target's Hill frame (x radial, y \
+         per-axis saturation 48 N and 0.8 N·m. The accuracy tables use the paper's model: each \
+         body's geometry replaced by a 5 cm sphere at its centre of mass (`--set \
+         bodies.NAME.parts=[Bus(name: \"com_sphere\", shape: Sphere(radius_m: 0.05))]`); the \
+         full geometry of the scene files is flown in the contact section. ρ in the target's Hill frame (x radial, y \
          along-track, z normal); angles 2·q_rv (deg); ω_r = ω_s − A(q_r)ω_t (deg/s, chaser axes). \
          Accuracy = |mean| + 3σ over the paper's windows (T: 150–200 s, M: 50–100 s).\n"
     );
-    // ---- Table 3 and the other disturbance forms.
+    // ---- Table 3 and the other disturbance forms: the paper's model (no geometry) for the
+    // accuracies, the full geometry for the contacts.
+    let pm = paper_model_overrides();
     let mut t3: Vec<((Geng2015Law, &str), CaseResult)> = vec![];
+    let mut full: Vec<((Geng2015Law, &str), CaseResult)> = vec![];
     for form in ["linear", "periodic", "cosine", "sine"] {
         for law in laws {
             let path = scene_file(law, form, None);
-            let res = run_case(&path, None, window(law))?;
+            let res = run_case(&path, &pm, None, window(law))?;
             eprintln!(
-                "geng2015: {} done ({:.0} steps/s)",
+                "geng2015: {} (paper model) done ({:.0} steps/s)",
                 res.name, res.steps_per_s
             );
             if form == "linear" || form == "periodic" {
                 write_csv(&out.join(format!("{}.csv", res.name)), &res.series)?;
             }
             t3.push(((law, form), res));
+            let res = run_case(&path, &[], None, window(law))?;
+            eprintln!("geng2015: {} (full geometry) done", res.name);
+            if form == "linear" {
+                write_csv(
+                    &out.join(format!("{}_full_geometry.csv", res.name)),
+                    &res.series,
+                )?;
+            }
+            full.push(((law, form), res));
         }
     }
     let get = |law: Geng2015Law, form: &str| {
@@ -457,8 +489,18 @@ pub fn run(out: &Path) -> Result<(), String> {
             .1
     };
     let cols = [
-        "Δρx m", "Δρy m", "Δρz m", "ΔVx m/s", "ΔVy m/s", "ΔVz m/s", "Δφ °", "Δθ °", "Δψ °",
-        "Δωx °/s", "Δωy °/s", "Δωz °/s",
+        "Δρx m",
+        "Δρy m",
+        "Δρz m",
+        "ΔVx m/s",
+        "ΔVy m/s",
+        "ΔVz m/s",
+        "Δφ °",
+        "Δθ °",
+        "Δψ °",
+        "Δωx °/s",
+        "Δωy °/s",
+        "Δωz °/s",
     ];
     for (form, label, linear) in [
         ("linear", "a_d = a_d0(1 + 0.5t) on both bodies", true),
@@ -517,12 +559,7 @@ pub fn run(out: &Path) -> Result<(), String> {
         for law in laws {
             let r = get(law, form);
             let cells: Vec<String> = (0..6)
-                .map(|i| {
-                    format!(
-                        "{:.1} / {:.2e}",
-                        r.sign_changes_per_s[i], r.tv_per_s[i]
-                    )
-                })
+                .map(|i| format!("{:.1} / {:.2e}", r.sign_changes_per_s[i], r.tv_per_s[i]))
                 .collect();
             let _ = writeln!(md, "| {form} | {law:?} | {} |", cells.join(" | "));
         }
@@ -534,7 +571,8 @@ pub fn run(out: &Path) -> Result<(), String> {
     let mut m2_t2_ok = true;
     let mut m1m2_pos_ok = true;
     let mut m2m1_vel_ok = true;
-    let mut chat_ok = true;
+    let mut tv_ok = true;
+    let mut sc_ok = true;
     let mut chat_meas = vec![];
     for form in ["linear", "periodic"] {
         let (t1, m1, t2, m2) = (get(T1, form), get(M1, form), get(T2, form), get(M2, form));
@@ -556,9 +594,10 @@ pub fn run(out: &Path) -> Result<(), String> {
             let sc: Vec<f64> = (0..6)
                 .map(|i| a.sign_changes_per_s[i] - b.sign_changes_per_s[i])
                 .collect();
-            // "Markedly less": total variation at least 5× lower on every channel and no
-            // more sign changes per second.
-            chat_ok &= tv.iter().all(|r| *r >= 5.0) && sc.iter().all(|d| *d >= 0.0);
+            // "Markedly less": total variation at least 5× lower on every channel; sign changes
+            // per second lower on every channel.
+            tv_ok &= tv.iter().all(|r| *r >= 5.0);
+            sc_ok &= sc.iter().all(|d| *d > 0.0);
             chat_meas.push(format!(
                 "{form} {:?}/{:?}: TV ratio {:.1?}, sign-change difference {:.1?} /s",
                 a.law, b.law, tv, sc
@@ -591,11 +630,18 @@ pub fn run(out: &Path) -> Result<(), String> {
         m1m2_pos_ok && m2m1_vel_ok,
     ));
     claims.push(claim(
-        "chattering",
-        "M1/M2 chatter markedly less than T1/T2: total variation of every actuator channel ≥ 5× lower and no more sign changes per second.",
+        "chattering_total_variation",
+        "M1/M2 chatter markedly less than T1/T2 by total variation: Σ|Δu| per second at least 5× lower on every actuator channel (both Table 3 cases).",
         Some("much less actuator chattering for M (Figs 5, 10; no number given)"),
         chat_meas.join("; "),
-        chat_ok,
+        tv_ok,
+    ));
+    claims.push(claim(
+        "chattering_sign_changes",
+        "M1/M2 switch sign less often than T1/T2: fewer sign changes per second on every actuator channel (both Table 3 cases).",
+        Some("much less actuator chattering for M (Figs 5, 10; no number given)"),
+        chat_meas.join("; "),
+        sc_ok,
     ));
     // ---- Inertia robustness (Tables 4–7).
     let _ = writeln!(
@@ -609,11 +655,15 @@ pub fn run(out: &Path) -> Result<(), String> {
     let mut mag_meas = vec![];
     for (tag, label) in INERTIA_TAGS {
         let _ = writeln!(md, "### {label}\n");
-        let _ = writeln!(md, "| case | law | {} | Δ|ρ| m | ratio to nominal |", cols.join(" | "));
+        let _ = writeln!(
+            md,
+            "| case | law | {} | Δ|ρ| m | ratio to nominal |",
+            cols.join(" | ")
+        );
         let _ = writeln!(md, "|---|---|{}---|---|", "---|".repeat(12));
         for (form, linear) in [("linear", true), ("periodic", false)] {
             for law in [M1, M2] {
-                let r = run_case(&scene_file(law, form, Some(tag)), None, INERTIA_WINDOW)?;
+                let r = run_case(&scene_file(law, form, Some(tag)), &pm, None, INERTIA_WINDOW)?;
                 eprintln!("geng2015: {} done", r.name);
                 let nominal = get(law, form);
                 let nom_acc: Vec<f64> = (0..13)
@@ -666,45 +716,56 @@ pub fn run(out: &Path) -> Result<(), String> {
     );
     let _ = writeln!(
         md,
-        "| case | law | final |ρ| m | first contact s | collisions | touched parts (peak N) | closest approach |"
+        "| case | law | final |ρ| m | closest port approach before contact | first contact s | collisions | touched parts (peak N) | closest approach (parts) |"
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
     let mut meet_ok = true;
     let mut meet_meas = vec![];
-    for ((law, form), r) in &t3 {
+    for ((law, form), r) in &full {
         let fin = *r.series.port_distance_m.last().unwrap_or(&f64::NAN);
         let coll = if r.collisions.is_empty() {
             "none".to_string()
         } else {
-            r.collisions
-                .iter()
-                .take(3)
-                .map(|(t, a, b)| format!("{a}–{b} at {t:.2} s"))
-                .collect::<Vec<_>>()
-                .join(", ")
+            let (t, a, b) = &r.collisions[0];
+            format!("{} (first: {a}–{b} at {t:.2} s)", r.collisions.len())
         };
         let touched = if r.touched_parts.is_empty() {
             "none".to_string()
         } else {
             r.touched_parts
                 .iter()
-                .map(|(p, f)| format!("{p} ({f:.1})"))
+                .map(|(p, f)| format!("{p} ({f:.0})"))
                 .collect::<Vec<_>>()
                 .join(", ")
         };
+        // Closest port approach before the first contact.
+        let t_contact = r.first_contact_s.unwrap_or(f64::INFINITY);
+        let (rho_min, t_min) = r
+            .series
+            .t
+            .iter()
+            .zip(&r.series.port_distance_m)
+            .filter(|(t, _)| **t < t_contact)
+            .fold((f64::INFINITY, 0.0), |(m, tm), (t, d)| {
+                if *d < m { (*d, *t) } else { (m, tm) }
+            });
         let closest = r
             .closest
             .as_ref()
-            .map(|(d, a, b, t)| format!("{d:.4} m, {a}–{b} at {t:.1} s"))
+            .map(|(d, a, b, t)| format!("{d:.4} m, {a}–{b} at {t:.2} s"))
             .unwrap_or_default();
         meet_ok &= r.collisions.is_empty() && fin < 1e-3;
         meet_meas.push(format!(
-            "{form} {law:?}: final |ρ| {fin:.2e} m, collisions {}, closest {closest}",
-            r.collisions.len()
+            "{form} {law:?}: {} collisions, first {}; closest port approach before contact {rho_min:.3} m at {t_min:.2} s; final |ρ| {fin:.2e} m",
+            r.collisions.len(),
+            r.collisions
+                .first()
+                .map(|(t, a, b)| format!("{a}–{b} at {t:.2} s"))
+                .unwrap_or("none".into())
         ));
         let _ = writeln!(
             md,
-            "| {form} | {law:?} | {} | {} | {coll} | {touched} | {closest} |",
+            "| {form} | {law:?} | {} | {rho_min:.3} m at {t_min:.2} s | {} | {coll} | {touched} | {closest} |",
             e3(fin),
             r.first_contact_s
                 .map(|t| format!("{t:.2}"))
@@ -712,9 +773,24 @@ pub fn run(out: &Path) -> Result<(), String> {
         );
     }
     md.push('\n');
+    // The paper-model runs: no contact by construction, how close do the centres come?
+    let pm_min = t3
+        .iter()
+        .filter_map(|(_, r)| r.closest.as_ref().map(|c| c.0))
+        .fold(f64::INFINITY, f64::min);
+    let pm_final = t3
+        .iter()
+        .map(|(_, r)| *r.series.port_distance_m.last().unwrap_or(&f64::NAN))
+        .fold(0.0, f64::max);
+    let _ = writeln!(
+        md,
+        "Paper-model runs (5 cm spheres): largest final |ρ| {} m over the 16 runs; the spheres \
+         never came closer than {pm_min:.3} m.\n",
+        e3(pm_final)
+    );
     claims.push(claim(
         "ports_meet_no_collision",
-        "In every Table 3 run the ports meet (final |ρ| < 1 mm) and no part other than the docking cone and slot touches the other spacecraft (full geometry).",
+        "Flying the full geometry, the ports meet (final |ρ| < 1 mm) and no part other than the docking cone and slot touches the other spacecraft, in every run (4 laws × 4 disturbance forms).",
         Some("P_s and P_t dock safely (§3.1); the paper models no geometry"),
         meet_meas.join("; "),
         meet_ok,
@@ -727,7 +803,10 @@ pub fn run(out: &Path) -> Result<(), String> {
          Observed: the last time |s_i| exceeds 10× its window accuracy (|mean| + 3σ of s_i over \
          the window). The bound ignores saturation, which is active during the approach.\n"
     );
-    let _ = writeln!(md, "| case | law | channel | eq (10) bound s | observed s |");
+    let _ = writeln!(
+        md,
+        "| case | law | channel | eq (10) bound s | observed s |"
+    );
     let _ = writeln!(md, "|---|---|---|---|---|");
     let mut eq10_ok = true;
     let mut eq10_meas = vec![];
@@ -745,7 +824,9 @@ pub fn run(out: &Path) -> Result<(), String> {
                 eq10_meas.push(format!(
                     "{form} {law:?} ch{}: bound {} s, observed {obs:.1} s",
                     i + 1,
-                    bound.map(|b| format!("{b:.3e}")).unwrap_or("premises fail".into())
+                    bound
+                        .map(|b| format!("{b:.3e}"))
+                        .unwrap_or("premises fail".into())
                 ));
                 let _ = writeln!(
                     md,

@@ -25,7 +25,7 @@ use crate::control::geng2015::{
 use crate::orbit::constants::MU_EARTH_M3_S2;
 use crate::scene::{Environment, LoadedScene, SceneError};
 use crate::sim::output::Diagnostics;
-use crate::sim::{BodyState, Clock, OrbitEnv, Roster, SimBody, Stage, SimStep, Wrench};
+use crate::sim::{BodyState, Clock, OrbitEnv, Roster, SimBody, SimStep, Stage, Wrench};
 use bevy::prelude::*;
 use nalgebra::{Matrix3, Vector3};
 
@@ -144,7 +144,10 @@ pub fn install(
     if !positive(spec.accel_max_m_s2) {
         return Err(err(
             "accel_max_m_s2",
-            format!("must be a positive acceleration, got {}", spec.accel_max_m_s2),
+            format!(
+                "must be a positive acceleration, got {}",
+                spec.accel_max_m_s2
+            ),
         ));
     }
     if !positive(spec.torque_max_nm) {
@@ -156,14 +159,14 @@ pub fn install(
     for (field, v) in [
         (
             "model_chaser_inertia_diag_kg_m2",
-            spec.model_chaser_inertia_diag_kg_m2,
+            spec.model_chaser_inertia_diag_kg_m2.clone(),
         ),
         (
             "model_target_inertia_diag_kg_m2",
-            spec.model_target_inertia_diag_kg_m2,
+            spec.model_target_inertia_diag_kg_m2.clone(),
         ),
     ] {
-        if let Some(d) = v
+        if let Some(d) = v.as_deref()
             && !d.iter().all(|x| positive(*x))
         {
             return Err(err(
@@ -192,15 +195,17 @@ pub fn install(
             &g.m2_k3,
             &g.m2_k4,
         ];
-        if !all.iter().all(|v| v.iter().all(|x| x.is_finite() && *x >= 0.0)) {
+        if !all
+            .iter()
+            .all(|v| v.iter().all(|x| x.is_finite() && *x >= 0.0))
+        {
             return Err(err("gains", "gains must be finite and non-negative".into()));
         }
     }
     if let Some(d) = &spec.disturbance {
         let ok = d.k_d_per_s.is_finite()
             && d.torque_scale_nm.is_finite()
-            && d
-                .chaser_accel0_m_s2
+            && d.chaser_accel0_m_s2
                 .iter()
                 .chain(&d.target_accel0_m_s2)
                 .all(|x| x.is_finite());
@@ -212,10 +217,14 @@ pub fn install(
         chaser_mass_kg: bs.mass_kg,
         chaser_inertia_kg_m2: spec
             .model_chaser_inertia_diag_kg_m2
+            .as_deref()
+            .copied()
             .map(diag3)
             .unwrap_or_else(|| bs.inertia_kg_m2.matrix()),
         target_inertia_kg_m2: spec
             .model_target_inertia_diag_kg_m2
+            .as_deref()
+            .copied()
             .map(diag3)
             .unwrap_or_else(|| bt.inertia_kg_m2.matrix()),
         chaser_port_body_m: ps,
@@ -226,7 +235,11 @@ pub fn install(
         rho_frame: spec.rho_frame,
         rho_des_m: Vector3::from(spec.rho_des_m),
         sdot_estimate: spec.sdot_estimate,
-        gains: spec.gains.clone().unwrap_or_else(Geng2015Gains::paper),
+        gains: spec
+            .gains
+            .as_deref()
+            .cloned()
+            .unwrap_or_else(Geng2015Gains::paper),
     };
     // ω° of T_d: the reference orbit's mean motion.
     let omega_orbit = app
