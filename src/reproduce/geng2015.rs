@@ -79,6 +79,9 @@ pub struct Series {
     pub s: Vec<Vector6<f64>>,
     /// ṡ used by the law at `t`.
     pub s_dot: Vec<Vector6<f64>>,
+    /// Cosine of the angle between ρ and the target port's outward direction A_tᵀP_t/|P_t|
+    /// (1: the chaser port is in front of the target port; −1: behind it).
+    pub approach_cos: Vec<f64>,
 }
 
 /// What one run measured.
@@ -196,6 +199,9 @@ pub fn run_case(
         se.trans.push(Vector6::new(r.x, r.y, r.z, v.x, v.y, v.z));
         se.rot.push(Vector6::new(a.x, a.y, a.z, w.x, w.y, w.z));
         se.port_distance_m.push(r.norm());
+        let out_dir = rel.a_f * (st.att * params.target_port_body_m);
+        se.approach_cos
+            .push(r.dot(&out_dir) / (r.norm() * out_dir.norm()).max(f64::MIN_POSITIVE));
         if k == calls {
             break;
         }
@@ -716,9 +722,9 @@ pub fn run(out: &Path) -> Result<(), String> {
     );
     let _ = writeln!(
         md,
-        "| case | law | final |ρ| m | closest port approach before contact | first contact s | collisions | touched parts (peak N) | closest approach (parts) |"
+        "| case | law | final |ρ| m | closest port approach before contact | cos(ρ, port axis) at contact | first contact s | collisions | touched parts (peak N) | closest approach (parts) |"
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|");
     let mut meet_ok = true;
     let mut meet_meas = vec![];
     for ((law, form), r) in &full {
@@ -732,14 +738,28 @@ pub fn run(out: &Path) -> Result<(), String> {
         let touched = if r.touched_parts.is_empty() {
             "none".to_string()
         } else {
-            r.touched_parts
+            let mut v: Vec<String> = r
+                .touched_parts
                 .iter()
+                .take(6)
                 .map(|(p, f)| format!("{p} ({f:.0})"))
-                .collect::<Vec<_>>()
-                .join(", ")
+                .collect();
+            if r.touched_parts.len() > 6 {
+                v.push(format!("… {} more", r.touched_parts.len() - 6));
+            }
+            v.join(", ")
         };
-        // Closest port approach before the first contact.
         let t_contact = r.first_contact_s.unwrap_or(f64::INFINITY);
+        // Where the chaser port was relative to the target port's face at the first contact.
+        let cos_at_contact = r
+            .series
+            .t
+            .iter()
+            .zip(&r.series.approach_cos)
+            .rfind(|(t, _)| **t <= t_contact)
+            .map(|(_, c)| *c)
+            .unwrap_or(f64::NAN);
+        // Closest port approach before the first contact.
         let (rho_min, t_min) = r
             .series
             .t
@@ -756,7 +776,7 @@ pub fn run(out: &Path) -> Result<(), String> {
             .unwrap_or_default();
         meet_ok &= r.collisions.is_empty() && fin < 1e-3;
         meet_meas.push(format!(
-            "{form} {law:?}: {} collisions, first {}; closest port approach before contact {rho_min:.3} m at {t_min:.2} s; final |ρ| {fin:.2e} m",
+            "{form} {law:?}: {} collisions, first {}; closest port approach before contact {rho_min:.3} m at {t_min:.2} s; cos(ρ, target port axis) there {cos_at_contact:.2}; final |ρ| {fin:.2e} m",
             r.collisions.len(),
             r.collisions
                 .first()
@@ -765,7 +785,7 @@ pub fn run(out: &Path) -> Result<(), String> {
         ));
         let _ = writeln!(
             md,
-            "| {form} | {law:?} | {} | {rho_min:.3} m at {t_min:.2} s | {} | {coll} | {touched} | {closest} |",
+            "| {form} | {law:?} | {} | {rho_min:.3} m at {t_min:.2} s | {cos_at_contact:.2} | {} | {coll} | {touched} | {closest} |",
             e3(fin),
             r.first_contact_s
                 .map(|t| format!("{t:.2}"))
@@ -795,6 +815,70 @@ pub fn run(out: &Path) -> Result<(), String> {
         meet_meas.join("; "),
         meet_ok,
     ));
+    // ---- Truth-step sensitivity: dt = controller period = 50 ms.
+    let _ = writeln!(
+        md,
+        "## Sensitivity to the truth step\n\nThe same paper-model runs with the simulation \
+         step raised to the 50 ms controller period (`--set dt_s=0.05`), i.e. the plant \
+         integrated at the control rate as a 50 ms fixed-step simulation would. Ratio T2/M2 of \
+         the position and velocity accuracies (> 1: M2 better).\n"
+    );
+    let _ = writeln!(
+        md,
+        "| case | dt s | T2/M2 Δρ x y z | T2/M2 ΔV x y z | T1/M1 Δρ x y z |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|");
+    let mut coarse_meas = vec![];
+    for form in ["linear", "periodic"] {
+        let mut coarse = vec![];
+        for law in laws {
+            let mut ov = pm.clone();
+            ov.push("dt_s=0.05".into());
+            coarse.push(run_case(
+                &scene_file(law, form, None),
+                &ov,
+                None,
+                window(law),
+            )?);
+        }
+        let c = |l: Geng2015Law| &coarse[laws.iter().position(|x| *x == l).unwrap_or(0)];
+        for (dt, t1, m1, t2, m2) in [
+            (
+                0.01,
+                get(T1, form),
+                get(M1, form),
+                get(T2, form),
+                get(M2, form),
+            ),
+            (0.05, c(T1), c(M1), c(T2), c(M2)),
+        ] {
+            let q = |a: &CaseResult, b: &CaseResult, i: usize| a.accuracy[i] / b.accuracy[i];
+            let f = |a: &CaseResult, b: &CaseResult, r: std::ops::Range<usize>| {
+                r.map(|i| format!("{:.2}", q(a, b, i)))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            };
+            let _ = writeln!(
+                md,
+                "| {form} | {dt} | {} | {} | {} |",
+                f(t2, m2, 0..3),
+                f(t2, m2, 3..6),
+                f(t1, m1, 0..3)
+            );
+            coarse_meas.push(format!("{form} dt {dt}: T2/M2 ρ {}", f(t2, m2, 0..3)));
+        }
+    }
+    md.push('\n');
+    for c in claims.iter_mut() {
+        if c["id"] == "m2_vs_t2" {
+            let m = format!(
+                "{}; with a 50 ms truth step: {}",
+                c["measured"].as_str().unwrap_or(""),
+                coarse_meas.join("; ")
+            );
+            c["measured"] = serde_json::Value::String(m);
+        }
+    }
     // ---- Eq (10).
     let _ = writeln!(
         md,
