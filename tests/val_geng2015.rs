@@ -537,3 +537,27 @@ fn regress_geng2015_deterministic() {
     assert_eq!(a.series.trans, b.series.trans);
     assert_eq!(a.series.u, b.series.u);
 }
+
+#[test]
+fn invariant_geng2015_metrics_closed_form() {
+    // The report's metrics on series with closed-form answers: |mean| + 3σ of a constant c is
+    // |c|; of a ±a square wave (mean 0, σ = a) it is 3a; a command alternating ±1 every 50 ms
+    // changes sign 20 times per second with total variation 40 per second.
+    let t: Vec<f64> = (0..=200).map(|k| k as f64 * 0.05).collect();
+    let c = vec![-2.5; t.len()];
+    assert!((accuracy(&t, &c, 0.0, 10.0) - 2.5).abs() < 1e-12);
+    let sq: Vec<f64> = (0..t.len())
+        .map(|k| if k % 2 == 0 { 0.3 } else { -0.3 })
+        .collect();
+    // 201 samples: mean 0.3/201, σ ≈ 0.3.
+    let a = accuracy(&t[..200], &sq[..200], 0.0, 10.0);
+    assert!((a - 0.9).abs() < 1e-9, "{a}");
+    let u: Vec<nalgebra::Vector6<f64>> = sq
+        .iter()
+        .map(|x| nalgebra::Vector6::repeat(x / 0.3))
+        .collect();
+    let (sc, tv) = rpod::reproduce::geng2015::chattering(&t, &u, 0.0, 10.0);
+    for i in 0..6 {
+        assert!((sc[i] - 20.0).abs() < 1e-9 && (tv[i] - 40.0).abs() < 1e-9);
+    }
+}
