@@ -561,3 +561,45 @@ fn invariant_geng2015_metrics_closed_form() {
         assert!((sc[i] - 20.0).abs() < 1e-9 && (tv[i] - 40.0).abs() < 1e-9);
     }
 }
+
+#[test]
+fn val_geng2015_inertia_scenes() {
+    // The 16 ±10 % inertia scenes: the bodies carry J·(1 ± 0.1) (paper J_s, J_t), the
+    // controller's model keeps the nominal J_s, J_t; everything else equals the nominal scene.
+    let js = Vector3::new(45.6, 47.3, 46.9);
+    let jt = Vector3::new(67.6, 57.6, 57.6);
+    for law in [M1, M2] {
+        for form in ["linear", "periodic"] {
+            for (tag, ks, kt) in [
+                ("jsp10_jtp10", 1.1, 1.1),
+                ("jsp10_jtm10", 1.1, 0.9),
+                ("jsm10_jtp10", 0.9, 1.1),
+                ("jsm10_jtm10", 0.9, 0.9),
+            ] {
+                let loaded = load_scene_file(&scene_file(law, form, Some(tag)), &[]).unwrap();
+                let sim = Simulation::new(&loaded).unwrap();
+                let b = &loaded.scene.bodies;
+                let (tb, cb) = (&b[0], &b[1]);
+                assert_eq!((tb.name.as_str(), cb.name.as_str()), ("target", "chaser"));
+                let d = |m: Matrix3<f64>| Vector3::new(m[(0, 0)], m[(1, 1)], m[(2, 2)]);
+                assert!(
+                    (d(cb.inertia_kg_m2.matrix()) - js * ks).norm() < 1e-9,
+                    "{tag}"
+                );
+                assert!(
+                    (d(tb.inertia_kg_m2.matrix()) - jt * kt).norm() < 1e-9,
+                    "{tag}"
+                );
+                let p = &sim.app.world().resource::<Geng2015Runtime>().loops[0]
+                    .controller
+                    .params;
+                assert_eq!(d(p.chaser_inertia_kg_m2), js);
+                assert_eq!(d(p.target_inertia_kg_m2), jt);
+                let nominal = load_scene_file(&scene_file(law, form, None), &[]).unwrap();
+                let n0 = &nominal.scene.bodies[1].initial;
+                assert_eq!(cb.initial.pos_m, n0.pos_m);
+                assert_eq!(cb.initial.vel_m_s, n0.vel_m_s);
+            }
+        }
+    }
+}
