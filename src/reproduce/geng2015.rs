@@ -10,8 +10,9 @@
 //! M: 50–100 s, ±10 % inertia: 70–100 s). Chattering per actuator channel over the same window:
 //! sign changes of u per second and total variation Σ|Δu| per second.
 //!
-//! Writes `REPORT.md`, `claims.json` and, per Table 3 run, `<case>.csv` (the sampled series the
-//! report's numbers come from).
+//! Writes `REPORT.md`, `claims.json`, per Table 3 run `<case>.csv` (the sampled series the
+//! report's numbers come from), and the figures as SVG (`<case>.svg`: the paper's Figs 2–11 per
+//! law; `<case>_full_geometry.svg`: port distance, paper model vs full geometry).
 
 use crate::control::geng2015::{
     BoundEnvelope, Geng2015Law, convergence_time_bound_s, disturbance_bounds, relative_state,
@@ -538,6 +539,20 @@ pub fn run(out: &Path) -> Result<(), String> {
         }
         md.push('\n');
     }
+    // ---- Figures (the paper's Figs 2–11 for every law, linear a_d).
+    let _ = writeln!(
+        md,
+        "## Figures (linear a_d, paper model)\n\nPer law: ρ and ρ̇ (target Hill frame), port \
+         distance |ρ| (log), relative attitude angles 2·q_rv and ω_r (chaser axes), force and \
+         torque commands (chaser body axes), sliding variables — the content of the paper's \
+         Figs 2–11 (which show M1 and M2).\n"
+    );
+    for law in laws {
+        let r = get(law, "linear");
+        let file = format!("{}.svg", r.name);
+        plot_case(out, r, &file)?;
+        let _ = writeln!(md, "![{law:?}, linear a_d]({file})\n");
+    }
     let _ = writeln!(
         md,
         "## Same laws, a_d = a_d0[1 + cos 0.5t] and a_d0[1 + sin 0.5t] on both bodies (testbed only)\n"
@@ -821,6 +836,17 @@ pub fn run(out: &Path) -> Result<(), String> {
          never came closer than {pm_min:.3} m.\n",
         e3(pm_final)
     );
+    for law in laws {
+        let model = get(law, "linear");
+        let f = &full
+            .iter()
+            .find(|((l, fm), _)| *l == law && *fm == "linear")
+            .expect("case ran")
+            .1;
+        let file = format!("{}_full_geometry.svg", f.name);
+        plot_full_geometry(out, model, f, &file)?;
+        let _ = writeln!(md, "![{law:?}: paper model vs full geometry]({file})\n");
+    }
     claims.push(claim(
         "ports_meet_no_collision",
         "Flying the full geometry, the ports meet (final |ρ| < 1 mm) and no part other than the docking cone and slot touches the other spacecraft, in every run (4 laws × 4 disturbance forms).",
@@ -998,4 +1024,309 @@ fn write_csv(path: &Path, s: &Series) -> Result<(), String> {
         out.push('\n');
     }
     write_atomic(path, out.as_bytes())
+}
+
+// ---------------------------------------------------------------------------------------------
+// Plots. The project's report module (PNG) is not on main yet; until it is, the figures are
+// written as self-contained SVG by this small line-plot writer.
+// ---------------------------------------------------------------------------------------------
+
+/// One panel: title, axis labels (with units), named lines, optional log-y, vertical markers.
+struct Panel {
+    title: String,
+    x_label: String,
+    y_label: String,
+    log_y: bool,
+    lines: Vec<(String, Vec<(f64, f64)>)>,
+    vlines: Vec<(f64, String)>,
+}
+
+impl Panel {
+    fn new(title: &str, x_label: &str, y_label: &str) -> Self {
+        Self {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            log_y: false,
+            lines: vec![],
+            vlines: vec![],
+        }
+    }
+    fn line(mut self, name: &str, pts: Vec<(f64, f64)>) -> Self {
+        self.lines.push((name.into(), pts));
+        self
+    }
+}
+
+const COLORS: [&str; 6] = [
+    "#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9",
+];
+
+fn nice_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let span = (hi - lo).max(f64::MIN_POSITIVE);
+    let raw = span / 5.0;
+    let mag = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 2.5, 5.0, 10.0]
+        .iter()
+        .map(|m| m * mag)
+        .find(|s| span / s <= 6.0)
+        .unwrap_or(10.0 * mag);
+    let mut v = vec![];
+    let mut x = (lo / step).ceil() * step;
+    while x <= hi + 1e-9 * span {
+        v.push(if x.abs() < 1e-12 * span { 0.0 } else { x });
+        x += step;
+    }
+    v
+}
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+/// Writes panels in a grid of `cols` columns as one SVG.
+fn write_svg(path: &Path, title: &str, panels: &[Panel], cols: usize) -> Result<(), String> {
+    let (pw, ph) = (520.0, 300.0);
+    let rows = panels.len().div_ceil(cols);
+    let (w, h) = (pw * cols as f64, ph * rows as f64 + 40.0);
+    let mut s = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" \
+         font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" \
+         fill=\"white\"/>\n<text x=\"{}\" y=\"24\" font-size=\"16\" text-anchor=\"middle\">{}</text>\n",
+        w / 2.0,
+        esc(title)
+    );
+    for (k, p) in panels.iter().enumerate() {
+        let (ox, oy) = ((k % cols) as f64 * pw, 40.0 + (k / cols) as f64 * ph);
+        let (l, r, t, b) = (ox + 70.0, ox + pw - 15.0, oy + 25.0, oy + ph - 45.0);
+        let fy = |y: f64| {
+            if p.log_y {
+                y.abs().max(1e-300).log10()
+            } else {
+                y
+            }
+        };
+        let pts = p.lines.iter().flat_map(|(_, v)| v.iter());
+        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for (x, y) in pts {
+            if x.is_finite() && y.is_finite() && (!p.log_y || *y > 0.0) {
+                x0 = x0.min(*x);
+                x1 = x1.max(*x);
+                y0 = y0.min(fy(*y));
+                y1 = y1.max(fy(*y));
+            }
+        }
+        if x0 > x1 {
+            continue;
+        }
+        if y1 - y0 < 1e-300 {
+            y0 -= 1.0;
+            y1 += 1.0;
+        }
+        let pad = 0.05 * (y1 - y0);
+        let (y0, y1) = (y0 - pad, y1 + pad);
+        let x1 = if x1 > x0 { x1 } else { x0 + 1.0 };
+        let sx = |x: f64| l + (x - x0) / (x1 - x0) * (r - l);
+        let sy = |y: f64| b - (y - y0) / (y1 - y0) * (b - t);
+        let _ = writeln!(
+            s,
+            "<text x=\"{}\" y=\"{}\" font-size=\"13\" text-anchor=\"middle\">{}</text>",
+            (l + r) / 2.0,
+            oy + 16.0,
+            esc(&p.title)
+        );
+        let _ = writeln!(
+            s,
+            "<rect x=\"{l}\" y=\"{t}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#444\"/>",
+            r - l,
+            b - t
+        );
+        for xt in nice_ticks(x0, x1) {
+            let _ = writeln!(
+                s,
+                "<line x1=\"{0}\" x2=\"{0}\" y1=\"{t}\" y2=\"{b}\" stroke=\"#ddd\"/><text x=\"{0}\" y=\"{1}\" text-anchor=\"middle\">{2}</text>",
+                sx(xt),
+                b + 14.0,
+                format_tick(xt)
+            );
+        }
+        for yt in nice_ticks(y0, y1) {
+            let label = if p.log_y {
+                format!("1e{}", yt.round())
+            } else {
+                format_tick(yt)
+            };
+            if p.log_y && (yt - yt.round()).abs() > 1e-9 {
+                continue;
+            }
+            let _ = writeln!(
+                s,
+                "<line x1=\"{l}\" x2=\"{r}\" y1=\"{0}\" y2=\"{0}\" stroke=\"#ddd\"/><text x=\"{1}\" y=\"{2}\" text-anchor=\"end\">{3}</text>",
+                sy(yt),
+                l - 4.0,
+                sy(yt) + 4.0,
+                label
+            );
+        }
+        let _ = writeln!(
+            s,
+            "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>",
+            (l + r) / 2.0,
+            b + 32.0,
+            esc(&p.x_label)
+        );
+        let _ = writeln!(
+            s,
+            "<text transform=\"translate({},{}) rotate(-90)\" text-anchor=\"middle\">{}</text>",
+            ox + 16.0,
+            (t + b) / 2.0,
+            esc(&p.y_label)
+        );
+        for (i, (name, v)) in p.lines.iter().enumerate() {
+            let c = COLORS[i % COLORS.len()];
+            let mut d = String::new();
+            let mut pen = false;
+            let mut last = (f64::NAN, f64::NAN);
+            for (x, y) in v {
+                if !(x.is_finite() && y.is_finite()) || (p.log_y && *y <= 0.0) {
+                    pen = false;
+                    continue;
+                }
+                let (px, py) = (sx(*x), sy(fy(*y)));
+                if pen && (px - last.0).abs() < 0.4 && (py - last.1).abs() < 0.4 {
+                    continue;
+                }
+                let _ = write!(d, "{}{px:.1},{py:.1} ", if pen { "L" } else { "M" });
+                pen = true;
+                last = (px, py);
+            }
+            let _ = writeln!(
+                s,
+                "<path d=\"{d}\" fill=\"none\" stroke=\"{c}\" stroke-width=\"1.3\"/>\
+                 <text x=\"{}\" y=\"{}\" fill=\"{c}\" text-anchor=\"end\">{}</text>",
+                r - 6.0,
+                t + 14.0 + 13.0 * i as f64,
+                esc(name)
+            );
+        }
+        for (x, label) in &p.vlines {
+            let _ = writeln!(
+                s,
+                "<line x1=\"{0}\" x2=\"{0}\" y1=\"{t}\" y2=\"{b}\" stroke=\"#c00\" stroke-dasharray=\"4 3\"/><text x=\"{1}\" y=\"{2}\" fill=\"#c00\">{3}</text>",
+                sx(*x),
+                sx(*x) + 3.0,
+                b - 6.0,
+                esc(label)
+            );
+        }
+    }
+    s.push_str("</svg>\n");
+    write_atomic(path, s.as_bytes())
+}
+
+fn format_tick(x: f64) -> String {
+    if x == 0.0 {
+        "0".into()
+    } else if x.abs() >= 1e4 || x.abs() < 1e-2 {
+        format!("{x:.1e}")
+    } else {
+        let s = format!("{x:.3}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}
+
+/// The paper's Figs 2–11 for one run: ρ, ρ̇, |ρ| (log), angles, ω_r, forces, torques, sliding
+/// variables (translation, rotation).
+fn plot_case(out: &Path, r: &CaseResult, file: &str) -> Result<(), String> {
+    let se = &r.series;
+    let n = se.u.len();
+    let tu = &se.t[..n];
+    let col = |v: &[Vector6<f64>], tt: &[f64], i: usize| -> Vec<(f64, f64)> {
+        tt.iter().zip(v).map(|(t, x)| (*t, x[i])).collect()
+    };
+    let xyz = ["x", "y", "z"];
+    let mut p = vec![
+        Panel::new("Port position ρ (target Hill frame)", "t [s]", "ρ [m]"),
+        Panel::new("Port velocity ρ̇ (target Hill frame)", "t [s]", "ρ̇ [m/s]"),
+        Panel::new("Port distance |ρ|", "t [s]", "|ρ| [m] (log)"),
+        Panel::new(
+            "Relative attitude 2·q_rv (chaser axes)",
+            "t [s]",
+            "angle [deg]",
+        ),
+        Panel::new("Relative rate ω_r (chaser axes)", "t [s]", "ω_r [deg/s]"),
+        Panel::new("Control force (chaser body axes)", "t [s]", "F [N]"),
+        Panel::new("Control torque (chaser body axes)", "t [s]", "T [N·m]"),
+        Panel::new("Sliding variables, translation", "t [s]", "s [m or m/s]"),
+        Panel::new("Sliding variables, rotation", "t [s]", "s [1 or 1/s]"),
+    ];
+    p[2].log_y = true;
+    p[2] = std::mem::replace(&mut p[2], Panel::new("", "", "")).line(
+        "|ρ|",
+        se.t.iter()
+            .zip(&se.port_distance_m)
+            .map(|(t, d)| (*t, *d))
+            .collect(),
+    );
+    for i in 0..3 {
+        let take = |p: &mut Panel, name: String, pts: Vec<(f64, f64)>| {
+            *p = std::mem::replace(p, Panel::new("", "", "")).line(&name, pts);
+        };
+        take(&mut p[0], format!("ρ{}", xyz[i]), col(&se.trans, &se.t, i));
+        take(
+            &mut p[1],
+            format!("V{}", xyz[i]),
+            col(&se.trans, &se.t, 3 + i),
+        );
+        take(&mut p[3], ["φ", "θ", "ψ"][i].into(), col(&se.rot, &se.t, i));
+        take(
+            &mut p[4],
+            format!("ω{}", xyz[i]),
+            col(&se.rot, &se.t, 3 + i),
+        );
+        take(&mut p[5], format!("F{}", xyz[i]), col(&se.u, tu, i));
+        take(&mut p[6], format!("T{}", xyz[i]), col(&se.u, tu, 3 + i));
+        take(&mut p[7], format!("S{}", xyz[i]), col(&se.s, tu, i));
+        take(&mut p[8], format!("Sq{}", i + 1), col(&se.s, tu, 3 + i));
+    }
+    write_svg(
+        &out.join(file),
+        &format!("{} — {:?}, paper model", r.name, r.law),
+        &p,
+        3,
+    )
+}
+
+/// Port distance of the paper-model run against the full-geometry run, first collision marked.
+fn plot_full_geometry(
+    out: &Path,
+    model: &CaseResult,
+    full: &CaseResult,
+    file: &str,
+) -> Result<(), String> {
+    let pts = |r: &CaseResult| -> Vec<(f64, f64)> {
+        r.series
+            .t
+            .iter()
+            .zip(&r.series.port_distance_m)
+            .map(|(t, d)| (*t, *d))
+            .collect()
+    };
+    let mut p = Panel::new(
+        &format!(
+            "{:?}: port distance, paper model vs full geometry",
+            model.law
+        ),
+        "t [s]",
+        "|ρ| [m] (log)",
+    )
+    .line("paper model (5 cm spheres)", pts(model))
+    .line("full geometry", pts(full));
+    p.log_y = true;
+    if let Some((t, a, b)) = full.collisions.first() {
+        p.vlines.push((*t, format!("first collision {a}–{b}")));
+    }
+    write_svg(&out.join(file), &full.name, &[p], 1)
 }
