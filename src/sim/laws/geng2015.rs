@@ -12,8 +12,10 @@
 //!   its [`Wrench`]; the paper's disturbances are added to both bodies: force m·R·a_d(t)
 //!   (a_d in the body's own axes) and torque R·T_d(t). The gravity-gradient torque T_g of the
 //!   paper is the environment's (scene `gravity_gradient: true`) and is not added again.
-//! - Diagnostics columns `geng2015.<body>.*`: ρ and ρ̇ (ρ frame), q_rv, ω_r (chaser axes), the
-//!   port distance |ρ|, the sliding variables s1..s6 and the applied command u (N, N·m).
+//! - Diagnostics columns `geng2015.<body>.*` (`Stage::Monitor`, from the states after the step,
+//!   i.e. at the time of the trajectory row): ρ and ρ̇ (ρ frame), q_rv, ω_r (chaser axes), the
+//!   port distance |ρ|; and from the last controller call the sliding variables s1..s6 and the
+//!   applied command u (chaser body axes, N, N·m).
 //!
 //! Scene errors (missing bodies or ports, no orbit, a period that is not a whole number of
 //! steps, bad limits) point at the controller's fields.
@@ -275,6 +277,7 @@ pub fn install(
         app.insert_resource(Geng2015Runtime::default());
         app.add_systems(SimStep, control.in_set(Stage::Control));
         app.add_systems(SimStep, actuate.in_set(Stage::Actuate));
+        app.add_systems(SimStep, publish.in_set(Stage::Monitor));
     }
     app.world_mut()
         .resource_mut::<Geng2015Runtime>()
@@ -310,7 +313,6 @@ fn control(
     roster: Res<Roster>,
     states: Query<&BodyState>,
     mut rt: ResMut<Geng2015Runtime>,
-    mut diag: ResMut<Diagnostics>,
 ) {
     let t = clock.t_s();
     let reference = orbit.reference.state();
@@ -329,7 +331,29 @@ fn control(
             lp.calls += 1;
             lp.last_call_s = t;
         }
-        // Diagnostics every step from the current state; s and u from the last call.
+    }
+}
+
+/// Monitor stage: diagnostics from the states after the step (the time of the trajectory row);
+/// s and u are those of the last controller call.
+fn publish(
+    clock: Res<Clock>,
+    orbit: Res<OrbitEnv>,
+    roster: Res<Roster>,
+    states: Query<&BodyState>,
+    rt: Res<Geng2015Runtime>,
+    mut diag: ResMut<Diagnostics>,
+) {
+    let t = clock.t_s();
+    let reference = orbit.reference.state();
+    for lp in &rt.loops {
+        let (Ok(sc), Ok(st)) = (
+            states.get(roster.bodies[lp.chaser]),
+            states.get(roster.bodies[lp.target]),
+        ) else {
+            continue;
+        };
+        let obs = observation(t, reference, sc, st);
         let rel = relative_state(&lp.controller.params, &obs);
         let d = lp.controller.diagnostics();
         let q = rel.q_r.imag();
