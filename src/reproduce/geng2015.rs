@@ -11,12 +11,13 @@
 //! sign changes of u per second and total variation Σ|Δu| per second.
 //!
 //! Writes `REPORT.md`, `claims.json`, per Table 3 run `<case>.csv` (the sampled series the
-//! report's numbers come from), and the figures as SVG (`<case>.svg`: the paper's Figs 2–11 per
-//! law; `<case>_full_geometry.svg`: port distance, paper model vs full geometry).
+//! report's numbers come from), and the figures as PNG (`<case>.png`: the paper's Figs 2–11 per
+//! law; `<case>_full_geometry.png`: port distance, paper model vs full geometry).
 
 use crate::control::geng2015::{
     BoundEnvelope, Geng2015Law, convergence_time_bound_s, disturbance_bounds, relative_state,
 };
+use crate::report::Claim;
 use crate::scene::load_scene_file;
 use crate::sim::Simulation;
 use crate::sim::laws::geng2015::{Geng2015Runtime, observation};
@@ -111,6 +112,8 @@ pub struct CaseResult {
     pub touched_parts: Vec<(String, f64)>,
     /// Closest approach over the run in full geometry: (distance m, part, part, t s).
     pub closest: Option<(f64, String, String, f64)>,
+    /// Smallest clearance between parts that are not both docking parts, over the run, m.
+    pub min_clearance_non_docking_m: f64,
     /// Largest |ω_s| and |ω_t| seen, rad/s (for the disturbance bounds).
     pub rate_max_rad_s: (f64, f64),
     /// Simulated steps per wall second.
@@ -254,6 +257,11 @@ pub fn run_case(
             .map(|(k, v)| (k.clone(), v.peak_force_n))
             .collect(),
         closest,
+        min_clearance_non_docking_m: mon
+            .min_clearance_per_pair
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min),
         rate_max_rad_s: rate_max,
         steps_per_s: if sim.wall_s > 0.0 {
             sim.steps() as f64 / sim.wall_s
@@ -427,14 +435,8 @@ fn e3(x: f64) -> String {
     }
 }
 
-fn claim(
-    id: &str,
-    text: &str,
-    paper: Option<&str>,
-    measured: String,
-    held: bool,
-) -> serde_json::Value {
-    serde_json::json!({"id": id, "claim": text, "paper": paper, "measured": measured, "held": held})
+fn claim(id: &str, text: &str, paper: Option<&str>, measured: String, held: bool) -> Claim {
+    Claim::new(id, text, paper, measured, held)
 }
 
 /// Runs the paper's cases and writes REPORT.md, the series CSVs and claims.json into `out`.
@@ -550,7 +552,7 @@ pub fn run(out: &Path) -> Result<(), String> {
     );
     for law in laws {
         let r = get(law, "linear");
-        let file = format!("{}.svg", r.name);
+        let file = format!("{}.png", r.name);
         plot_case(out, r, &file)?;
         let _ = writeln!(md, "![{law:?}, linear a_d]({file})\n");
     }
@@ -889,7 +891,7 @@ pub fn run(out: &Path) -> Result<(), String> {
     // The paper-model runs: no contact by construction, how close do the centres come?
     let pm_min = t3
         .iter()
-        .filter_map(|(_, r)| r.closest.as_ref().map(|c| c.0))
+        .map(|(_, r)| r.min_clearance_non_docking_m)
         .fold(f64::INFINITY, f64::min);
     let pm_final = t3
         .iter()
@@ -908,7 +910,7 @@ pub fn run(out: &Path) -> Result<(), String> {
             .find(|((l, fm), _)| *l == law && *fm == "linear")
             .expect("case ran")
             .1;
-        let file = format!("{}_full_geometry.svg", f.name);
+        let file = format!("{}_full_geometry.png", f.name);
         plot_full_geometry(out, model, f, &file)?;
         let _ = writeln!(md, "![{law:?}: paper model vs full geometry]({file})\n");
     }
@@ -1007,13 +1009,12 @@ pub fn run(out: &Path) -> Result<(), String> {
     }
     md.push('\n');
     for c in claims.iter_mut() {
-        if c["id"] == "m2_vs_t2" {
-            let m = format!(
+        if c.id == "m2_vs_t2" {
+            c.measured = format!(
                 "{}; with a 50 ms truth step: {}",
-                c["measured"].as_str().unwrap_or(""),
+                c.measured,
                 coarse_meas.join("; ")
             );
-            c["measured"] = serde_json::Value::String(m);
         }
     }
     // ---- Eq (10).
@@ -1092,9 +1093,9 @@ pub fn run(out: &Path) -> Result<(), String> {
         let _ = writeln!(
             summary,
             "| {} | {} | {} |",
-            c["id"].as_str().unwrap_or(""),
-            c["held"],
-            c["claim"].as_str().unwrap_or("").replace('|', "\\|")
+            c.id,
+            c.held,
+            c.claim.replace('|', "\\|")
         );
     }
     summary.push_str("\n## Findings\n\n");
@@ -1104,17 +1105,14 @@ pub fn run(out: &Path) -> Result<(), String> {
     summary.push('\n');
     let cut = md.find("## Table 3").unwrap_or(md.len());
     md.insert_str(cut, &summary);
-    write_atomic(&out.join("REPORT.md"), md.as_bytes())?;
-    let json = serde_json::to_string_pretty(&serde_json::Value::Array(claims))
+    write_file(&out.join("REPORT.md"), md.as_bytes())?;
+    crate::report::write_claims_json(&out.join("claims.json"), &claims)
         .map_err(|e| e.to_string())?;
-    write_atomic(&out.join("claims.json"), json.as_bytes())?;
     Ok(())
 }
 
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    let tmp = path.with_extension("partial");
-    std::fs::write(&tmp, bytes).map_err(|e| format!("{}: {e}", tmp.display()))?;
-    std::fs::rename(&tmp, path).map_err(|e| format!("{}: {e}", path.display()))
+fn write_file(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    crate::report::write_atomic(path, bytes).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 fn write_csv(path: &Path, s: &Series) -> Result<(), String> {
@@ -1139,280 +1137,90 @@ fn write_csv(path: &Path, s: &Series) -> Result<(), String> {
         }
         out.push('\n');
     }
-    write_atomic(path, out.as_bytes())
+    write_file(path, out.as_bytes())
 }
 
-// ---------------------------------------------------------------------------------------------
-// Plots. The project's report module (PNG) is not on main yet; until it is, the figures are
-// written as self-contained SVG by this small line-plot writer.
-// ---------------------------------------------------------------------------------------------
-
-/// One panel: title, axis labels (with units), named lines, optional log-y, vertical markers.
-struct Panel {
-    title: String,
-    x_label: String,
-    y_label: String,
-    log_y: bool,
-    lines: Vec<(String, Vec<(f64, f64)>)>,
-    vlines: Vec<(f64, String)>,
-}
-
-impl Panel {
-    fn new(title: &str, x_label: &str, y_label: &str) -> Self {
-        Self {
-            title: title.into(),
-            x_label: x_label.into(),
-            y_label: y_label.into(),
-            log_y: false,
-            lines: vec![],
-            vlines: vec![],
-        }
-    }
-    fn line(mut self, name: &str, pts: Vec<(f64, f64)>) -> Self {
-        self.lines.push((name.into(), pts));
-        self
-    }
-}
-
-const COLORS: [&str; 6] = [
-    "#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9",
-];
-
-fn nice_ticks(lo: f64, hi: f64) -> Vec<f64> {
-    let span = (hi - lo).max(f64::MIN_POSITIVE);
-    let raw = span / 5.0;
-    let mag = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 2.5, 5.0, 10.0]
-        .iter()
-        .map(|m| m * mag)
-        .find(|s| span / s <= 6.0)
-        .unwrap_or(10.0 * mag);
-    let mut v = vec![];
-    let mut x = (lo / step).ceil() * step;
-    while x <= hi + 1e-9 * span {
-        v.push(if x.abs() < 1e-12 * span { 0.0 } else { x });
-        x += step;
-    }
-    v
-}
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
-
-/// Writes panels in a grid of `cols` columns as one SVG.
-fn write_svg(path: &Path, title: &str, panels: &[Panel], cols: usize) -> Result<(), String> {
-    let (pw, ph) = (520.0, 300.0);
-    let rows = panels.len().div_ceil(cols);
-    let (w, h) = (pw * cols as f64, ph * rows as f64 + 40.0);
-    let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" \
-         font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" \
-         fill=\"white\"/>\n<text x=\"{}\" y=\"24\" font-size=\"16\" text-anchor=\"middle\">{}</text>\n",
-        w / 2.0,
-        esc(title)
-    );
-    for (k, p) in panels.iter().enumerate() {
-        let (ox, oy) = ((k % cols) as f64 * pw, 40.0 + (k / cols) as f64 * ph);
-        let (l, r, t, b) = (ox + 70.0, ox + pw - 15.0, oy + 25.0, oy + ph - 45.0);
-        let fy = |y: f64| {
-            if p.log_y {
-                y.abs().max(1e-300).log10()
-            } else {
-                y
-            }
-        };
-        let pts = p.lines.iter().flat_map(|(_, v)| v.iter());
-        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-        for (x, y) in pts {
-            if x.is_finite() && y.is_finite() && (!p.log_y || *y > 0.0) {
-                x0 = x0.min(*x);
-                x1 = x1.max(*x);
-                y0 = y0.min(fy(*y));
-                y1 = y1.max(fy(*y));
-            }
-        }
-        if x0 > x1 {
-            continue;
-        }
-        if y1 - y0 < 1e-300 {
-            y0 -= 1.0;
-            y1 += 1.0;
-        }
-        let pad = 0.05 * (y1 - y0);
-        let (y0, y1) = (y0 - pad, y1 + pad);
-        let x1 = if x1 > x0 { x1 } else { x0 + 1.0 };
-        let sx = |x: f64| l + (x - x0) / (x1 - x0) * (r - l);
-        let sy = |y: f64| b - (y - y0) / (y1 - y0) * (b - t);
-        let _ = writeln!(
-            s,
-            "<text x=\"{}\" y=\"{}\" font-size=\"13\" text-anchor=\"middle\">{}</text>",
-            (l + r) / 2.0,
-            oy + 16.0,
-            esc(&p.title)
-        );
-        let _ = writeln!(
-            s,
-            "<rect x=\"{l}\" y=\"{t}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#444\"/>",
-            r - l,
-            b - t
-        );
-        for xt in nice_ticks(x0, x1) {
-            let _ = writeln!(
-                s,
-                "<line x1=\"{0}\" x2=\"{0}\" y1=\"{t}\" y2=\"{b}\" stroke=\"#ddd\"/><text x=\"{0}\" y=\"{1}\" text-anchor=\"middle\">{2}</text>",
-                sx(xt),
-                b + 14.0,
-                format_tick(xt)
-            );
-        }
-        for yt in nice_ticks(y0, y1) {
-            let label = if p.log_y {
-                format!("1e{}", yt.round())
-            } else {
-                format_tick(yt)
-            };
-            if p.log_y && (yt - yt.round()).abs() > 1e-9 {
-                continue;
-            }
-            let _ = writeln!(
-                s,
-                "<line x1=\"{l}\" x2=\"{r}\" y1=\"{0}\" y2=\"{0}\" stroke=\"#ddd\"/><text x=\"{1}\" y=\"{2}\" text-anchor=\"end\">{3}</text>",
-                sy(yt),
-                l - 4.0,
-                sy(yt) + 4.0,
-                label
-            );
-        }
-        let _ = writeln!(
-            s,
-            "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>",
-            (l + r) / 2.0,
-            b + 32.0,
-            esc(&p.x_label)
-        );
-        let _ = writeln!(
-            s,
-            "<text transform=\"translate({},{}) rotate(-90)\" text-anchor=\"middle\">{}</text>",
-            ox + 16.0,
-            (t + b) / 2.0,
-            esc(&p.y_label)
-        );
-        for (i, (name, v)) in p.lines.iter().enumerate() {
-            let c = COLORS[i % COLORS.len()];
-            let mut d = String::new();
-            let mut pen = false;
-            let mut last = (f64::NAN, f64::NAN);
-            for (x, y) in v {
-                if !(x.is_finite() && y.is_finite()) || (p.log_y && *y <= 0.0) {
-                    pen = false;
-                    continue;
-                }
-                let (px, py) = (sx(*x), sy(fy(*y)));
-                if pen && (px - last.0).abs() < 0.4 && (py - last.1).abs() < 0.4 {
-                    continue;
-                }
-                let _ = write!(d, "{}{px:.1},{py:.1} ", if pen { "L" } else { "M" });
-                pen = true;
-                last = (px, py);
-            }
-            let _ = writeln!(
-                s,
-                "<path d=\"{d}\" fill=\"none\" stroke=\"{c}\" stroke-width=\"1.3\"/>\
-                 <text x=\"{}\" y=\"{}\" fill=\"{c}\" text-anchor=\"end\">{}</text>",
-                r - 6.0,
-                t + 14.0 + 13.0 * i as f64,
-                esc(name)
-            );
-        }
-        for (x, label) in &p.vlines {
-            let _ = writeln!(
-                s,
-                "<line x1=\"{0}\" x2=\"{0}\" y1=\"{t}\" y2=\"{b}\" stroke=\"#c00\" stroke-dasharray=\"4 3\"/><text x=\"{1}\" y=\"{2}\" fill=\"#c00\">{3}</text>",
-                sx(*x),
-                sx(*x) + 3.0,
-                b - 6.0,
-                esc(label)
-            );
-        }
-    }
-    s.push_str("</svg>\n");
-    write_atomic(path, s.as_bytes())
-}
-
-fn format_tick(x: f64) -> String {
-    if x == 0.0 {
-        "0".into()
-    } else if x.abs() >= 1e4 || x.abs() < 1e-2 {
-        format!("{x:.1e}")
-    } else {
-        let s = format!("{x:.3}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    }
-}
-
-/// The paper's Figs 2–11 for one run: ρ, ρ̇, |ρ| (log), angles, ω_r, forces, torques, sliding
-/// variables (translation, rotation).
+/// Figures 2–11 of the paper for one run (3 × 3 panels): ρ, ρ̇, angles, ω_r, forces, torques,
+/// sliding variables (translation, rotation), port distance (log).
 fn plot_case(out: &Path, r: &CaseResult, file: &str) -> Result<(), String> {
+    use crate::report::{Figure, Plot};
     let se = &r.series;
     let n = se.u.len();
-    let tu = &se.t[..n];
-    let col = |v: &[Vector6<f64>], tt: &[f64], i: usize| -> Vec<(f64, f64)> {
-        tt.iter().zip(v).map(|(t, x)| (*t, x[i])).collect()
+    let col = |v: &[Vector6<f64>], i: usize, scale: f64| -> Vec<(f64, f64)> {
+        se.t.iter()
+            .zip(v)
+            .map(|(t, x)| (*t, x[i] * scale))
+            .collect()
     };
     let xyz = ["x", "y", "z"];
-    let mut p = vec![
-        Panel::new("Port position ρ (target Hill frame)", "t [s]", "ρ [m]"),
-        Panel::new("Port velocity ρ̇ (target Hill frame)", "t [s]", "ρ̇ [m/s]"),
-        Panel::new("Port distance |ρ|", "t [s]", "|ρ| [m] (log)"),
-        Panel::new(
-            "Relative attitude 2·q_rv (chaser axes)",
-            "t [s]",
-            "angle [deg]",
-        ),
-        Panel::new("Relative rate ω_r (chaser axes)", "t [s]", "ω_r [deg/s]"),
-        Panel::new("Control force (chaser body axes)", "t [s]", "F [N]"),
-        Panel::new("Control torque (chaser body axes)", "t [s]", "T [N·m]"),
-        Panel::new("Sliding variables, translation", "t [s]", "s [m or m/s]"),
-        Panel::new("Sliding variables, rotation", "t [s]", "s [1 or 1/s]"),
-    ];
-    p[2].log_y = true;
-    p[2] = std::mem::replace(&mut p[2], Panel::new("", "", "")).line(
-        "|ρ|",
-        se.t.iter()
-            .zip(&se.port_distance_m)
-            .map(|(t, d)| (*t, *d))
-            .collect(),
-    );
+    let mut p_rho = Plot::new("Port-to-port position ρ (target Hill frame)")
+        .x_label("t [s]")
+        .y_label("ρ [m]");
+    let mut p_v = Plot::new("Relative port velocity ρ̇ (target Hill frame)")
+        .x_label("t [s]")
+        .y_label("ρ̇ [m/s]");
+    let mut p_ang = Plot::new("Relative attitude angles 2·q_rv")
+        .x_label("t [s]")
+        .y_label("angle [deg]");
+    let mut p_w = Plot::new("Relative angular velocity ω_r (chaser axes)")
+        .x_label("t [s]")
+        .y_label("ω_r [deg/s]");
+    let mut p_f = Plot::new("Control force (chaser body axes)")
+        .x_label("t [s]")
+        .y_label("F [N]");
+    let mut p_t = Plot::new("Control torque (chaser body axes)")
+        .x_label("t [s]")
+        .y_label("T [N·m]");
+    let mut p_st = Plot::new("Sliding variables, translation")
+        .x_label("t [s]")
+        .y_label("s [m or m/s]");
+    let mut p_sr = Plot::new("Sliding variables, rotation")
+        .x_label("t [s]")
+        .y_label("s [– or 1/s]");
     for i in 0..3 {
-        let take = |p: &mut Panel, name: String, pts: Vec<(f64, f64)>| {
-            *p = std::mem::replace(p, Panel::new("", "", "")).line(&name, pts);
-        };
-        take(&mut p[0], format!("ρ{}", xyz[i]), col(&se.trans, &se.t, i));
-        take(
-            &mut p[1],
-            format!("V{}", xyz[i]),
-            col(&se.trans, &se.t, 3 + i),
+        p_rho = p_rho.line(format!("ρ{}", xyz[i]), col(&se.trans, i, 1.0));
+        p_v = p_v.line(format!("V{}", xyz[i]), col(&se.trans, 3 + i, 1.0));
+        p_ang = p_ang.line(["φ", "θ", "ψ"][i], col(&se.rot, i, 1.0));
+        p_w = p_w.line(format!("ω{}", xyz[i]), col(&se.rot, 3 + i, 1.0));
+        let tu = &se.t[..n];
+        p_f = p_f.line(
+            format!("F{}", xyz[i]),
+            tu.iter().zip(&se.u).map(|(t, u)| (*t, u[i])),
         );
-        take(&mut p[3], ["φ", "θ", "ψ"][i].into(), col(&se.rot, &se.t, i));
-        take(
-            &mut p[4],
-            format!("ω{}", xyz[i]),
-            col(&se.rot, &se.t, 3 + i),
+        p_t = p_t.line(
+            format!("T{}", xyz[i]),
+            tu.iter().zip(&se.u).map(|(t, u)| (*t, u[3 + i])),
         );
-        take(&mut p[5], format!("F{}", xyz[i]), col(&se.u, tu, i));
-        take(&mut p[6], format!("T{}", xyz[i]), col(&se.u, tu, 3 + i));
-        take(&mut p[7], format!("S{}", xyz[i]), col(&se.s, tu, i));
-        take(&mut p[8], format!("Sq{}", i + 1), col(&se.s, tu, 3 + i));
+        p_st = p_st.line(
+            format!("S{}", xyz[i]),
+            tu.iter().zip(&se.s).map(|(t, s)| (*t, s[i])),
+        );
+        p_sr = p_sr.line(
+            format!("Sq{}", i + 1),
+            tu.iter().zip(&se.s).map(|(t, s)| (*t, s[3 + i])),
+        );
     }
-    write_svg(
-        &out.join(file),
-        &format!("{} — {:?}, paper model", r.name, r.law),
-        &p,
-        3,
-    )
+    let p_d = Plot::new("Port distance |ρ|")
+        .x_label("t [s]")
+        .y_label("|ρ| [m]")
+        .log_y()
+        .line(
+            "|ρ|",
+            se.t.iter().zip(&se.port_distance_m).map(|(t, d)| (*t, *d)),
+        );
+    Figure::new(format!("{} ({:?})", r.name, r.law))
+        .cols(3)
+        .plot(p_rho)
+        .plot(p_v)
+        .plot(p_d)
+        .plot(p_ang)
+        .plot(p_w)
+        .plot(p_f)
+        .plot(p_t)
+        .plot(p_st)
+        .plot(p_sr)
+        .write_png(&out.join(file))
+        .map_err(|e| format!("{file}: {e}"))
 }
 
 /// Port distance of the paper-model run against the full-geometry run, first collision marked.
@@ -1422,27 +1230,34 @@ fn plot_full_geometry(
     full: &CaseResult,
     file: &str,
 ) -> Result<(), String> {
-    let pts = |r: &CaseResult| -> Vec<(f64, f64)> {
-        r.series
+    use crate::report::Plot;
+    let mut p = Plot::new(format!(
+        "{:?}: port distance, paper model vs full geometry",
+        model.law
+    ))
+    .x_label("t [s]")
+    .y_label("|ρ| [m]")
+    .log_y()
+    .line(
+        "paper model (5 cm spheres)",
+        model
+            .series
             .t
             .iter()
-            .zip(&r.series.port_distance_m)
-            .map(|(t, d)| (*t, *d))
-            .collect()
-    };
-    let mut p = Panel::new(
-        &format!(
-            "{:?}: port distance, paper model vs full geometry",
-            model.law
-        ),
-        "t [s]",
-        "|ρ| [m] (log)",
+            .zip(&model.series.port_distance_m)
+            .map(|(t, d)| (*t, *d)),
     )
-    .line("paper model (5 cm spheres)", pts(model))
-    .line("full geometry", pts(full));
-    p.log_y = true;
+    .line(
+        "full geometry",
+        full.series
+            .t
+            .iter()
+            .zip(&full.series.port_distance_m)
+            .map(|(t, d)| (*t, *d)),
+    );
     if let Some((t, a, b)) = full.collisions.first() {
-        p.vlines.push((*t, format!("first collision {a}–{b}")));
+        p = p.vline(*t, format!("first collision {a}–{b}"));
     }
-    write_svg(&out.join(file), &full.name, &[p], 1)
+    p.write_png(&out.join(file))
+        .map_err(|e| format!("{file}: {e}"))
 }
