@@ -1723,10 +1723,124 @@ mod tests {
     }
 }
 
-/// How a scene asks for this law (extended by the simulation wiring of this paper).
+/// How a scene asks for this law: which bodies and ports, the law, its period, and the paper's
+/// disturbances (applied by the simulation to both bodies). Every field but `body`, `target`,
+/// `law`, `chaser_port` and `target_port` has the paper's value as default.
+///
+/// The controller's model takes the chaser mass and both inertias from the scene bodies unless
+/// `model_chaser_inertia_diag_kg_m2` / `model_target_inertia_diag_kg_m2` say otherwise (the
+/// ±10 % inertia cases of Tables 4–7 perturb the bodies and keep the model nominal). Port
+/// positions are the scene ports' origins less the body's centre of mass. (The larger optional
+/// blocks are boxed to keep [`crate::control::ControllerSpec`] small; scenes write them plainly.)
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneSpec {
-    /// The body this law flies.
+    /// The body this law flies (the chaser S).
     pub body: String,
+    /// The uncontrolled target T.
+    pub target: String,
+    /// T1, T2, M1 or M2.
+    pub law: Geng2015Law,
+    /// Port of `body` that is P_s (its origin is the docking point).
+    pub chaser_port: String,
+    /// Port of `target` that is P_t.
+    pub target_port: String,
+    /// Controller period, s (a whole number of steps; the command is held in between). 0.05 s
+    /// reproduces the paper (module docs).
+    #[serde(default = "default_period_s")]
+    pub period_s: f64,
+    /// Frame of ρ (default the target's Hill frame).
+    #[serde(default = "default_rho_frame")]
+    pub rho_frame: RhoFrame,
+    /// Source of ṡ for T2/M2 (default the integral state).
+    #[serde(default = "default_sdot")]
+    pub sdot_estimate: SdotEstimate,
+    /// Desired ρ_d in the ρ frame, m (default 0: the ports coincide).
+    #[serde(default)]
+    pub rho_des_m: [f64; 3],
+    /// Per-axis acceleration limit a_max, m/s² (default 0.2).
+    #[serde(default = "default_accel_max")]
+    pub accel_max_m_s2: f64,
+    /// Per-axis torque limit T_max, N·m (default 0.8).
+    #[serde(default = "default_torque_max")]
+    pub torque_max_nm: f64,
+    /// Diagonal of the chaser inertia the controller assumes, kg·m² (default: the body's).
+    #[serde(default)]
+    pub model_chaser_inertia_diag_kg_m2: Option<Box<[f64; 3]>>,
+    /// Diagonal of the target inertia the controller assumes, kg·m² (default: the body's).
+    #[serde(default)]
+    pub model_target_inertia_diag_kg_m2: Option<Box<[f64; 3]>>,
+    /// Gains (default Table 2).
+    #[serde(default)]
+    pub gains: Option<Box<Geng2015Gains>>,
+    /// The paper's disturbances on both bodies (default none).
+    #[serde(default)]
+    pub disturbance: Option<Box<DisturbanceSpec>>,
+}
+
+/// The disturbances of §1/§3.1 as a scene writes them: a_d on each body in its own axes (form
+/// and amplitude), T_d(t) on both; ω° of T_d is the reference orbit's mean motion. The
+/// gravity-gradient torque T_g is the environment's (`gravity_gradient: true`), not repeated.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DisturbanceSpec {
+    /// Form of the chaser's a_sd.
+    pub chaser_form: AccelDisturbanceForm,
+    /// Form of the target's a_td.
+    pub target_form: AccelDisturbanceForm,
+    /// k_d, 1/s (default 0.5).
+    #[serde(default = "default_k_d")]
+    pub k_d_per_s: f64,
+    /// a_sd0, chaser body axes, m/s² (default [2.0, 4.2, 3.5]e−5).
+    #[serde(default = "default_chaser_a0")]
+    pub chaser_accel0_m_s2: [f64; 3],
+    /// a_td0, target body axes, m/s² (default [2.5, 4.0, 3.8]e−5).
+    #[serde(default = "default_target_a0")]
+    pub target_accel0_m_s2: [f64; 3],
+    /// Scale of T_d, N·m (default 1.5e−5).
+    #[serde(default = "default_torque_scale")]
+    pub torque_scale_nm: f64,
+}
+
+impl DisturbanceSpec {
+    /// The law-side disturbance set, with ω° = `omega_orbit_rad_s`.
+    pub fn to_disturbances(&self, omega_orbit_rad_s: f64) -> Geng2015Disturbances {
+        Geng2015Disturbances {
+            k_d_per_s: self.k_d_per_s,
+            target_accel0_m_s2: Vector3::from(self.target_accel0_m_s2),
+            chaser_accel0_m_s2: Vector3::from(self.chaser_accel0_m_s2),
+            target_form: self.target_form,
+            chaser_form: self.chaser_form,
+            torque_scale_nm: self.torque_scale_nm,
+            omega_orbit_rad_s,
+        }
+    }
+}
+
+fn default_period_s() -> f64 {
+    0.05
+}
+fn default_rho_frame() -> RhoFrame {
+    RhoFrame::TargetHill
+}
+fn default_sdot() -> SdotEstimate {
+    SdotEstimate::IntegralState
+}
+fn default_accel_max() -> f64 {
+    0.2
+}
+fn default_torque_max() -> f64 {
+    0.8
+}
+fn default_k_d() -> f64 {
+    0.5
+}
+fn default_chaser_a0() -> [f64; 3] {
+    [2.0e-5, 4.2e-5, 3.5e-5]
+}
+fn default_target_a0() -> [f64; 3] {
+    [2.5e-5, 4.0e-5, 3.8e-5]
+}
+fn default_torque_scale() -> f64 {
+    1.5e-5
 }
