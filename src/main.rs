@@ -2,7 +2,15 @@
 //! scenes), `rpod bench` (steps/s against the bare rapier and parry floor).
 
 use clap::{Parser, Subcommand};
+use std::io::Write;
 use std::path::PathBuf;
+
+/// println! that does not panic when stdout is closed (e.g. piped into `head`).
+macro_rules! out {
+    ($($t:tt)*) => {{
+        let _ = writeln!(std::io::stdout().lock(), $($t)*);
+    }};
+}
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -74,7 +82,7 @@ fn main() -> ExitCode {
             let mut bad = false;
             for s in &scenes {
                 match load_and_build(s, &set) {
-                    Ok(sim) => println!(
+                    Ok(sim) => out!(
                         "{}: ok ({} bodies, dt = {} s, duration = {} s)",
                         s.display(),
                         sim.scene.bodies.len(),
@@ -96,7 +104,7 @@ fn main() -> ExitCode {
         Cmd::Reproduce { name, out } => reproduce(name, &out),
         Cmd::Bench { scene, steps } => match rpod::bench::run(&scene, steps) {
             Ok(report) => {
-                println!("{report}");
+                out!("{report}");
                 ExitCode::SUCCESS
             }
             Err(e) => {
@@ -159,7 +167,7 @@ fn run(
     match sim.finish() {
         Ok(summary) => {
             let md = &summary["min_distance"];
-            println!(
+            out!(
                 "{}: {} steps, {:.2} s simulated in {:.2} s wall ({:.0} steps/s)",
                 summary["scene"].as_str().unwrap_or(""),
                 summary["steps"],
@@ -168,7 +176,7 @@ fn run(
                 summary["steps_per_s"].as_f64().unwrap_or(0.0)
             );
             if !md.is_null() {
-                println!(
+                out!(
                     "min distance {:.4} m between {} and {} at t = {:.2} s",
                     md["value_m"].as_f64().unwrap_or(f64::NAN),
                     md["parts"][0].as_str().unwrap_or(""),
@@ -179,16 +187,16 @@ fn run(
             match summary["first_collision_s"].as_f64() {
                 Some(t) => {
                     let c = &summary["collisions"][0];
-                    println!(
+                    out!(
                         "COLLISION at t = {t:.2} s: {} hit {}",
                         c["a"].as_str().unwrap_or(""),
                         c["b"].as_str().unwrap_or("")
                     );
                 }
-                None => println!("no collision"),
+                None => out!("no collision"),
             }
             for g in summary["guarantees"].as_array().into_iter().flatten() {
-                println!(
+                out!(
                     "guarantee {}: {} (worst margin {:.4} {} at t = {:.2} s)",
                     g["name"].as_str().unwrap_or(""),
                     if g["held"].as_bool() == Some(true) {
@@ -201,7 +209,7 @@ fn run(
                     g["worst_margin_t_s"].as_f64().unwrap_or(f64::NAN)
                 );
             }
-            println!(
+            out!(
                 "wrote {}/{{trajectory.csv, events.jsonl, summary.json}}",
                 out.display()
             );
@@ -225,7 +233,7 @@ fn reproduce(name: Option<String>, out: &std::path::Path) -> ExitCode {
     let mut failed = false;
     for n in &names {
         let dir = out.join(n);
-        println!("== {n} → {}", dir.display());
+        out!("== {n} → {}", dir.display());
         if let Err(e) = rpod::reproduce::run(n, &dir) {
             eprintln!("error: {n}: {e}");
             failed = true;
@@ -240,7 +248,7 @@ fn reproduce(name: Option<String>, out: &std::path::Path) -> ExitCode {
             .into_iter()
             .flatten()
         {
-            println!(
+            out!(
                 "  [{}] {}: {}",
                 if c["held"].as_bool() == Some(true) {
                     "held"

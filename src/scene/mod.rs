@@ -49,6 +49,104 @@ pub struct Scene {
     /// Control laws flying the bodies (each names the bodies it acts on).
     #[serde(default)]
     pub controllers: Vec<crate::control::ControllerSpec>,
+    /// The docking mechanism between a chaser port and a target port, if any.
+    #[serde(default)]
+    pub docking: Option<DockingSpec>,
+}
+
+/// The docking mechanism: an electromagnet in the chaser's cone, an iron plate in the target's
+/// slot, and a latch that engages when the cone seats.
+///
+/// Geometry: with p_c, a_c the chaser port origin and outward axis and p_t, a_t the target's
+/// (world frame), the *seat point* is p_seat = p_t + a_t·`seat_depth_m`; the gap is
+/// |p_c − p_seat|; the axial error is (p_c − p_t)·a_t − `seat_depth_m` (positive: not yet in);
+/// the lateral offset is the part of p_c − p_t perpendicular to a_t; the misalignment is the
+/// angle between a_c and −a_t.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DockingSpec {
+    /// Chaser body.
+    pub chaser: String,
+    /// Chaser port (the cone stands on it).
+    pub chaser_port: String,
+    /// Target body.
+    pub target: String,
+    /// Target port (the slot is built around it).
+    pub target_port: String,
+    /// Depth of the chaser port origin above the target port origin, along a_t, when seated, m.
+    pub seat_depth_m: f64,
+    /// Radius of the slot's mouth, m (used to judge a miss).
+    pub mouth_radius_m: f64,
+    /// The electromagnet.
+    pub magnet: MagnetSpec,
+    /// The latch.
+    pub latch: LatchSpec,
+    /// When a run gives up.
+    #[serde(default)]
+    pub miss: MissSpec,
+}
+
+/// Electromagnet: attractive force F(gap) = min(F0 / (1 + gap/g0)², F_max) on the chaser port,
+/// along −a_t (into the slot), with the equal and opposite reaction on the target at the same
+/// point.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MagnetSpec {
+    /// Force at zero gap before the cap, N.
+    pub f0_n: f64,
+    /// Gap scale g0, m.
+    pub g0_m: f64,
+    /// Cap, N.
+    pub max_force_n: f64,
+    /// The magnet switches on automatically when the gap falls below this, m (0: never).
+    pub activation_distance_m: f64,
+    /// Switched on from t = 0 (a command), whatever the gap.
+    #[serde(default)]
+    pub on_at_start: bool,
+}
+
+/// Latch: engages (a rapier fixed joint) when the cone has stayed seated for `dwell_s`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LatchSpec {
+    /// Seated when |axial error| ≤ this, m.
+    pub axial_tolerance_m: f64,
+    /// … and lateral offset ≤ this, m.
+    pub lateral_tolerance_m: f64,
+    /// … and misalignment ≤ this, deg.
+    pub angle_tolerance_deg: f64,
+    /// Time seated before the latch engages (soft capture), s.
+    #[serde(default = "dwell")]
+    pub dwell_s: f64,
+    /// The latch breaks when the joint force exceeds this, N.
+    pub break_force_n: f64,
+}
+
+fn dwell() -> f64 {
+    0.2
+}
+
+/// Failure criteria.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MissSpec {
+    /// In docking contact, not seated, and relative speed below `jam_speed_m_s` for this
+    /// long: JAMMED, s.
+    pub jam_time_s: f64,
+    /// Relative speed below which a stuck cone counts as jammed, m/s.
+    pub jam_speed_m_s: f64,
+    /// After a docking contact ends, separating faster than this: REBOUND, m/s.
+    pub rebound_speed_m_s: f64,
+}
+
+impl Default for MissSpec {
+    fn default() -> Self {
+        Self {
+            jam_time_s: 5.0,
+            jam_speed_m_s: 1e-3,
+            rebound_speed_m_s: 1e-3,
+        }
+    }
 }
 
 fn one() -> u32 {
@@ -277,6 +375,17 @@ pub struct BodySpec {
     /// Docking-port frames.
     #[serde(default)]
     pub ports: Vec<PortSpec>,
+    /// Coulomb friction coefficient of this body's parts (rapier combines two parts' values by
+    /// their average).
+    #[serde(default = "friction")]
+    pub friction: f64,
+    /// Restitution coefficient of this body's parts (combined by the average).
+    #[serde(default)]
+    pub restitution: f64,
+}
+
+fn friction() -> f64 {
+    0.3
 }
 
 /// A body axis, for directions written in a scene.

@@ -88,6 +88,9 @@ pub fn validate(s: &Scene) -> Check {
         }
         validate_body(b)?;
     }
+    if let Some(d) = &s.docking {
+        validate_docking(s, d)?;
+    }
     for g in &s.guarantees {
         let p = format!("guarantees.{}", g.name());
         let body_exists = |n: &str| s.bodies.iter().any(|b| b.name == n);
@@ -149,6 +152,12 @@ fn validate_body(b: &BodySpec) -> Check {
         );
     }
     positive(&format!("{p}.mass_kg"), b.mass_kg, "kilograms")?;
+    if !(b.friction.is_finite() && b.friction >= 0.0) {
+        return fail(format!("{p}.friction"), "must be ≥ 0");
+    }
+    if !(b.restitution.is_finite() && (0.0..=1.0).contains(&b.restitution)) {
+        return fail(format!("{p}.restitution"), "must be in [0, 1]");
+    }
     finite3(&format!("{p}.com_m"), &b.com_m)?;
     let j = b.inertia_kg_m2.matrix();
     if j.iter().any(|v| !v.is_finite()) {
@@ -342,5 +351,74 @@ fn validate_part(pp: &str, b: &BodySpec, part: &PartSpec) -> Check {
             }
         }
     }
+    Ok(())
+}
+
+fn validate_docking(s: &Scene, d: &super::DockingSpec) -> Check {
+    let body = |n: &str, f: &str| {
+        s.bodies
+            .iter()
+            .find(|b| b.name == n)
+            .ok_or_else(|| (format!("docking.{f}"), format!("no body named `{n}`")))
+    };
+    let c = body(&d.chaser, "chaser")?;
+    let t = body(&d.target, "target")?;
+    if d.chaser == d.target {
+        return fail("docking.target", "must differ from the chaser");
+    }
+    if !c.ports.iter().any(|p| p.name == d.chaser_port) {
+        return fail(
+            "docking.chaser_port",
+            format!("`{}` has no port `{}`", d.chaser, d.chaser_port),
+        );
+    }
+    if !t.ports.iter().any(|p| p.name == d.target_port) {
+        return fail(
+            "docking.target_port",
+            format!("`{}` has no port `{}`", d.target, d.target_port),
+        );
+    }
+    if !(d.seat_depth_m.is_finite() && d.seat_depth_m >= 0.0) {
+        return fail("docking.seat_depth_m", "must be ≥ 0 m");
+    }
+    positive("docking.mouth_radius_m", d.mouth_radius_m, "metres")?;
+    let m = &d.magnet;
+    if !(m.f0_n.is_finite() && m.f0_n >= 0.0) {
+        return fail("docking.magnet.f0_n", "must be ≥ 0 N");
+    }
+    positive("docking.magnet.g0_m", m.g0_m, "metres")?;
+    if !(m.max_force_n.is_finite() && m.max_force_n >= 0.0) {
+        return fail("docking.magnet.max_force_n", "must be ≥ 0 N");
+    }
+    if !(m.activation_distance_m.is_finite() && m.activation_distance_m >= 0.0) {
+        return fail("docking.magnet.activation_distance_m", "must be ≥ 0 m");
+    }
+    let l = &d.latch;
+    positive(
+        "docking.latch.axial_tolerance_m",
+        l.axial_tolerance_m,
+        "metres",
+    )?;
+    positive(
+        "docking.latch.lateral_tolerance_m",
+        l.lateral_tolerance_m,
+        "metres",
+    )?;
+    positive(
+        "docking.latch.angle_tolerance_deg",
+        l.angle_tolerance_deg,
+        "degrees",
+    )?;
+    if !(l.dwell_s.is_finite() && l.dwell_s >= 0.0) {
+        return fail("docking.latch.dwell_s", "must be ≥ 0 s");
+    }
+    positive("docking.latch.break_force_n", l.break_force_n, "newtons")?;
+    positive("docking.miss.jam_time_s", d.miss.jam_time_s, "seconds")?;
+    positive("docking.miss.jam_speed_m_s", d.miss.jam_speed_m_s, "m/s")?;
+    positive(
+        "docking.miss.rebound_speed_m_s",
+        d.miss.rebound_speed_m_s,
+        "m/s",
+    )?;
     Ok(())
 }

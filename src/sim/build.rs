@@ -203,8 +203,8 @@ impl Simulation {
                 let col = rp::ColliderBuilder::new(shape.clone())
                     .position(conv::pose(&pc.pose_body))
                     .density(0.0)
-                    .friction(0.3)
-                    .restitution(0.0)
+                    .friction(b.friction as f32)
+                    .restitution(b.restitution as f32)
                     .build();
                 let ch = pw.insert_collider(col, Some(handle));
                 contacts.colliders.insert(
@@ -340,6 +340,7 @@ impl Simulation {
             force_row: false,
         });
         super::add_pipeline(&mut app);
+        super::docking::install(&mut app, loaded)?;
         super::laws::install(&mut app, loaded)?;
         app.finish();
         app.cleanup();
@@ -509,6 +510,7 @@ impl Simulation {
             "guarantees": g.status,
             "final_states": finals,
             "monitor": {"exact_queries": mon.exact_queries, "pruned_pairs": mon.pruned_pairs},
+            "docking": w.get_resource::<super::docking::Docking>().map(super::docking::summary),
         })
     }
 

@@ -24,6 +24,7 @@
 //! same scene gives byte-identical outputs on every run.
 
 pub mod build;
+pub mod docking;
 pub mod laws;
 pub mod monitor;
 pub mod output;

@@ -1,0 +1,462 @@
+//! The docking mechanism: electromagnetic capture, soft capture, latch (a rapier fixed joint
+//! with a finite break force), and the state machine FREE → ATTRACTING → CONTACT →
+//! SOFT_CAPTURE → LATCHED, with REBOUND, JAMMED and MISSED. Every change is an event.
+//!
+//! Geometry and the magnet law are documented on [`crate::scene::DockingSpec`] and
+//! [`crate::scene::MagnetSpec`]. Contact is real: the cone and the slot's wall pieces are rapier
+//! colliders, and the monitor says which parts touch.
+
+use super::monitor::ContactState;
+use super::output::Diagnostics;
+use super::{BodyState, Clock, EventLog, Physics, SimBody, SimStep, Stage, Wrench, conv};
+use crate::scene::{DockingSpec, LoadedScene, SceneError};
+use bevy::prelude::*;
+use bevy_rapier3d::rapier::prelude as rp;
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use serde::Serialize;
+
+/// How long a docking contact counts as ongoing after the last touching step, s.
+pub const CONTACT_HOLD_S: f64 = 0.1;
+
+/// Docking state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "SCREAMING_SNAKE_CASE")]
+pub enum DockState {
+    /// No magnet, no contact.
+    Free,
+    /// Magnet on, no contact yet.
+    Attracting,
+    /// Cone touching the slot, not seated.
+    Contact,
+    /// Seated within the latch tolerances, waiting out the dwell.
+    SoftCapture,
+    /// Latched: a fixed joint holds the bodies.
+    Latched,
+    /// The cone bounced out of the slot.
+    Rebound,
+    /// Stuck in the slot without seating.
+    Jammed,
+    /// Failed: passed beside the slot, or another part collided.
+    Missed,
+}
+
+impl DockState {
+    /// A number for the trajectory column `dock.state`.
+    pub fn code(self) -> f64 {
+        match self {
+            DockState::Free => 0.0,
+            DockState::Attracting => 1.0,
+            DockState::Contact => 2.0,
+            DockState::SoftCapture => 3.0,
+            DockState::Latched => 4.0,
+            DockState::Rebound => 5.0,
+            DockState::Jammed => 6.0,
+            DockState::Missed => 7.0,
+        }
+    }
+    /// The name used in events and summaries.
+    pub fn name(self) -> &'static str {
+        match self {
+            DockState::Free => "FREE",
+            DockState::Attracting => "ATTRACTING",
+            DockState::Contact => "CONTACT",
+            DockState::SoftCapture => "SOFT_CAPTURE",
+            DockState::Latched => "LATCHED",
+            DockState::Rebound => "REBOUND",
+            DockState::Jammed => "JAMMED",
+            DockState::Missed => "MISSED",
+        }
+    }
+}
+
+/// Port geometry at one instant (world frame).
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct PortGeometry {
+    /// |p_c − p_seat|, m.
+    pub gap_m: f64,
+    /// (p_c − p_t)·a_t − seat depth, m (positive: not yet in).
+    pub axial_error_m: f64,
+    /// Offset of p_c from the target port axis, m.
+    pub lateral_m: f64,
+    /// Angle between a_c and −a_t, deg.
+    pub misalignment_deg: f64,
+    /// Rate of the axial error (negative: closing), m/s.
+    pub axial_rate_m_s: f64,
+    /// Relative speed of the chaser port point w.r.t. the target's material point there, m/s.
+    pub rel_speed_m_s: f64,
+}
+
+/// The mechanism's state and results.
+#[derive(Resource, Debug, Clone)]
+pub struct Docking {
+    /// The scene's specification.
+    pub spec: DockingSpec,
+    /// Chaser and target entities.
+    pub bodies: (Entity, Entity),
+    /// Ports in their body frames: (origin, unit axis).
+    pub ports: ((Vector3<f64>, Vector3<f64>), (Vector3<f64>, Vector3<f64>)),
+    /// Current state.
+    pub state: DockState,
+    /// Why the current state was entered.
+    pub reason: String,
+    /// Magnet on.
+    pub magnet_on: bool,
+    /// Magnet force this step, N.
+    pub magnet_force_n: f64,
+    /// Latest geometry.
+    pub geometry: PortGeometry,
+    /// When the cone last seated, s.
+    pub seated_since: Option<f64>,
+    /// In docking contact, not seated, slow, since, s.
+    pub jam_since: Option<f64>,
+    /// Latch time, s.
+    pub t_latch_s: Option<f64>,
+    /// First docking contact, s.
+    pub t_first_contact_s: Option<f64>,
+    /// Largest misalignment while in contact, deg.
+    pub max_misalignment_deg: f64,
+    /// The latch joint.
+    pub joint: Option<rp::ImpulseJointHandle>,
+    /// Peak latch-joint force, N.
+    pub peak_joint_force_n: f64,
+    /// Last step with a docking contact, s.
+    pub last_docking_contact_s: Option<f64>,
+    /// Diagnostics column indices: gap, axial, lateral, misalignment, magnet, state.
+    cols: [usize; 6],
+}
+
+/// World port origin and unit axis of a body.
+fn port_world(
+    s: &BodyState,
+    com: &Vector3<f64>,
+    port: &(Vector3<f64>, Vector3<f64>),
+) -> (Vector3<f64>, Vector3<f64>) {
+    let pose = s.body_pose(com);
+    (pose.transform_point(&port.0.into()).coords, s.att * port.1)
+}
+
+/// Velocity of the material point at world position `p` of a body.
+fn point_velocity(s: &BodyState, p: &Vector3<f64>) -> Vector3<f64> {
+    s.vel_m_s + s.omega_rad_s.cross(&(p - s.pos_m))
+}
+
+/// Port geometry of the chaser relative to the target.
+pub fn geometry(
+    spec: &DockingSpec,
+    chaser: (&BodyState, &SimBody),
+    target: (&BodyState, &SimBody),
+    ports: &((Vector3<f64>, Vector3<f64>), (Vector3<f64>, Vector3<f64>)),
+) -> (PortGeometry, Vector3<f64>, Vector3<f64>) {
+    let (pc, ac) = port_world(chaser.0, &chaser.1.com_body_m, &ports.0);
+    let (pt, at) = port_world(target.0, &target.1.com_body_m, &ports.1);
+    let d = pc - pt;
+    let axial = d.dot(&at);
+    let lateral = (d - at * axial).norm();
+    let seat = pt + at * spec.seat_depth_m;
+    let v_rel = point_velocity(chaser.0, &pc) - point_velocity(target.0, &pc);
+    // Rate of the axial error: d/dt[(p_c − p_t)·a_t] = (v_c(p_c) − v_t(p_t))·a_t
+    // + (p_c − p_t)·(ω_t × a_t), which reduces to v_rel·a_t with v_rel taken at p_c.
+    let axial_rate = v_rel.dot(&at);
+    let g = PortGeometry {
+        gap_m: (pc - seat).norm(),
+        axial_error_m: axial - spec.seat_depth_m,
+        lateral_m: lateral,
+        misalignment_deg: ac.dot(&(-at)).clamp(-1.0, 1.0).acos().to_degrees(),
+        axial_rate_m_s: axial_rate,
+        rel_speed_m_s: v_rel.norm(),
+    };
+    (g, pc, at)
+}
+
+/// Installs the mechanism for a scene with `docking: Some(..)`.
+pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
+    let Some(spec) = loaded.scene.docking.clone() else {
+        return Ok(());
+    };
+    let roster = app.world().resource::<super::Roster>().clone();
+    let find = |name: &str, field: &str| {
+        roster.names.iter().position(|n| n == name).ok_or_else(|| {
+            loaded.error_at(&format!("docking.{field}"), format!("no body `{name}`"))
+        })
+    };
+    let ci = find(&spec.chaser, "chaser")?;
+    let ti = find(&spec.target, "target")?;
+    let port = |bi: usize, name: &str| {
+        crate::scene::parts::port_frame(&loaded.scene.bodies[bi], name).expect("validated port")
+    };
+    let ports = (port(ci, &spec.chaser_port), port(ti, &spec.target_port));
+    let mut diag = app.world_mut().resource_mut::<Diagnostics>();
+    let cols = [
+        diag.column("dock.gap_m"),
+        diag.column("dock.axial_error_m"),
+        diag.column("dock.lateral_m"),
+        diag.column("dock.misalignment_deg"),
+        diag.column("dock.magnet_n"),
+        diag.column("dock.state"),
+    ];
+    let magnet_on = spec.magnet.on_at_start;
+    app.insert_resource(Docking {
+        spec,
+        bodies: (roster.bodies[ci], roster.bodies[ti]),
+        ports,
+        state: if magnet_on {
+            DockState::Attracting
+        } else {
+            DockState::Free
+        },
+        reason: String::new(),
+        magnet_on,
+        magnet_force_n: 0.0,
+        geometry: PortGeometry::default(),
+        seated_since: None,
+        jam_since: None,
+        t_latch_s: None,
+        t_first_contact_s: None,
+        max_misalignment_deg: 0.0,
+        joint: None,
+        peak_joint_force_n: 0.0,
+        last_docking_contact_s: None,
+        cols,
+    });
+    app.add_systems(SimStep, docking_actuate.in_set(Stage::Actuate));
+    app.add_systems(
+        SimStep,
+        docking_monitor
+            .in_set(Stage::Monitor)
+            .after(super::monitor::contacts),
+    );
+    Ok(())
+}
+
+/// Actuate: the magnet's force on the chaser port and its reaction on the target.
+fn docking_actuate(mut dock: ResMut<Docking>, mut q: Query<(&SimBody, &BodyState, &mut Wrench)>) {
+    let (ce, te) = dock.bodies;
+    let [(cb, cs, _), (tb, ts, _)] = q.get_many([ce, te]).expect("docking bodies");
+    let (g, pc, at) = geometry(&dock.spec, (cs, cb), (ts, tb), &dock.ports);
+    let m = dock.spec.magnet.clone();
+    if !dock.magnet_on && m.activation_distance_m > 0.0 && g.gap_m < m.activation_distance_m {
+        dock.magnet_on = true;
+    }
+    let on = dock.magnet_on && dock.state != DockState::Latched;
+    let f = if on {
+        (m.f0_n / (1.0 + g.gap_m / m.g0_m).powi(2)).min(m.max_force_n)
+    } else {
+        0.0
+    };
+    dock.magnet_force_n = f;
+    dock.geometry = g;
+    if f > 0.0 {
+        let force = -at * f; // into the slot
+        let [(cb, cs, mut cw), (_, ts, mut tw)] = q.get_many_mut([ce, te]).expect("docking bodies");
+        let _ = cb;
+        cw.force_n += force;
+        cw.torque_nm += (pc - cs.pos_m).cross(&force);
+        tw.force_n -= force;
+        tw.torque_nm += (pc - ts.pos_m).cross(&(-force));
+    }
+}
+
+/// Monitor: the state machine, the latch joint and its break force.
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it uses
+fn docking_monitor(
+    mut dock: ResMut<Docking>,
+    clock: Res<Clock>,
+    contacts: Res<ContactState>,
+    mut phys: ResMut<Physics>,
+    q: Query<(&SimBody, &BodyState)>,
+    mut log: ResMut<EventLog>,
+    mut diag: ResMut<Diagnostics>,
+) {
+    let t = clock.t_s();
+    let dt = clock.dt_s;
+    let (ce, te) = dock.bodies;
+    let [(cb, cs), (tb, ts)] = q.get_many([ce, te]).expect("docking bodies");
+    let (g, _, _) = geometry(&dock.spec, (cs, cb), (ts, tb), &dock.ports);
+    let prefix = (format!("{}/", cb.name), format!("{}/", tb.name));
+    let between = |a: &str, b: &str| {
+        (a.starts_with(&prefix.0) && b.starts_with(&prefix.1))
+            || (a.starts_with(&prefix.1) && b.starts_with(&prefix.0))
+    };
+    let mut touching_now = false;
+    let mut collision: Option<String> = None;
+    for ((a, b), c) in &contacts.active {
+        if between(a, b) {
+            if c.docking {
+                touching_now = true;
+            } else if collision.is_none() {
+                collision = Some(format!("{a} and {b}"));
+            }
+        }
+    }
+    // A cone sliding in a funnel touches and leaves the walls from step to step; contact counts
+    // as ongoing until it has been absent for CONTACT_HOLD_S.
+    if touching_now {
+        dock.last_docking_contact_s = Some(t);
+    }
+    let docking_contact = dock
+        .last_docking_contact_s
+        .is_some_and(|tc| t - tc <= CONTACT_HOLD_S + 1e-9);
+    let spec = dock.spec.clone();
+    let seated = g.axial_error_m.abs() <= spec.latch.axial_tolerance_m
+        && g.lateral_m <= spec.latch.lateral_tolerance_m
+        && g.misalignment_deg <= spec.latch.angle_tolerance_deg;
+    if docking_contact {
+        dock.t_first_contact_s.get_or_insert(t);
+        dock.max_misalignment_deg = dock.max_misalignment_deg.max(g.misalignment_deg);
+    }
+    let old = dock.state;
+    let mut new = old;
+    let mut reason = String::new();
+    use DockState::*;
+    match old {
+        Missed => {}
+        Latched => {
+            if let Some(h) = dock.joint
+                && let Some(j) = phys.world.impulse_joints.get(h)
+            {
+                let f = Vector3::new(j.impulses[0], j.impulses[1], j.impulses[2])
+                    .map(f64::from)
+                    .norm()
+                    / dt;
+                dock.peak_joint_force_n = dock.peak_joint_force_n.max(f);
+                if f > spec.latch.break_force_n {
+                    phys.world.impulse_joints.remove(h, true);
+                    dock.joint = None;
+                    new = Free;
+                    reason = format!(
+                        "latch broke: joint force {f:.1} N > break force {:.1} N",
+                        spec.latch.break_force_n
+                    );
+                }
+            }
+        }
+        _ => {
+            if let Some(pair) = collision {
+                new = Missed;
+                reason = format!("collision between {pair} before the latch engaged");
+            } else if g.axial_error_m < 0.0 && g.lateral_m > spec.mouth_radius_m {
+                new = Missed;
+                reason = format!(
+                    "the chaser port passed beside the slot: lateral offset {:.3} m > mouth radius {:.3} m",
+                    g.lateral_m, spec.mouth_radius_m
+                );
+            } else if !docking_contact
+                && matches!(old, Free | Attracting)
+                && g.axial_rate_m_s > spec.miss.rebound_speed_m_s
+                && g.lateral_m > spec.mouth_radius_m
+            {
+                new = Missed;
+                reason = format!(
+                    "the approach turned away outside the mouth: lateral offset {:.3} m > {:.3} m, separating at {:.4} m/s",
+                    g.lateral_m, spec.mouth_radius_m, g.axial_rate_m_s
+                );
+            } else if seated && docking_contact || (seated && old == SoftCapture) {
+                if old != SoftCapture {
+                    new = SoftCapture;
+                    dock.seated_since = Some(t);
+                    reason = format!(
+                        "seated: axial {:.4} m, lateral {:.4} m, misalignment {:.2}°",
+                        g.axial_error_m, g.lateral_m, g.misalignment_deg
+                    );
+                } else if t - dock.seated_since.unwrap_or(t) >= spec.latch.dwell_s - 1e-9 {
+                    new = Latched;
+                    reason = format!(
+                        "latched after {:.2} s seated (axial {:.4} m, lateral {:.4} m, misalignment {:.2}°)",
+                        spec.latch.dwell_s, g.axial_error_m, g.lateral_m, g.misalignment_deg
+                    );
+                    let joint = latch_joint(cs, cb, ts, tb);
+                    let h = phys.world.insert_impulse_joint(tb.handle, cb.handle, joint);
+                    dock.joint = Some(h);
+                    dock.t_latch_s = Some(t);
+                }
+            } else if docking_contact {
+                if old != Contact && old != Jammed {
+                    new = Contact;
+                    reason = "cone touches the slot".into();
+                    dock.jam_since = None;
+                }
+                if g.rel_speed_m_s < spec.miss.jam_speed_m_s {
+                    let since = *dock.jam_since.get_or_insert(t);
+                    if old != Jammed && t - since >= spec.miss.jam_time_s {
+                        new = Jammed;
+                        reason = format!(
+                            "in contact, not seated, relative speed < {} m/s for {} s (axial {:.4} m, lateral {:.4} m, misalignment {:.2}°)",
+                            spec.miss.jam_speed_m_s,
+                            spec.miss.jam_time_s,
+                            g.axial_error_m,
+                            g.lateral_m,
+                            g.misalignment_deg
+                        );
+                    }
+                } else {
+                    dock.jam_since = None;
+                    if old == Jammed {
+                        new = Contact;
+                        reason = "moving again".into();
+                    }
+                }
+            } else if matches!(old, Contact | SoftCapture | Jammed) {
+                if g.axial_rate_m_s > spec.miss.rebound_speed_m_s {
+                    new = Rebound;
+                    reason = format!(
+                        "the cone left the slot separating at {:.4} m/s",
+                        g.axial_rate_m_s
+                    );
+                } else {
+                    new = if dock.magnet_on { Attracting } else { Free };
+                    reason = "contact ended".into();
+                }
+            } else if old == Free && dock.magnet_on {
+                new = Attracting;
+                reason = format!("magnet on at gap {:.3} m", g.gap_m);
+            }
+        }
+    }
+    if new != old {
+        dock.state = new;
+        dock.reason = reason.clone();
+        log.push(
+            t,
+            "docking_state",
+            serde_json::json!({"from": old.name(), "to": new.name(), "reason": reason}),
+        );
+    }
+    let values = [
+        g.gap_m,
+        g.axial_error_m,
+        g.lateral_m,
+        g.misalignment_deg,
+        dock.magnet_force_n,
+        dock.state.code(),
+    ];
+    for (c, v) in dock.cols.iter().zip(values) {
+        diag.values[*c] = v;
+    }
+    dock.geometry = g;
+}
+
+/// A fixed joint holding the chaser where it is relative to the target: frame 1 is the target's
+/// body frame, frame 2 the same frame expressed in the chaser's body frame.
+fn latch_joint(cs: &BodyState, cb: &SimBody, ts: &BodyState, tb: &SimBody) -> rp::FixedJoint {
+    let pt: Isometry3<f64> = ts.body_pose(&tb.com_body_m);
+    let pc: Isometry3<f64> = cs.body_pose(&cb.com_body_m);
+    let frame1 = Isometry3::from_parts(Translation3::identity(), UnitQuaternion::identity());
+    let frame2 = pc.inv_mul(&pt);
+    rp::FixedJointBuilder::new()
+        .local_frame1(conv::pose(&frame1))
+        .local_frame2(conv::pose(&frame2))
+        .build()
+}
+
+/// The docking section of `summary.json`.
+pub fn summary(dock: &Docking) -> serde_json::Value {
+    serde_json::json!({
+        "state": dock.state.name(),
+        "reason": dock.reason,
+        "first_docking_contact_s": dock.t_first_contact_s,
+        "t_latch_s": dock.t_latch_s,
+        "max_misalignment_in_contact_deg": dock.max_misalignment_deg,
+        "peak_latch_force_n": dock.peak_joint_force_n,
+        "final_geometry": dock.geometry,
+    })
+}
