@@ -127,7 +127,11 @@ fn val_guo2016_paper_gains_corridor_holds_errors_do_not_converge() {
     // (signed distance to the wall) held at every step.
     assert!(t.all_inside && t.min_h > 0.0);
     let g = sim.guarantees();
-    let i = g.list.iter().position(|x| x.name() == "guo2016_corridor").unwrap();
+    let i = g
+        .list
+        .iter()
+        .position(|x| x.name() == "guo2016_corridor")
+        .unwrap();
     assert!(g.status[i].held && g.status[i].worst_margin > 0.0);
     // Claim "errors converge (|r_e| < 1 cm, |σ_e| < 1e-4)": NOT held. Prediction: S_tr moves by
     // at most the reaching bound 4 k4/m·T plus the d_τ coupling m|r_b||J⁻¹d_τ|/m·T, so the
@@ -169,12 +173,19 @@ fn val_guo2016_k2_zero_does_not_leave_corridor() {
         .fold(0.0, f64::max);
     let delta = 0.02 / (ta.min_h * ta.min_h);
     let bound = delta * (ta.max_r_e + ta.max_x_dot_tr * rep::PAPER_DURATION_S);
-    eprintln!("max |Δr| k2=0.02 vs 0: {diff:.3e} m (bound {bound:.3e} m); min h (k2=0) {:.2}", tb.min_h);
+    eprintln!(
+        "max |Δr| k2=0.02 vs 0: {diff:.3e} m (bound {bound:.3e} m); min h (k2=0) {:.2}",
+        tb.min_h
+    );
     assert!(diff <= bound, "{diff} > {bound}");
     // Claim "with k2 = 0 the chaser leaves the corridor": NOT held.
     assert!(tb.all_inside && tb.min_h > 0.0);
     let g = b.guarantees();
-    let i = g.list.iter().position(|x| x.name() == "guo2016_corridor").unwrap();
+    let i = g
+        .list
+        .iter()
+        .position(|x| x.name() == "guo2016_corridor")
+        .unwrap();
     assert!(g.status[i].held);
     assert!(b.contacts().first_contact_s.is_none());
 }
@@ -186,7 +197,10 @@ fn val_guo2016_reaching_variant_converges_and_leaves_corridor() {
     // leaves the corridor whatever k2; the errors converge below the thresholds.
     let mid = (Vector3::new(14.9, 17.1, 37.7) + Vector3::new(2.0, 0.0, 0.0)) * 0.5;
     assert!(h_closed_form(&mid, 25.0, 5.0) < 0.0);
-    for file in ["scenes/guo2016_corridor.ron", "scenes/guo2016_no_avoidance.ron"] {
+    for file in [
+        "scenes/guo2016_corridor.ron",
+        "scenes/guo2016_no_avoidance.ron",
+    ] {
         let l = rep::reaching_variant(file).unwrap();
         let r = rep::run_case(&l, "reaching", rep::REACHING_DURATION_S, 0).unwrap();
         eprintln!(
@@ -207,7 +221,10 @@ fn val_guo2016_reaching_variant_converges_and_leaves_corridor() {
         // √(0.3² + 0.12²) = 0.3231 m from the mouth rim (ρ = 0.15 m); the facetted hulls move
         // that by millimetres. The approach is a straight line that stops there: no contact.
         assert!(r.first_contact_s.is_none());
-        assert!(r.min_distance_parts.1 == "chaser/cone" && r.min_distance_parts.0.starts_with("target/slot"));
+        assert!(
+            r.min_distance_parts.1 == "chaser/cone"
+                && r.min_distance_parts.0.starts_with("target/slot")
+        );
         assert!(r.min_distance_m > 0.3 && r.min_distance_m < 0.3231 + 5e-3);
     }
 }
@@ -224,7 +241,10 @@ fn val_guo2016_campaign_small_is_deterministic_and_consistent() {
         assert!(h_closed_form(&x.start.r0_m, 25.0, 5.0) > 0.0);
         assert_eq!(x.category(), y.category());
         if let (Some(r), Some(s)) = (&x.run, &y.run) {
-            assert_eq!(r.min_wing_distance_m.to_bits(), s.min_wing_distance_m.to_bits());
+            assert_eq!(
+                r.min_wing_distance_m.to_bits(),
+                s.min_wing_distance_m.to_bits()
+            );
             assert_eq!(r.final_r_e_m.to_bits(), s.final_r_e_m.to_bits());
             assert_eq!(r.corridor_held, r.min_corridor_margin_m > 0.0);
             assert!(r.min_wing_distance_m >= r.min_distance_m - 1e-6);
@@ -238,11 +258,59 @@ fn regress_guo2016_bad_controller_entry_is_a_located_error() {
     let l = load_scene_str(&bad, "bad.ron", &[]).unwrap();
     let e = Simulation::new(&l).err().expect("refused");
     // The error names the field and points into the controllers block of the text.
-    let controllers_line = bad.lines().position(|l| l.contains("controllers:")).unwrap() + 1;
+    let controllers_line = bad
+        .lines()
+        .position(|l| l.contains("controllers:"))
+        .unwrap()
+        + 1;
     eprintln!("{e}");
-    assert!(e.field.ends_with("k1_per_s") && e.line >= controllers_line, "{e}");
+    assert!(
+        e.field.ends_with("k1_per_s") && e.line >= controllers_line,
+        "{e}"
+    );
     let bad = rep::CORRIDOR_SCENE.replace("chaser: \"chaser\",", "chaser: \"nobody\",");
     let l = load_scene_str(&bad, "bad.ron", &[]).unwrap();
     let e = Simulation::new(&l).err().expect("refused");
-    assert!(e.field.contains("chaser") && e.message.contains("nobody"), "{e}");
+    assert!(
+        e.field.contains("chaser") && e.message.contains("nobody"),
+        "{e}"
+    );
+}
+
+#[test]
+fn val_guo2016_command_reaches_the_chaser_in_world_axes() {
+    // Reference: one step integrated by hand. The law's force F_b (chaser axes) must change the
+    // chaser velocity by q₀·F_b/m·dt (world axes) up to the differential gravity over the step
+    // (≤ 3n²|r|·dt ≈ 1.3e-6 m/s at 41 m); its torque plus d_τ must change the (initially zero)
+    // rate by q₀·J⁻¹(τ + d_τ)·dt up to three terms second order in ω̇·dt, each bounded by
+    // ‖J‖‖J⁻¹‖|ω̇dt|²·dt: the gyroscopic term, the torque held in world axes while the body
+    // turns, and q₁ vs q₀ in the conversion to world axes.
+    let mut sim = sim_of("scenes/guo2016_corridor.ron");
+    let s0 = sim.body("chaser").unwrap();
+    sim.step(1);
+    let s1 = sim.body("chaser").unwrap();
+    let c = sim.app.world().resource::<Guo2016Controllers>().list[0].clone();
+    let dt = 0.01;
+    let p = &c.law.params;
+    let dv = s1.vel_m_s - s0.vel_m_s;
+    let want = s0.att * c.command.force_body_n / p.chaser_mass_kg * dt;
+    let n = c.disturbance_rate_rad_s;
+    let grav_bound = 3.0 * n * n * s0.pos_m.norm() * dt;
+    eprintln!(
+        "Δv {dv} want {want} (|F| {:.3} N)",
+        c.command.force_body_n.norm()
+    );
+    assert!(want.norm() > 100.0 * grav_bound);
+    assert!((dv - want).norm() < grav_bound, "{}", (dv - want).norm());
+    let j_inv = p.chaser_inertia_body_kg_m2.try_inverse().unwrap();
+    let wdot = j_inv * (c.command.torque_body_nm + c.disturbance_body_nm);
+    let want_w = s0.att * wdot * dt;
+    let err = (s1.omega_rad_s - want_w).norm();
+    let gyro =
+        (p.chaser_inertia_body_kg_m2.norm() * (wdot * dt).norm_squared()) * j_inv.norm() * dt;
+    eprintln!(
+        "ω₁ {} want {want_w}: err {err:.3e} (gyroscopic bound {gyro:.3e})",
+        s1.omega_rad_s
+    );
+    assert!(err <= 3.0 * gyro + 1e-12 * want_w.norm(), "{err}");
 }

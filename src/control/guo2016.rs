@@ -1108,7 +1108,11 @@ impl SceneSpec {
         pos("k3", self.k3, "number")?;
         nonneg("k4_n", self.k4_n, "force in N")?;
         pos("boundary_layer", self.boundary_layer, "width")?;
-        nonneg("reaching_gain_per_s", self.reaching_gain_per_s, "rate in 1/s")?;
+        nonneg(
+            "reaching_gain_per_s",
+            self.reaching_gain_per_s,
+            "rate in 1/s",
+        )?;
         pos("corridor_a_m", self.corridor_a_m, "length in m")?;
         pos("corridor_tan_theta", self.corridor_tan_theta, "number")?;
         if !finite3(&self.r_d_body_m) {

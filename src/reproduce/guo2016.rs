@@ -158,7 +158,9 @@ fn body_colliders(
 /// Smallest distance between any chaser part and any target solar-wing part, with the wing part.
 fn wing_distance(sim: &mut Simulation, chaser: usize, target: usize) -> (f64, String) {
     let c = body_colliders(sim, chaser, |_| true);
-    let t = body_colliders(sim, target, |r| matches!(r, PartRole::Panel | PartRole::Boom));
+    let t = body_colliders(sim, target, |r| {
+        matches!(r, PartRole::Panel | PartRole::Boom)
+    });
     let mut best = (f64::INFINITY, String::new());
     for (_, pa, sa) in &c {
         for (nb, pb, sb) in &t {
@@ -294,7 +296,9 @@ fn spec_name(loaded: &LoadedScene) -> String {
 /// (chaser aligned with D0), at rest in attitude.
 pub fn reaching_variant(file: &str) -> Result<LoadedScene, String> {
     let mut l = load_bundled(file)?;
-    spec_mut(&mut l).ok_or("no Guo2016 controller")?.reaching_gain_per_s = REACHING_GAIN_PER_S;
+    spec_mut(&mut l)
+        .ok_or("no Guo2016 controller")?
+        .reaching_gain_per_s = REACHING_GAIN_PER_S;
     set_chaser_aligned(&mut l);
     Ok(l)
 }
@@ -412,7 +416,9 @@ pub const CATEGORIES: [&str; 5] = [
 /// identity attitude, so target frame = world axes).
 pub fn campaign(n: usize, seed: u64, duration_s: f64) -> Result<Vec<CampaignRun>, String> {
     let base = reaching_variant("scenes/guo2016_corridor.ron")?;
-    let corridor = spec_of(&base).params(1.0, nalgebra::Matrix3::identity()).corridor();
+    let corridor = spec_of(&base)
+        .params(1.0, nalgebra::Matrix3::identity())
+        .corridor();
     let mut out = Vec::new();
     for s in campaign_starts(&corridor, n, seed) {
         let mut l = base.clone();

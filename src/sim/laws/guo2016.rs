@@ -27,9 +27,7 @@ use crate::guarantee::{Guarantee, MonitorView};
 use crate::orbit::constants::MU_EARTH_M3_S2;
 use crate::scene::{LoadedScene, SceneError};
 use crate::sim::output::Diagnostics;
-use crate::sim::{
-    BodyState, Clock, Gravity, Guarantees, OrbitEnv, Roster, SimStep, Stage, Wrench,
-};
+use crate::sim::{BodyState, Clock, Gravity, Guarantees, OrbitEnv, Roster, SimStep, Stage, Wrench};
 use bevy::prelude::*;
 use nalgebra::Vector3;
 
@@ -119,8 +117,7 @@ impl Guarantee for CorridorGuarantee {
         &self.name
     }
     fn margin(&self, view: &MonitorView) -> f64 {
-        self.corridor
-            .signed_distance_m(&self.r1_target_m(view))
+        self.corridor.signed_distance_m(&self.r1_target_m(view))
     }
 }
 
@@ -256,11 +253,7 @@ pub fn guo2016_control(
             grav_diff_world_m_s2: grav,
         };
         let (cmd, d) = c.law.control(&obs);
-        let margin = c
-            .law
-            .params
-            .corridor()
-            .signed_distance_m(&d.r1_target_m);
+        let margin = c.law.params.corridor().signed_distance_m(&d.r1_target_m);
         let r_e = Vector3::new(d.x[3], d.x[4], d.x[5]).norm();
         let sigma_e = Vector3::new(d.x[0], d.x[1], d.x[2]).norm();
         let values = [
