@@ -999,8 +999,8 @@ mod tests {
 fn default_boundary_layer() -> f64 {
     1e-3
 }
-fn default_time_constants_s() -> [f64; 3] {
-    [40.0, 50.0, 60.0]
+fn default_time_constants_s() -> Box<[f64; 3]> {
+    Box::new([40.0, 50.0, 60.0])
 }
 fn default_corridor_guarantee() -> String {
     "guo2016_corridor".to_string()
@@ -1014,6 +1014,9 @@ fn default_corridor_guarantee() -> String {
 /// `d_τ = A·cos(n t)` (chaser body axes; Section 5: `A = [0.001, 0.002, 0.003]` N·m, `n` the
 /// mean motion of the reference orbit) and names the corridor guarantee registered with the
 /// monitor (margin: signed distance of the chaser centre of mass to the corridor wall, m).
+///
+/// (The 3-vectors are boxed only to keep [`crate::control::ControllerSpec`] small; in the
+/// scene they are written as plain `(x, y, z)`.)
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneSpec {
@@ -1040,17 +1043,17 @@ pub struct SceneSpec {
     /// Corridor opening `tan θ`, dimensionless.
     pub corridor_tan_theta: f64,
     /// Desired target position relative to the chaser `r_d`, chaser body axes, m.
-    pub r_d_body_m: [f64; 3],
+    pub r_d_body_m: Box<[f64; 3]>,
     /// Amplitudes of `σ_d,i(t) = A_i sin(t/T_i)` (MRP, dimensionless; default 0).
     #[serde(default)]
-    pub sigma_d_amplitude: [f64; 3],
+    pub sigma_d_amplitude: Box<[f64; 3]>,
     /// Time constants `T_i` of `σ_d(t)`, s (default 40, 50, 60 s).
     #[serde(default = "default_time_constants_s")]
-    pub sigma_d_time_constant_s: [f64; 3],
+    pub sigma_d_time_constant_s: Box<[f64; 3]>,
     /// Amplitudes of the disturbance torque `d_τ = A cos(n t)` on the chaser, chaser body
     /// axes, N·m (default 0: none).
     #[serde(default)]
-    pub disturbance_torque_amplitude_nm: [f64; 3],
+    pub disturbance_torque_amplitude_nm: Box<[f64; 3]>,
     /// Angular frequency `n` of the disturbance, rad/s. Default: the mean motion of the
     /// reference orbit (orbit scenes), 0 otherwise.
     #[serde(default)]
@@ -1077,10 +1080,10 @@ impl SceneSpec {
             reaching_gain_per_s: p.reaching_gain_per_s,
             corridor_a_m: p.corridor_a_m,
             corridor_tan_theta: p.corridor_tan_theta,
-            r_d_body_m: p.r_d_body_m.into(),
-            sigma_d_amplitude: p.sigma_d_amplitude.into(),
-            sigma_d_time_constant_s: p.sigma_d_time_constant_s.into(),
-            disturbance_torque_amplitude_nm: [1e-3, 2e-3, 3e-3],
+            r_d_body_m: Box::new(p.r_d_body_m.into()),
+            sigma_d_amplitude: Box::new(p.sigma_d_amplitude.into()),
+            sigma_d_time_constant_s: Box::new(p.sigma_d_time_constant_s.into()),
+            disturbance_torque_amplitude_nm: Box::new([1e-3, 2e-3, 3e-3]),
             disturbance_rate_rad_s: None,
             corridor_guarantee: default_corridor_guarantee(),
         }
@@ -1121,7 +1124,7 @@ impl SceneSpec {
         if !finite3(&self.sigma_d_amplitude) {
             return Err(("sigma_d_amplitude", "must be finite".into()));
         }
-        for &t in &self.sigma_d_time_constant_s {
+        for &t in self.sigma_d_time_constant_s.iter() {
             pos("sigma_d_time_constant_s", t, "time in s")?;
         }
         if !finite3(&self.disturbance_torque_amplitude_nm) {
@@ -1150,9 +1153,44 @@ impl SceneSpec {
             corridor_tan_theta: self.corridor_tan_theta,
             chaser_mass_kg: mass_kg,
             chaser_inertia_body_kg_m2: inertia_body_kg_m2,
-            r_d_body_m: Vector3::from(self.r_d_body_m),
-            sigma_d_amplitude: Vector3::from(self.sigma_d_amplitude),
-            sigma_d_time_constant_s: Vector3::from(self.sigma_d_time_constant_s),
+            r_d_body_m: Vector3::from(*self.r_d_body_m),
+            sigma_d_amplitude: Vector3::from(*self.sigma_d_amplitude),
+            sigma_d_time_constant_s: Vector3::from(*self.sigma_d_time_constant_s),
         }
+    }
+}
+
+#[cfg(test)]
+mod scene_spec_tests {
+    //! The scene entry against the paper's parameter set and RON text written by hand.
+    use super::*;
+
+    #[test]
+    fn regress_guo2016_scene_spec_ron_and_paper_values() {
+        let text = r#"(chaser: "c", target: "t", k1_per_s: 9.0, k2_m4: 0.02, k3: 1.0, k4_n: 0.005,
+            corridor_a_m: 25.0, corridor_tan_theta: 5.0, r_d_body_m: (2.0, 0.0, 0.0),
+            sigma_d_amplitude: (0.001, 0.001, 0.001),
+            disturbance_torque_amplitude_nm: (0.001, 0.002, 0.003))"#;
+        let s: SceneSpec = ron::from_str(text).unwrap();
+        assert!(s.validate().is_ok());
+        let want = SceneSpec::paper("c", "t");
+        let j = Matrix3::from_diagonal(&Vector3::new(15.0, 17.0, 20.0));
+        let (a, b) = (s.params(100.0, j), Guo2016Params::paper());
+        assert_eq!(
+            serde_json::to_string(&a).unwrap(),
+            serde_json::to_string(&b).unwrap()
+        );
+        assert_eq!(
+            serde_json::to_string(&s).unwrap(),
+            serde_json::to_string(&want).unwrap()
+        );
+        // Unknown fields and bad numbers are refused, naming the field.
+        assert!(ron::from_str::<SceneSpec>(&text.replace("k3:", "k3_typo:")).is_err());
+        let mut bad = s.clone();
+        bad.corridor_tan_theta = -1.0;
+        assert_eq!(bad.validate().unwrap_err().0, "corridor_tan_theta");
+        let mut bad = s;
+        bad.sigma_d_time_constant_s = Box::new([40.0, 0.0, 60.0]);
+        assert_eq!(bad.validate().unwrap_err().0, "sigma_d_time_constant_s");
     }
 }

@@ -197,7 +197,7 @@ pub fn install(
             law: Guo2016::new(params),
             chaser,
             target,
-            disturbance_amplitude_nm: Vector3::from(spec.disturbance_torque_amplitude_nm),
+            disturbance_amplitude_nm: Vector3::from(*spec.disturbance_torque_amplitude_nm),
             disturbance_rate_rad_s: n,
             observation: None,
             command: Guo2016Command {
