@@ -1190,7 +1190,7 @@ mod scene_spec_tests {
         bad.corridor_tan_theta = -1.0;
         assert_eq!(bad.validate().unwrap_err().0, "corridor_tan_theta");
         let mut bad = s;
-        bad.sigma_d_time_constant_s = Box::new([40.0, 0.0, 60.0]);
+        *bad.sigma_d_time_constant_s = [40.0, 0.0, 60.0];
         assert_eq!(bad.validate().unwrap_err().0, "sigma_d_time_constant_s");
     }
 }
