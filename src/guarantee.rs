@@ -36,6 +36,9 @@ pub struct PairDistance {
     pub part_a: usize,
     /// Index of `b`'s part of the closest pair.
     pub part_b: usize,
+    /// Minimum distance over the part pairs that are not both docking parts (cone/slot), m:
+    /// the clearance of everything the mechanism is not meant to touch.
+    pub clearance_m: f64,
 }
 
 /// What a guarantee may look at.

@@ -19,3 +19,5 @@ pub mod reproduce;
 pub mod scene;
 #[cfg(feature = "sim")]
 pub mod sim;
+#[cfg(feature = "sim")]
+pub mod trials;

@@ -49,6 +49,8 @@ enum Cmd {
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
     },
+    /// Run a trials campaign (or `trials merge` shard outputs).
+    Trials(TrialsCmd),
     /// Reproduce a paper's headline result (all papers without a name): REPORT.md, plots,
     /// claims.json under OUT/NAME.
     Reproduce {
@@ -67,6 +69,133 @@ enum Cmd {
         #[arg(long, default_value_t = 20000)]
         steps: u64,
     },
+}
+
+#[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true)]
+struct TrialsCmd {
+    #[command(subcommand)]
+    merge: Option<TrialsSub>,
+    /// Trials file (RON).
+    file: Option<PathBuf>,
+    /// Worker threads (default: the machine's cores).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Run only shard i of n (`--shard 3/10`): trials whose index % n == i.
+    #[arg(long)]
+    shard: Option<String>,
+    /// Output directory (default: out/trials/<campaign name>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+#[derive(Subcommand)]
+enum TrialsSub {
+    /// Join the outputs of shards into one trials.csv, summary.json and envelope plot.
+    Merge {
+        /// The trials file the shards ran.
+        file: PathBuf,
+        /// Shard output directories.
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+        /// Merged output directory.
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+fn trials(cmd: TrialsCmd) -> ExitCode {
+    if let Some(TrialsSub::Merge { file, shards, out }) = cmd.merge {
+        let c = match rpod::trials::load(&file) {
+            Ok(c) => c,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(2);
+            }
+        };
+        return match rpod::trials::merge(&c, &shards, &out) {
+            Ok(n) => {
+                out!("merged {n} trials into {}", out.display());
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        };
+    }
+    let Some(file) = cmd.file else {
+        eprintln!("error: name a trials file (or `rpod trials merge`)");
+        return ExitCode::from(2);
+    };
+    let shard = match cmd.shard.as_deref().map(|s| {
+        s.split_once('/')
+            .and_then(|(i, n)| Some((i.parse::<usize>().ok()?, n.parse::<usize>().ok()?)))
+            .filter(|(i, n)| *n > 0 && i < n)
+    }) {
+        None => (0, 1),
+        Some(Some(s)) => s,
+        Some(None) => {
+            eprintln!("error: --shard takes i/n with 0 ≤ i < n, e.g. --shard 0/4");
+            return ExitCode::from(2);
+        }
+    };
+    let c = match rpod::trials::load(&file) {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let jobs = cmd
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let out = cmd
+        .out
+        .unwrap_or_else(|| PathBuf::from("out/trials").join(&c.spec.name));
+    let opts = rpod::trials::RunOptions {
+        jobs,
+        shard,
+        out: out.clone(),
+        progress: true,
+    };
+    match rpod::trials::run(&c, &opts) {
+        Ok(st) => {
+            out!(
+                "{}: ran {} trials ({} resumed) on {jobs} jobs in {:.1} s: {:.2} trials/s, {:.0} steps/s",
+                c.spec.name,
+                st.ran,
+                st.resumed,
+                st.wall_s,
+                st.ran as f64 / st.wall_s.max(1e-9),
+                st.steps as f64 / st.wall_s.max(1e-9)
+            );
+            if let Ok(text) = std::fs::read_to_string(out.join("summary.json"))
+                && let Ok(v) = serde_json::from_str::<serde_json::Value>(&text)
+            {
+                out!(
+                    "outcomes {}; capture probability {:.3} (95 % Wilson [{:.3}, {:.3}])",
+                    v["outcomes"],
+                    v["capture_probability"].as_f64().unwrap_or(f64::NAN),
+                    v["capture_probability_95ci_wilson"][0]
+                        .as_f64()
+                        .unwrap_or(f64::NAN),
+                    v["capture_probability_95ci_wilson"][1]
+                        .as_f64()
+                        .unwrap_or(f64::NAN)
+                );
+            }
+            out!(
+                "wrote {}/{{trials.csv, summary.json, capture_envelope.png, capture_envelope.svg}}",
+                out.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(1)
+        }
+    }
 }
 
 fn main() -> ExitCode {
@@ -102,6 +231,7 @@ fn main() -> ExitCode {
             }
         }
         Cmd::Reproduce { name, out } => reproduce(name, &out),
+        Cmd::Trials(cmd) => trials(cmd),
         Cmd::Bench { scene, steps } => match rpod::bench::run(&scene, steps) {
             Ok(report) => {
                 out!("{report}");

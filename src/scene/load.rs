@@ -89,16 +89,7 @@ pub fn load_scene_str(
     for o in overrides {
         text = apply_override(&text, file, o)?;
     }
-    let scene: Scene = ron::from_str(&text).map_err(|e| {
-        let field = field_at(&text, e.span.start.line, e.span.start.col);
-        SceneError {
-            file: file.to_string(),
-            line: e.span.start.line,
-            col: e.span.start.col,
-            field,
-            message: e.code.to_string(),
-        }
-    })?;
+    let scene: Scene = parse_ron(&text, file)?;
     let loaded = LoadedScene {
         scene,
         text,
@@ -108,6 +99,21 @@ pub fn load_scene_str(
         return Err(loaded.error_at(&path, message));
     }
     Ok(loaded)
+}
+
+/// Parses any RON document (e.g. a trials file), with serde errors located like scene errors.
+/// Optional fields may be written bare (`duration_s: 30.0`) or as `Some(30.0)`.
+pub fn parse_ron<T: serde::de::DeserializeOwned>(text: &str, file: &str) -> Result<T, SceneError> {
+    ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        .from_str(text)
+        .map_err(|e| SceneError {
+            file: file.to_string(),
+            line: e.span.start.line,
+            col: e.span.start.col,
+            field: field_at(text, e.span.start.line, e.span.start.col),
+            message: e.code.to_string(),
+        })
 }
 
 /// Applies one `path=value` override to scene text. The value is RON (`3.5`, `true`,

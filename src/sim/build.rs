@@ -325,6 +325,10 @@ impl Simulation {
                         .collect()
                 })
                 .collect(),
+            part_docking: all_parts
+                .iter()
+                .map(|ps| ps.iter().map(|p| p.role.is_docking()).collect())
+                .collect(),
             ..Default::default()
         })
         .insert_resource(EventLog::default())
@@ -503,6 +507,7 @@ impl Simulation {
             "events": rec.history.len(),
             "min_distance": overall,
             "pairs": pairs,
+            "min_clearance_non_docking_m": mon.min_clearance_per_pair.iter().copied().fold(f64::INFINITY, f64::min),
             "first_contact_s": cs.first_contact_s,
             "first_collision_s": cs.first_collision_s,
             "collisions": collisions,

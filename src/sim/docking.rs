@@ -18,6 +18,9 @@ use serde::Serialize;
 /// How long a docking contact counts as ongoing after the last touching step, s.
 pub const CONTACT_HOLD_S: f64 = 0.1;
 
+/// A port in its body frame: (origin, unit outward axis).
+pub type PortFrame = (Vector3<f64>, Vector3<f64>);
+
 /// Docking state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "SCREAMING_SNAKE_CASE")]
@@ -94,7 +97,7 @@ pub struct Docking {
     /// Chaser and target entities.
     pub bodies: (Entity, Entity),
     /// Ports in their body frames: (origin, unit axis).
-    pub ports: ((Vector3<f64>, Vector3<f64>), (Vector3<f64>, Vector3<f64>)),
+    pub ports: (PortFrame, PortFrame),
     /// Current state.
     pub state: DockState,
     /// Why the current state was entered.
@@ -126,11 +129,7 @@ pub struct Docking {
 }
 
 /// World port origin and unit axis of a body.
-fn port_world(
-    s: &BodyState,
-    com: &Vector3<f64>,
-    port: &(Vector3<f64>, Vector3<f64>),
-) -> (Vector3<f64>, Vector3<f64>) {
+fn port_world(s: &BodyState, com: &Vector3<f64>, port: &PortFrame) -> (Vector3<f64>, Vector3<f64>) {
     let pose = s.body_pose(com);
     (pose.transform_point(&port.0.into()).coords, s.att * port.1)
 }
@@ -145,7 +144,7 @@ pub fn geometry(
     spec: &DockingSpec,
     chaser: (&BodyState, &SimBody),
     target: (&BodyState, &SimBody),
-    ports: &((Vector3<f64>, Vector3<f64>), (Vector3<f64>, Vector3<f64>)),
+    ports: &(PortFrame, PortFrame),
 ) -> (PortGeometry, Vector3<f64>, Vector3<f64>) {
     let (pc, ac) = port_world(chaser.0, &chaser.1.com_body_m, &ports.0);
     let (pt, at) = port_world(target.0, &target.1.com_body_m, &ports.1);
@@ -350,7 +349,7 @@ fn docking_monitor(
                     "the approach turned away outside the mouth: lateral offset {:.3} m > {:.3} m, separating at {:.4} m/s",
                     g.lateral_m, spec.mouth_radius_m, g.axial_rate_m_s
                 );
-            } else if seated && docking_contact || (seated && old == SoftCapture) {
+            } else if seated && (docking_contact || old == SoftCapture) {
                 if old != SoftCapture {
                     new = SoftCapture;
                     dock.seated_since = Some(t);

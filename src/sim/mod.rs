@@ -476,6 +476,10 @@ pub struct MonitorState {
     pub min_per_pair: Vec<PairMin>,
     /// `body/collider` names, per body, in collider order.
     pub part_names: Vec<Vec<String>>,
+    /// Per body, per collider: a docking part (cone or slot).
+    pub part_docking: Vec<Vec<bool>>,
+    /// Smallest non-docking clearance seen over the run, per pair (same order as `pairs`), m.
+    pub min_clearance_per_pair: Vec<f64>,
     /// Distance queries made (exact parry calls) over the run.
     pub exact_queries: u64,
     /// Part pairs skipped by bounding-sphere pruning over the run.

@@ -194,73 +194,94 @@ pub fn distances(
     let first = mon.pairs.len() != n * (n - 1) / 2;
     if first {
         mon.pairs.clear();
+        mon.min_per_pair.clear();
+        mon.min_clearance_per_pair.clear();
     }
     let (mut exact, mut pruned) = (0u64, 0u64);
     let mut k = 0;
     for i in 0..n {
         for j in i + 1..n {
             let (pi, pj) = (&sc.poses[i], &sc.poses[j]);
-            let query = |a: usize, b: usize| {
-                shape_distance(&pi[a].0, &*sc.shapes[i][a], &pj[b].0, &*sc.shapes[j][b])
-            };
-            // Warm start from the previous closest pair.
-            let (mut best, mut ba, mut bb) = if first {
-                (f64::INFINITY, 0, 0)
-            } else {
-                let p = &mon.pairs[k];
-                exact += 1;
-                (query(p.part_a, p.part_b), p.part_a, p.part_b)
-            };
-            sc.candidates.clear();
-            for (a, (pa, ra)) in pi.iter().enumerate() {
-                for (b, (pb, rb)) in pj.iter().enumerate() {
-                    let lb = (pa.translation.vector - pb.translation.vector).norm() - ra - rb;
-                    if lb < best && !(a == ba && b == bb && !first) {
-                        sc.candidates.push((lb, a, b));
-                    } else {
-                        pruned += 1;
+            let dock_i = &mon.part_docking[i];
+            let dock_j = &mon.part_docking[j];
+            let any_docking_pair = dock_i.iter().any(|d| *d) && dock_j.iter().any(|d| *d);
+            let shapes = &sc.shapes;
+            let candidates = &mut sc.candidates;
+            // Closest part pair among those `keep` accepts, warm-started from `warm`.
+            let mut closest = |keep: &dyn Fn(usize, usize) -> bool,
+                               warm: Option<(usize, usize)>| {
+                let query = |a: usize, b: usize| {
+                    shape_distance(&pi[a].0, &*shapes[i][a], &pj[b].0, &*shapes[j][b])
+                };
+                let warm = warm.filter(|(a, b)| keep(*a, *b));
+                let (mut best, mut ba, mut bb) = match warm {
+                    Some((a, b)) => {
+                        exact += 1;
+                        (query(a, b), a, b)
+                    }
+                    None => (f64::INFINITY, 0, 0),
+                };
+                candidates.clear();
+                for (a, (pa, ra)) in pi.iter().enumerate() {
+                    for (b, (pb, rb)) in pj.iter().enumerate() {
+                        if !keep(a, b) || warm == Some((a, b)) {
+                            continue;
+                        }
+                        let lb = (pa.translation.vector - pb.translation.vector).norm() - ra - rb;
+                        if lb < best {
+                            candidates.push((lb, a, b));
+                        } else {
+                            pruned += 1;
+                        }
                     }
                 }
-            }
-            sc.candidates
-                .sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
-            for (c, &(lb, a, b)) in sc.candidates.iter().enumerate() {
-                if lb >= best {
-                    pruned += (sc.candidates.len() - c) as u64;
-                    break;
+                candidates
+                    .sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+                for (c, &(lb, a, b)) in candidates.iter().enumerate() {
+                    if lb >= best {
+                        pruned += (candidates.len() - c) as u64;
+                        break;
+                    }
+                    let d = query(a, b);
+                    exact += 1;
+                    if d < best {
+                        (best, ba, bb) = (d, a, b);
+                    }
                 }
-                let d = query(a, b);
-                exact += 1;
-                if d < best {
-                    (best, ba, bb) = (d, a, b);
-                }
-            }
+                (best, ba, bb)
+            };
+            let warm = (!first).then(|| (mon.pairs[k].part_a, mon.pairs[k].part_b));
+            let (best, ba, bb) = closest(&|_, _| true, warm);
+            let clearance = if any_docking_pair && dock_i[ba] && dock_j[bb] {
+                closest(&|a, b| !(dock_i[a] && dock_j[b]), None).0
+            } else {
+                best
+            };
             let pd = PairDistance {
                 a: i,
                 b: j,
                 distance_m: best,
                 part_a: ba,
                 part_b: bb,
+                clearance_m: clearance,
+            };
+            let pm = super::PairMin {
+                distance_m: best,
+                part_a: ba,
+                part_b: bb,
+                t_s: t,
             };
             if first {
                 mon.pairs.push(pd);
-                mon.min_per_pair.push(super::PairMin {
-                    distance_m: best,
-                    part_a: ba,
-                    part_b: bb,
-                    t_s: t,
-                });
+                mon.min_per_pair.push(pm);
+                mon.min_clearance_per_pair.push(clearance);
             } else {
                 mon.pairs[k] = pd;
-                let m = &mut mon.min_per_pair[k];
-                if best < m.distance_m {
-                    *m = super::PairMin {
-                        distance_m: best,
-                        part_a: ba,
-                        part_b: bb,
-                        t_s: t,
-                    };
+                if best < mon.min_per_pair[k].distance_m {
+                    mon.min_per_pair[k] = pm;
                 }
+                let c = &mut mon.min_clearance_per_pair[k];
+                *c = c.min(clearance);
             }
             k += 1;
         }
