@@ -563,8 +563,8 @@ fn geometry_sentence(r: &CaseRun) -> String {
 }
 
 /// The claims of issue 5 as measured.
-pub fn claims(r: &Results) -> Vec<shim::Claim> {
-    use shim::Claim;
+pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
+    use crate::report::Claim;
     let c = &r.corridor;
     let z = &r.no_avoidance;
     let counts = campaign_counts(&r.campaign);
@@ -704,8 +704,8 @@ fn time_figure(
     runs: [&CaseRun; 2],
     get: impl Fn(&Sample) -> Vector3<f64>,
     names: [&str; 3],
-) -> shim::Figure {
-    use shim::{Figure, Plot};
+) -> crate::report::Figure {
+    use crate::report::{Figure, Plot};
     let mut fig = Figure::new(title).cols(2);
     for (zoom, t_max) in [(false, PAPER_DURATION_S), (true, 2.0)] {
         for r in runs {
@@ -749,8 +749,8 @@ pub fn run(out: &Path) -> Result<(), String> {
     Ok(())
 }
 
-fn build_report(r: &Results, claims: &[shim::Claim], wall_s: f64) -> shim::ReportBuilder {
-    use shim::{Color, Dash, Figure, LineStyle, Plot, ReportBuilder};
+fn build_report(r: &Results, claims: &[crate::report::Claim], wall_s: f64) -> crate::report::ReportBuilder {
+    use crate::report::{Color, Dash, Figure, LineStyle, Plot, ReportBuilder};
     let c = &r.corridor;
     let z = &r.no_avoidance;
     let mut rep = ReportBuilder::new(
@@ -1184,228 +1184,3 @@ fn build_report(r: &Results, claims: &[shim::Claim], wall_s: f64) -> shim::Repor
     rep
 }
 
-/// Stand-in for `crate::report` until it lands on this branch (same API subset): writes
-/// REPORT.md, claims.json and, per figure, a CSV of its series instead of a PNG.
-#[allow(missing_docs, dead_code)]
-mod shim {
-    use std::fmt::Write as _;
-    use std::path::{Path, PathBuf};
-
-    #[derive(Debug, Clone, serde::Serialize)]
-    pub struct Claim {
-        pub id: String,
-        pub claim: String,
-        pub paper: Option<String>,
-        pub measured: String,
-        pub held: bool,
-    }
-    impl Claim {
-        pub fn new(
-            id: impl Into<String>,
-            claim: impl Into<String>,
-            paper: Option<&str>,
-            measured: impl Into<String>,
-            held: bool,
-        ) -> Self {
-            Self {
-                id: id.into(),
-                claim: claim.into(),
-                paper: paper.map(str::to_owned),
-                measured: measured.into(),
-                held,
-            }
-        }
-    }
-    #[derive(Debug, Clone, Copy)]
-    pub struct Color;
-    impl Color {
-        pub const RED: Color = Color;
-        pub const GRAY: Color = Color;
-        pub const DARK_GRAY: Color = Color;
-    }
-    #[derive(Debug, Clone, Copy)]
-    pub enum Dash {
-        Dashed,
-    }
-    #[derive(Debug, Clone, Copy)]
-    pub struct LineStyle {
-        pub color: Option<Color>,
-        pub width_px: f64,
-        pub dash: Dash,
-    }
-    #[derive(Debug, Clone, Default)]
-    pub struct Plot {
-        pub title: String,
-        pub series: Vec<(String, Vec<(f64, f64)>)>,
-    }
-    impl Plot {
-        pub fn new(t: impl Into<String>) -> Self {
-            Self {
-                title: t.into(),
-                series: vec![],
-            }
-        }
-        pub fn x_label(self, _: impl Into<String>) -> Self {
-            self
-        }
-        pub fn y_label(self, _: impl Into<String>) -> Self {
-            self
-        }
-        pub fn x_range(self, _: f64, _: f64) -> Self {
-            self
-        }
-        pub fn y_range(self, _: f64, _: f64) -> Self {
-            self
-        }
-        pub fn equal_aspect(self) -> Self {
-            self
-        }
-        pub fn line(
-            mut self,
-            n: impl Into<String>,
-            p: impl IntoIterator<Item = (f64, f64)>,
-        ) -> Self {
-            self.series.push((n.into(), p.into_iter().collect()));
-            self
-        }
-        pub fn line_styled(
-            self,
-            n: impl Into<String>,
-            p: impl IntoIterator<Item = (f64, f64)>,
-            _: LineStyle,
-        ) -> Self {
-            self.line(n, p)
-        }
-        pub fn polygon(
-            self,
-            n: impl Into<String>,
-            p: impl IntoIterator<Item = (f64, f64)>,
-            _: Color,
-        ) -> Self {
-            self.line(n, p)
-        }
-        pub fn hline(self, _: f64, _: impl Into<String>) -> Self {
-            self
-        }
-        pub fn outcomes<S: AsRef<str>>(
-            mut self,
-            p: impl IntoIterator<Item = (f64, f64, usize)>,
-            c: &[S],
-        ) -> Self {
-            let p: Vec<_> = p.into_iter().collect();
-            for (k, name) in c.iter().enumerate() {
-                self.series.push((
-                    name.as_ref().to_string(),
-                    p.iter().filter(|q| q.2 == k).map(|q| (q.0, q.1)).collect(),
-                ));
-            }
-            self
-        }
-        pub fn into_figure(self) -> Figure {
-            Figure::new("").plot(self)
-        }
-    }
-    #[derive(Debug, Clone, Default)]
-    pub struct Figure {
-        pub plots: Vec<Plot>,
-    }
-    impl Figure {
-        pub fn new(_: impl Into<String>) -> Self {
-            Self::default()
-        }
-        pub fn cols(self, _: usize) -> Self {
-            self
-        }
-        pub fn size_px(self, _: u32, _: u32) -> Self {
-            self
-        }
-        pub fn plot(mut self, p: Plot) -> Self {
-            self.plots.push(p);
-            self
-        }
-    }
-    #[derive(Debug, Clone, Default)]
-    pub struct ReportBuilder {
-        md: String,
-        figs: Vec<(String, Figure)>,
-        claims: Vec<Claim>,
-    }
-    impl ReportBuilder {
-        pub fn new(t: impl Into<String>) -> Self {
-            Self {
-                md: format!("# {}\n", t.into()),
-                ..Default::default()
-            }
-        }
-        pub fn heading(&mut self, t: impl Into<String>) -> &mut Self {
-            let _ = write!(self.md, "\n## {}\n", t.into());
-            self
-        }
-        pub fn paragraph(&mut self, t: impl Into<String>) -> &mut Self {
-            let _ = write!(self.md, "\n{}\n", t.into());
-            self
-        }
-        pub fn code(&mut self, t: impl Into<String>) -> &mut Self {
-            let _ = write!(self.md, "\n```\n{}\n```\n", t.into());
-            self
-        }
-        pub fn table<S: AsRef<str>>(&mut self, h: &[S], rows: &[Vec<String>]) -> &mut Self {
-            let hs: Vec<&str> = h.iter().map(|x| x.as_ref()).collect();
-            let _ = write!(
-                self.md,
-                "\n| {} |\n|{}\n",
-                hs.join(" | "),
-                " --- |".repeat(hs.len())
-            );
-            for r in rows {
-                let _ = writeln!(self.md, "| {} |", r.join(" | "));
-            }
-            self
-        }
-        pub fn claims(&mut self, c: &[Claim]) -> &mut Self {
-            self.claims = c.to_vec();
-            for c in c {
-                let _ = writeln!(
-                    self.md,
-                    "- **{}** {} — {}: {}",
-                    c.id,
-                    if c.held { "held" } else { "NOT held" },
-                    c.claim,
-                    c.measured
-                );
-            }
-            self
-        }
-        pub fn figure(
-            &mut self,
-            stem: impl Into<String>,
-            alt: impl Into<String>,
-            f: Figure,
-        ) -> &mut Self {
-            let stem = stem.into();
-            let _ = write!(self.md, "\n[{}]({stem}.csv)\n", alt.into());
-            self.figs.push((stem, f));
-            self
-        }
-        pub fn write(&self, dir: &Path) -> std::io::Result<PathBuf> {
-            std::fs::create_dir_all(dir)?;
-            for (stem, f) in &self.figs {
-                let mut s = String::from("plot,series,x,y\n");
-                for p in &f.plots {
-                    for (n, pts) in &p.series {
-                        for (x, y) in pts {
-                            let _ = writeln!(s, "{:?},{:?},{x},{y}", p.title, n);
-                        }
-                    }
-                }
-                std::fs::write(dir.join(format!("{stem}.csv")), s)?;
-            }
-            std::fs::write(
-                dir.join("claims.json"),
-                serde_json::to_string_pretty(&self.claims).map_err(std::io::Error::other)?,
-            )?;
-            std::fs::write(dir.join("REPORT.md"), &self.md)?;
-            Ok(dir.join("REPORT.md"))
-        }
-    }
-}
