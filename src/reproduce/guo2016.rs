@@ -749,7 +749,11 @@ pub fn run(out: &Path) -> Result<(), String> {
     Ok(())
 }
 
-fn build_report(r: &Results, claims: &[crate::report::Claim], wall_s: f64) -> crate::report::ReportBuilder {
+fn build_report(
+    r: &Results,
+    claims: &[crate::report::Claim],
+    wall_s: f64,
+) -> crate::report::ReportBuilder {
     use crate::report::{Color, Dash, Figure, LineStyle, Plot, ReportBuilder};
     let c = &r.corridor;
     let z = &r.no_avoidance;
@@ -867,8 +871,8 @@ fn build_report(r: &Results, claims: &[crate::report::Claim], wall_s: f64) -> cr
             .y_range(0.0, rho_max)
             .equal_aspect()
             .line_styled(
-                "corridor wall (tan θ = 5, a = 25 m)",
-                corridor_curve(shape, x_max, rho_max),
+                "corridor wall (tan θ = 5, a = 25 m); inside is below it",
+                corridor_curve(shape, x_max, 1.3 * rho_max),
                 gray,
             );
         for run in [c, z, &r.reaching, &r.reaching_no_avoidance] {
@@ -879,6 +883,16 @@ fn build_report(r: &Results, claims: &[crate::report::Claim], wall_s: f64) -> cr
                     .map(|s| (s.r1_target_m.x, rho(&s.r1_target_m))),
             );
         }
+        let end = |run: &CaseRun| {
+            run.samples
+                .last()
+                .map(|s| (s.r1_target_m.x, rho(&s.r1_target_m)))
+        };
+        p = p.scatter(
+            "paper gains: where the chaser stops (both k2)",
+            [end(c), end(z)].into_iter().flatten(),
+        );
+        p = p.scatter("r_d (hold point, 2 m out)", [(2.0, 0.0)]);
         wing(p)
     };
     rep.heading("Path and corridor (meridian plane of the target frame)");
@@ -1048,8 +1062,12 @@ fn build_report(r: &Results, claims: &[crate::report::Claim], wall_s: f64) -> cr
         .x_label("x, target docking axis (m)")
         .y_label("ρ = √(y² + z²), target frame (m)")
         .x_range(0.0, 13.0)
-        .y_range(0.0, 20.0)
-        .line_styled("corridor wall", corridor_curve(shape, 13.0, 20.0), gray)
+        .y_range(0.0, 32.0)
+        .line_styled(
+            "corridor wall (inside is below it)",
+            corridor_curve(shape, 13.0, 40.0),
+            gray,
+        )
         .outcomes(pts, &CATEGORIES);
     rep.figure(
         "campaign",
@@ -1183,4 +1201,3 @@ fn build_report(r: &Results, claims: &[crate::report::Claim], wall_s: f64) -> cr
     ));
     rep
 }
-
