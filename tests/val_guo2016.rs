@@ -230,9 +230,59 @@ fn val_guo2016_reaching_variant_converges_and_leaves_corridor() {
 }
 
 #[test]
-fn val_guo2016_campaign() {
-    // The campaign of the report (50 seeded starts, 15 s each) and a 6-start campaign with the
-    // same seed, whose starts are the first 6 of the big one: identical numbers (determinism).
+fn val_guo2016_reproduce_report_and_campaign() {
+    // Everything `rpod reproduce guo2016` computes, written to a temporary directory: the
+    // claims.json it writes says what the other tests of this file assert (4 of 8 held).
+    let results = rep::compute().unwrap();
+    let dir = std::env::temp_dir().join(format!("rpod-val-guo2016-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let claims = rep::write(&dir, &results, 0.0).unwrap();
+    let text = std::fs::read_to_string(dir.join("claims.json")).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let held: Vec<(String, bool)> = json
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| {
+            (
+                c["id"].as_str().unwrap().to_string(),
+                c["held"].as_bool().unwrap(),
+            )
+        })
+        .collect();
+    let want = [
+        ("guo2016-corridor-held", true),
+        ("guo2016-errors-converge", false),
+        ("guo2016-no-collision", true),
+        ("guo2016-k2-0-leaves-corridor", false),
+        ("guo2016-k2-changes-path", false),
+        ("guo2016-reaching-converges", true),
+        ("guo2016-reaching-corridor-held", false),
+        ("guo2016-campaign-corridor-keeps-wings-clear", true),
+    ];
+    assert_eq!(held.len(), want.len());
+    for ((id, h), (wid, wh)) in held.iter().zip(want) {
+        assert_eq!((id.as_str(), *h), (wid, wh));
+    }
+    assert_eq!(claims.len(), want.len());
+    for f in [
+        "REPORT.md",
+        "path_corridor.png",
+        "attitude_error.png",
+        "rate_error.png",
+        "torque.png",
+        "position.png",
+        "velocity.png",
+        "force.png",
+        "campaign.png",
+    ] {
+        let m = std::fs::metadata(dir.join(f)).unwrap();
+        assert!(m.len() > 1000, "{f}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+
+    // The campaign (50 seeded starts, 15 s each) and a 6-start campaign with the same seed,
+    // whose starts are the first 6 of the big one: identical numbers (determinism).
     // Every start lies inside the corridor (closed-form h); the law's own inside flag agrees
     // with the monitor's guarantee; the chaser–wing distance is never below the monitor's
     // full-geometry minimum (a lower bound over all part pairs).

@@ -735,11 +735,7 @@ fn time_figure(
 pub fn run(out: &Path) -> Result<(), String> {
     let t0 = std::time::Instant::now();
     let r = compute()?;
-    let claims = claims(&r);
-    let report = build_report(&r, &claims, t0.elapsed().as_secs_f64());
-    report
-        .write(out)
-        .map_err(|e| format!("cannot write the guo2016 report: {e}"))?;
+    let claims = write(out, &r, t0.elapsed().as_secs_f64())?;
     let held = claims.iter().filter(|c| c.held).count();
     println!(
         "guo2016: {held} of {} claims held; wrote REPORT.md, claims.json and plots ({:.1} s)",
@@ -747,6 +743,16 @@ pub fn run(out: &Path) -> Result<(), String> {
         t0.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// Writes REPORT.md, the PNG plots and claims.json for computed results into `out`;
+/// `wall_s` is the computing time quoted in the report. Returns the claims.
+pub fn write(out: &Path, r: &Results, wall_s: f64) -> Result<Vec<crate::report::Claim>, String> {
+    let claims = claims(r);
+    build_report(r, &claims, wall_s)
+        .write(out)
+        .map_err(|e| format!("cannot write the guo2016 report: {e}"))?;
+    Ok(claims)
 }
 
 fn build_report(
