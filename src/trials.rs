@@ -51,6 +51,9 @@ pub enum Parameter {
     Grid {
         /// Scene field path (as for `--set`).
         path: String,
+        /// Axis label with unit for plots (default: the path).
+        #[serde(default)]
+        label: Option<String>,
         /// Values, in the field's unit.
         values: Vec<f64>,
     },
@@ -58,6 +61,9 @@ pub enum Parameter {
     Uniform {
         /// Scene field path.
         path: String,
+        /// Axis label with unit for plots (default: the path).
+        #[serde(default)]
+        label: Option<String>,
         /// Lower bound.
         min: f64,
         /// Upper bound.
@@ -67,6 +73,9 @@ pub enum Parameter {
     Normal {
         /// Scene field path.
         path: String,
+        /// Axis label with unit for plots (default: the path).
+        #[serde(default)]
+        label: Option<String>,
         /// Mean.
         mean: f64,
         /// Standard deviation.
@@ -75,6 +84,14 @@ pub enum Parameter {
 }
 
 impl Parameter {
+    /// The plot label.
+    pub fn label(&self) -> &str {
+        match self {
+            Parameter::Grid { label, path, .. }
+            | Parameter::Uniform { label, path, .. }
+            | Parameter::Normal { label, path, .. } => label.as_deref().unwrap_or(path),
+        }
+    }
     /// The field path.
     pub fn path(&self) -> &str {
         match self {
@@ -596,7 +613,7 @@ pub fn write_summary(dir: &Path, c: &Campaign) -> Result<(), String> {
 /// Outcome over the two leading parameters (`capture_envelope.png` and `.svg`); with a
 /// single parameter the vertical axis is the trial index.
 fn envelope_plot(dir: &Path, c: &Campaign, rows: &[Row]) -> Result<(), String> {
-    let paths: Vec<&str> = c.spec.parameters.iter().map(|p| p.path()).collect();
+    let paths: Vec<&str> = c.spec.parameters.iter().map(|p| p.label()).collect();
     let mut cats: Vec<String> = rows.iter().map(|r| r.2.clone()).collect();
     cats.sort();
     cats.dedup();

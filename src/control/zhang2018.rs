@@ -23,6 +23,9 @@
 //!   [`classify_state`].
 //! * Avoidance during reconfiguration → [`AvoidanceController`], [`PlannedManeuver`],
 //!   [`simulate_reconfiguration`], [`collision_course_plan`].
+//! * How a scene asks for the law → [`SceneSpec`] (fixed thrust, planned maneuver in `rot`,
+//!   avoidance on/off, l, margin); the ECS wiring (floating origin at the formation centre,
+//!   capture guarantee) is `sim::laws::zhang2018`.
 //!
 //! # Corrections of the printed text (typos and inconsistencies)
 //! * ∂D parametrisation: printed Y_e(t̃) = s2 + l **cos** s5; corrected to s2 + l sin s5
@@ -1373,10 +1376,105 @@ mod tests {
     }
 }
 
-/// How a scene asks for this law (extended by the simulation wiring of this paper).
+/// One segment of a planned maneuver as written in a scene: thrust on from `t_start_s` to
+/// `t_end_s` in the direction `dir_deg` (angle from +X of the rotating frame `rot`, towards +Y).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanSegmentSpec {
+    /// Start time, s.
+    pub t_start_s: f64,
+    /// End time (exclusive), s.
+    pub t_end_s: f64,
+    /// Thrust direction in `rot`, deg.
+    pub dir_deg: f64,
+}
+
+/// How a scene asks for this law: one entry per spacecraft that flies a planned maneuver with a
+/// thrust of fixed magnitude and, if `avoid`, switches to the barrier-based evasive direction
+/// ([`AvoidanceController`]) against every other body of the scene. Needs the `SunEarthL2`
+/// environment. The first zhang2018 controller of a scene registers the capture guarantee
+/// `capture.A.B` (centre-of-mass separation ≥ l, margin in m) for every body pair.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneSpec {
     /// The body this law flies.
     pub body: String,
+    /// Thrust magnitude F, N (fixed; the paper gives none, [`Zhang2018Params::paper`] uses 1 N).
+    pub thrust_n: f64,
+    /// Planned maneuver (thrust off outside the segments); directions in `rot`.
+    #[serde(default)]
+    pub plan: Vec<PlanSegmentSpec>,
+    /// Fly the avoidance law (the body is an evader against every other body).
+    #[serde(default)]
+    pub avoid: bool,
+    /// Capture (critical) distance l, m.
+    pub capture_radius_m: f64,
+    /// Avoidance margin: the law engages when the barrier function (miss − l) falls below it, m.
+    #[serde(default = "default_margin_m")]
+    pub avoidance_margin_m: f64,
+}
+
+fn default_margin_m() -> f64 {
+    1000.0
+}
+
+impl SceneSpec {
+    /// The plan as a [`PlannedManeuver`] (directions in rad).
+    pub fn planned_maneuver(&self) -> PlannedManeuver {
+        PlannedManeuver {
+            segments: self
+                .plan
+                .iter()
+                .map(|s| ThrustSegment {
+                    t_start_s: s.t_start_s,
+                    t_end_s: s.t_end_s,
+                    dir_rad: s.dir_deg.to_radians(),
+                })
+                .collect(),
+        }
+    }
+
+    /// Checks the numbers; on failure returns `(field, message)` (field relative to the spec).
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let pos = |f: &str, v: f64, unit: &str| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err((
+                    f.to_string(),
+                    format!("must be a positive number of {unit}, got {v}"),
+                ))
+            }
+        };
+        pos("thrust_n", self.thrust_n, "newtons")?;
+        pos("capture_radius_m", self.capture_radius_m, "metres")?;
+        if !(self.avoidance_margin_m.is_finite() && self.avoidance_margin_m >= 0.0) {
+            return Err((
+                "avoidance_margin_m".into(),
+                format!("must be ≥ 0 m, got {}", self.avoidance_margin_m),
+            ));
+        }
+        let mut last_end = f64::NEG_INFINITY;
+        for (k, seg) in self.plan.iter().enumerate() {
+            let ok = seg.t_start_s.is_finite()
+                && seg.t_end_s.is_finite()
+                && seg.dir_deg.is_finite()
+                && seg.t_start_s >= 0.0
+                && seg.t_end_s > seg.t_start_s;
+            if !ok {
+                return Err((
+                    format!("plan.{k}"),
+                    "a segment needs finite numbers with 0 ≤ t_start_s < t_end_s".into(),
+                ));
+            }
+            if seg.t_start_s < last_end {
+                return Err((
+                    format!("plan.{k}.t_start_s"),
+                    "segments must be in time order and must not overlap".into(),
+                ));
+            }
+            last_end = seg.t_end_s;
+        }
+        Ok(())
+    }
 }

@@ -32,13 +32,21 @@
 //!   1 au = 1.495 978 707·10¹¹ m (IAU 2012), and the primaries sit at X_S = −A·μ2/(μ1+μ2),
 //!   X_B = +A·μ1/(μ1+μ2). The eccentricity e = 0.01670862 is not used (circular model).
 //!
+//! # Scenes (floating origin)
+//! [`L2EnvSpec`] is the `SunEarthL2` environment of a scene and [`L2Centre`] its formation
+//! centre: the world frame of such a scene is non-rotating (the `rot` axes at t = 0), with its
+//! origin on the centre's f64 trajectory; [`L2Centre::differential_accel_world_m_s2`] is the
+//! differential Sun + EMB gravity, and [`L2Centre::world_to_rot`] / [`L2Centre::rot_to_world`]
+//! convert body states for the controllers. In `rot` the primaries are fixed, so the inertial
+//! gravity of the Sun and the EMB moving on their circles is the `rot` gravity rotated by n t.
+//!
 //! # Propagator
 //! Classic fixed-step RK4 ([`rk4_step`]) with the thrust acceleration held constant over the
 //! step (zero-order hold, as a sampled controller applies it). Local error O((n·dt)⁵) with
 //! n ≈ 2·10⁻⁷ rad/s: a step of 600 s gives n·dt ≈ 1.2·10⁻⁴; the closed-loop formation runs use
 //! 10 s. Every call is deterministic.
 
-use nalgebra::{Matrix2, Vector2, Vector4};
+use nalgebra::{Matrix2, Vector2, Vector3, Vector4};
 
 /// Planar state `[X_m, Y_m, Vx_m_s, Vy_m_s]` in the rotating frame `rot` (or `l2c`).
 pub type L2State = Vector4<f64>;
@@ -236,6 +244,222 @@ pub fn propagate(
     x
 }
 
+/// Rotation of a planar vector by `angle_rad` about +Z.
+fn rot2(v: &Vector2<f64>, angle_rad: f64) -> Vector2<f64> {
+    let (s, c) = angle_rad.sin_cos();
+    Vector2::new(c * v[0] - s * v[1], s * v[0] + c * v[1])
+}
+
+/// Rotation of a 3-vector by `angle_rad` about +Z.
+fn rot3(v: &Vector3<f64>, angle_rad: f64) -> Vector3<f64> {
+    let xy = rot2(&Vector2::new(v[0], v[1]), angle_rad);
+    Vector3::new(xy[0], xy[1], v[2])
+}
+
+impl L2Params {
+    /// Gravity of both primaries (no centrifugal term) at `pos_rot_m`, a 3-vector in `rot` (the
+    /// primaries lie in the plane Z = 0), m/s².
+    pub fn gravity_rot_m_s2(&self, pos_rot_m: &Vector3<f64>) -> Vector3<f64> {
+        let s = self.sun_pos_rot_m();
+        let b = self.emb_pos_rot_m();
+        let d1 = pos_rot_m - Vector3::new(s[0], s[1], 0.0);
+        let d2 = pos_rot_m - Vector3::new(b[0], b[1], 0.0);
+        let r1 = d1.norm();
+        let r2 = d2.norm();
+        -d1 * (self.mu_sun_m3_s2 / (r1 * r1 * r1)) - d2 * (self.mu_emb_m3_s2 / (r2 * r2 * r2))
+    }
+}
+
+/// The `SunEarthL2` environment of a scene (Zhang et al. 2018).
+///
+/// # World frame of such a scene
+/// Non-rotating; its axes are those of the Sun–EMB rotating frame `rot` at t = 0 (+X from the
+/// Sun towards the EMB, +Z along the orbital angular momentum); its origin rides on the
+/// *formation centre*, a thrust-free point whose initial state is given here in the L2-centred
+/// rotating frame `l2c` and which is propagated in f64 under the Sun's and the EMB's gravity
+/// (the primaries on their circles: the circular restricted three-body problem of this module).
+/// Every body receives the differential gravity a(r_c + r) − a(r_c); world coordinates stay the
+/// size of the formation (km to a few thousand km) while the formation is 1.5·10¹¹ m from the
+/// barycentre. Body initial states (`frame: World`) are the position relative to the centre and
+/// the *inertial* velocity relative to the centre, in these axes; a velocity seen in the rotating
+/// frame converts as v_world = v_rot + n ẑ × r (at t = 0, [`L2Centre::rel_rot_to_world`]).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct L2EnvSpec {
+    /// Formation centre's initial position in `l2c` (X, Y), m.
+    pub centre_pos_l2c_m: [f64; 2],
+    /// Formation centre's initial velocity relative to the rotating frame, `l2c` axes, m/s.
+    pub centre_vel_l2c_m_s: [f64; 2],
+    /// Model constants (default: Table 1, [`L2Params::paper`]).
+    #[serde(default)]
+    pub model: L2Params,
+}
+
+impl L2EnvSpec {
+    /// Checks the numbers; on failure returns `(field, message)` (field relative to the spec).
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        for (f, v) in [
+            ("centre_pos_l2c_m", self.centre_pos_l2c_m),
+            ("centre_vel_l2c_m_s", self.centre_vel_l2c_m_s),
+        ] {
+            if v.iter().any(|x| !x.is_finite()) {
+                return Err((f.into(), "must be finite".into()));
+            }
+        }
+        for (f, v, unit) in [
+            ("model.mu_sun_m3_s2", self.model.mu_sun_m3_s2, "m³/s²"),
+            ("model.mu_emb_m3_s2", self.model.mu_emb_m3_s2, "m³/s²"),
+            (
+                "model.sun_emb_distance_m",
+                self.model.sun_emb_distance_m,
+                "metres",
+            ),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err((
+                    f.into(),
+                    format!("must be a positive number of {unit}, got {v}"),
+                ));
+            }
+        }
+        // The centre must stay clear of both primaries (the model's singularities): at least
+        // 1 % of the EMB–L2 distance from the EMB, and on the far side of the Sun's surface.
+        let c = self.model.l2c_to_rot(&Vector4::new(
+            self.centre_pos_l2c_m[0],
+            self.centre_pos_l2c_m[1],
+            0.0,
+            0.0,
+        ));
+        let pos = Vector2::new(c[0], c[1]);
+        let d_emb = (pos - self.model.emb_pos_rot_m()).norm();
+        let min_emb = 0.01 * (self.model.l2_x_rot_m() - self.model.emb_pos_rot_m()[0]);
+        if d_emb < min_emb || (pos - self.model.sun_pos_rot_m()).norm() < 7.0e8 {
+            return Err((
+                "centre_pos_l2c_m".into(),
+                format!(
+                    "the formation centre is inside a primary's singular region ({d_emb:.3e} m from the EMB)"
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The formation centre (the floating origin of a `SunEarthL2` scene) and the conversions
+/// between the non-rotating world frame of that scene and the rotating frame `rot`.
+///
+/// World axes coincide with `rot` at t = 0; at time t, v_world = R(n t) v_rot for directions,
+/// relative positions ρ_world = R(n t) ρ_rot and relative velocities
+/// ρ̇_world = R(n t)(ρ̇_rot + n ẑ × ρ_rot). The centre is propagated in `rot` with [`rk4_step`]
+/// (thrust-free) on the scene's fixed step, so every copy advanced by the same steps holds
+/// bit-identical states.
+#[derive(Debug, Clone)]
+pub struct L2Centre {
+    /// Model constants.
+    pub params: L2Params,
+    /// Centre state in `rot` at the current time.
+    pub state_rot: L2State,
+    /// Steps taken.
+    pub steps: u64,
+    /// Step, s.
+    pub dt_s: f64,
+}
+
+impl L2Centre {
+    /// The centre of a scene's environment at t = 0, stepping by `dt_s`.
+    pub fn new(spec: &L2EnvSpec, dt_s: f64) -> Self {
+        let s = spec.model.l2c_to_rot(&Vector4::new(
+            spec.centre_pos_l2c_m[0],
+            spec.centre_pos_l2c_m[1],
+            spec.centre_vel_l2c_m_s[0],
+            spec.centre_vel_l2c_m_s[1],
+        ));
+        Self {
+            params: spec.model.clone(),
+            state_rot: s,
+            steps: 0,
+            dt_s,
+        }
+    }
+
+    /// Current time, s (steps · dt, never accumulated).
+    pub fn t_s(&self) -> f64 {
+        self.steps as f64 * self.dt_s
+    }
+
+    /// Angle of the rotating frame relative to the world axes, n t, rad.
+    pub fn frame_angle_rad(&self) -> f64 {
+        self.params.mean_motion_rad_s() * self.t_s()
+    }
+
+    /// Advances the centre by one step (RK4, thrust-free; the step is `dt_s` split into
+    /// sub-steps of at most 600 s, well inside RK4's accuracy here, see the module doc).
+    pub fn advance(&mut self) {
+        let sub = (self.dt_s / 600.0).ceil().max(1.0) as usize;
+        let h = self.dt_s / sub as f64;
+        for _ in 0..sub {
+            self.state_rot = rk4_step(&self.params, &self.state_rot, &Vector2::zeros(), h);
+        }
+        self.steps += 1;
+    }
+
+    /// A world-frame direction of a `rot` direction given by its angle from +X, at the current
+    /// time (unit vector in the plane Z = 0).
+    pub fn rot_dir_to_world(&self, angle_rad: f64) -> Vector3<f64> {
+        let a = angle_rad + self.frame_angle_rad();
+        Vector3::new(a.cos(), a.sin(), 0.0)
+    }
+
+    /// Differential gravity a(r_c + ρ) − a(r_c) at world position `rel_world_m` (relative to
+    /// the centre), world frame, m/s². Evaluated in `rot` (the primaries are fixed there) and
+    /// rotated to the world axes; the difference of the two accelerations (each ~6·10⁻³ m/s²)
+    /// loses ~10⁻¹⁸ m/s² to round-off against differential terms of ~10⁻⁸ m/s² at 1000 km.
+    pub fn differential_accel_world_m_s2(&self, rel_world_m: &Vector3<f64>) -> Vector3<f64> {
+        let th = self.frame_angle_rad();
+        let c = Vector3::new(self.state_rot[0], self.state_rot[1], 0.0);
+        let rho_rot = rot3(rel_world_m, -th);
+        let d = self.params.gravity_rot_m_s2(&(c + rho_rot)) - self.params.gravity_rot_m_s2(&c);
+        rot3(&d, th)
+    }
+
+    /// A body's planar state in `rot` from its world-frame state relative to the centre.
+    pub fn world_to_rot(
+        &self,
+        rel_pos_world_m: &Vector3<f64>,
+        rel_vel_world_m_s: &Vector3<f64>,
+    ) -> L2State {
+        let th = self.frame_angle_rad();
+        let n = self.params.mean_motion_rad_s();
+        let rho = rot3(rel_pos_world_m, -th);
+        let rho_dot = rot3(rel_vel_world_m_s, -th) - Vector3::new(-n * rho[1], n * rho[0], 0.0);
+        self.state_rot + Vector4::new(rho[0], rho[1], rho_dot[0], rho_dot[1])
+    }
+
+    /// Inverse of [`L2Centre::world_to_rot`] for a planar state: (position, velocity) relative
+    /// to the centre in the world frame.
+    pub fn rot_to_world(&self, state_rot: &L2State) -> (Vector3<f64>, Vector3<f64>) {
+        let rel = state_rot - self.state_rot;
+        Self::rel_rot_to_world_at(&self.params, &rel, self.frame_angle_rad())
+    }
+
+    /// World-frame (position, velocity) of a state relative to the centre given in rotating
+    /// axes (`[ΔX, ΔY, ΔVx, ΔVy]`, velocity as seen in `rot`), at t = 0.
+    pub fn rel_rot_to_world(params: &L2Params, rel_rot: &L2State) -> (Vector3<f64>, Vector3<f64>) {
+        Self::rel_rot_to_world_at(params, rel_rot, 0.0)
+    }
+
+    fn rel_rot_to_world_at(
+        params: &L2Params,
+        rel: &L2State,
+        th: f64,
+    ) -> (Vector3<f64>, Vector3<f64>) {
+        let n = params.mean_motion_rad_s();
+        let rho = Vector3::new(rel[0], rel[1], 0.0);
+        let v = Vector3::new(rel[2] - n * rel[1], rel[3] + n * rel[0], 0.0);
+        (rot3(&rho, th), rot3(&v, th))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     //! Physics checked: the Jacobi integral of the CR3BP, the collinear equilibrium L2, and
@@ -372,5 +596,90 @@ mod tests {
             let scale = if j < 2 { scale } else { dv.norm() };
             assert!((fd - an).norm() < 1e-4 * scale, "col {j}: fd {fd} an {an}");
         }
+    }
+
+    #[test]
+    fn invariant_l2_world_rot_round_trip() {
+        // world_to_rot ∘ rot_to_world is the identity at any time (pure rotations and the
+        // ω × ρ term); checked after 3 days of centre motion (frame angle n t ≈ 0.05 rad).
+        // Round-off: the rot state is ~1.5e11 m (ulp 3e-5 m).
+        let spec = L2EnvSpec {
+            centre_pos_l2c_m: [87_028_563.409, -24_004_062.937],
+            centre_vel_l2c_m_s: [8.640_877, 121.265_276],
+            model: L2Params::paper(),
+        };
+        let mut c = L2Centre::new(&spec, 600.0);
+        for _ in 0..432 {
+            c.advance();
+        }
+        let rho = Vector3::new(-55.0, -735_449.692, 0.0);
+        let rho_dot = Vector3::new(0.5, 0.34, 0.0);
+        let s = c.world_to_rot(&rho, &rho_dot);
+        let (r2, v2) = c.rot_to_world(&s);
+        assert!((r2 - rho).norm() < 1e-4, "{}", (r2 - rho).norm());
+        assert!((v2 - rho_dot).norm() < 1e-10, "{}", (v2 - rho_dot).norm());
+        // At t = 0 the world axes are the rot axes and rel_rot_to_world adds n ẑ × ρ.
+        let n = spec.model.mean_motion_rad_s();
+        let (r0, v0) =
+            L2Centre::rel_rot_to_world(&spec.model, &Vector4::new(0.0, -20_000.0, 0.0, 0.0));
+        assert_eq!(r0, Vector3::new(0.0, -20_000.0, 0.0));
+        assert!((v0 - Vector3::new(n * 20_000.0, 0.0, 0.0)).norm() < 1e-18);
+    }
+
+    #[test]
+    fn val_l2_differential_gravity_is_the_gravity_gradient() {
+        // Reference: the gravity-gradient tensor of `drift_jacobian` (checked against finite
+        // differences above) less the centrifugal n²I: for |ρ| = 10 km the differential
+        // acceleration is G ρ up to the second-order term ~ (3/2)(μ/r⁴)|ρ|² ≈ 1e-5 relative
+        // (r ≈ 1.5e9 m from the EMB). At t > 0 the result is G ρ_rot rotated by n t.
+        let spec = L2EnvSpec {
+            centre_pos_l2c_m: [87_028_563.409, -24_004_062.937],
+            centre_vel_l2c_m_s: [8.640_877, 121.265_276],
+            model: L2Params::paper(),
+        };
+        let p = &spec.model;
+        let n = p.mean_motion_rad_s();
+        let mut c = L2Centre::new(&spec, 3600.0);
+        for steps in [0usize, 240] {
+            for _ in 0..steps {
+                c.advance();
+            }
+            let th = c.frame_angle_rad();
+            let (g, _) = p.drift_jacobian(&c.state_rot);
+            let g = g - Matrix2::identity() * (n * n);
+            for rho_rot in [Vector2::new(1.0e4, 0.0), Vector2::new(-3.0e3, 9.0e3)] {
+                let rho_w = rot3(&Vector3::new(rho_rot[0], rho_rot[1], 0.0), th);
+                let a = c.differential_accel_world_m_s2(&rho_w);
+                let expect_rot = g * rho_rot;
+                let expect = rot3(&Vector3::new(expect_rot[0], expect_rot[1], 0.0), th);
+                assert!(
+                    (a - expect).norm() < 1e-4 * expect.norm(),
+                    "t {} s: {a} vs {expect}",
+                    c.t_s()
+                );
+            }
+            // Out of plane: both primaries pull towards z = 0, a_z = −(μ1/r1³ + μ2/r2³) z.
+            let a = c.differential_accel_world_m_s2(&Vector3::new(0.0, 0.0, 1.0e4));
+            let pos = Vector2::new(c.state_rot[0], c.state_rot[1]);
+            let r1 = (pos - p.sun_pos_rot_m()).norm();
+            let r2 = (pos - p.emb_pos_rot_m()).norm();
+            let az = -(p.mu_sun_m3_s2 / r1.powi(3) + p.mu_emb_m3_s2 / r2.powi(3)) * 1.0e4;
+            assert!((a[2] - az).abs() < 1e-4 * az.abs(), "{} vs {az}", a[2]);
+        }
+    }
+
+    #[test]
+    fn invariant_l2_env_spec_validation() {
+        let mut spec = L2EnvSpec {
+            centre_pos_l2c_m: [87_028_563.409, -24_004_062.937],
+            centre_vel_l2c_m_s: [8.640_877, 121.265_276],
+            model: L2Params::paper(),
+        };
+        assert!(spec.validate().is_ok());
+        spec.centre_vel_l2c_m_s[1] = f64::NAN;
+        assert_eq!(spec.validate().unwrap_err().0, "centre_vel_l2c_m_s");
+        spec.centre_vel_l2c_m_s[1] = 0.0;
+        spec.model.mu_emb_m3_s2 = -1.0;
+        assert_eq!(spec.validate().unwrap_err().0, "model.mu_emb_m3_s2");
     }
 }

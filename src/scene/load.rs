@@ -412,24 +412,10 @@ fn parse_value(lx: &mut Lexer) -> Result<Node, String> {
                 kind: NodeKind::Atom,
             })
         }
-        b'"' => {
+        q @ (b'"' | b'\'') => {
+            // A string or a char literal: skip to the closing quote, honouring escapes.
             lx.i += 1;
-            while lx.i < lx.b.len() && lx.b[lx.i] != b'"' {
-                if lx.b[lx.i] == b'\\' {
-                    lx.i += 1;
-                }
-                lx.i += 1;
-            }
-            lx.i += 1;
-            Ok(Node {
-                start,
-                end: lx.i.min(lx.b.len()),
-                kind: NodeKind::Atom,
-            })
-        }
-        b'\'' => {
-            lx.i += 1;
-            while lx.i < lx.b.len() && lx.b[lx.i] != b'\'' {
+            while lx.i < lx.b.len() && lx.b[lx.i] != q {
                 if lx.b[lx.i] == b'\\' {
                     lx.i += 1;
                 }

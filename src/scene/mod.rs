@@ -177,6 +177,9 @@ pub enum Environment {
     },
     /// Force-free space with no gravity at all (for mechanism tests).
     FreeSpace,
+    /// Near the Sun–Earth L2 point (Zhang et al. 2018): the world frame rides on a formation
+    /// centre under Sun + Earth–Moon gravity; see [`crate::orbit::l2::L2EnvSpec`].
+    SunEarthL2(crate::orbit::l2::L2EnvSpec),
 }
 
 /// The reference orbit's initial state.

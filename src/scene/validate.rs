@@ -75,6 +75,9 @@ pub fn validate(s: &Scene) -> Check {
             }
         },
         Environment::FreeSpace => {}
+        Environment::SunEarthL2(spec) => spec
+            .validate()
+            .map_err(|(f, m)| (format!("environment.0.{f}"), m))?,
     }
     if s.bodies.is_empty() {
         return fail("bodies", "a scene needs at least one body");

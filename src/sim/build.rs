@@ -141,6 +141,9 @@ impl Simulation {
                 Some((r, v))
             }
             Environment::FreeSpace => None,
+            Environment::SunEarthL2(spec) => {
+                super::laws::zhang2018::install_environment(&mut app, spec, dt)
+            }
         };
 
         let mut roster = Roster::default();
@@ -497,7 +500,11 @@ impl Simulation {
         serde_json::json!({
             "scene": self.scene.name,
             "scene_file": self.scene_file,
-            "frame": "world: inertial axes, origin on the reference orbit; positions are centres of mass",
+            "frame": match self.scene.environment {
+                Environment::Orbit { .. } => "world: Earth-inertial axes, origin on the reference orbit (the target's unforced orbit); positions are centres of mass",
+                Environment::FreeSpace => "world: inertial, no gravity; positions are centres of mass",
+                _ => "world: non-rotating, origin on the environment's reference trajectory (see the scene's environment); positions are centres of mass",
+            },
             "dt_s": self.scene.dt_s,
             "steps": steps,
             "simulated_s": self.t_s(),

@@ -405,6 +405,15 @@ fn docking_monitor(
                     new = if dock.magnet_on { Attracting } else { Free };
                     reason = "contact ended".into();
                 }
+            } else if matches!(old, Free | Attracting)
+                && dock.t_first_contact_s.is_some()
+                && g.axial_rate_m_s > spec.miss.rebound_speed_m_s
+            {
+                new = Rebound;
+                reason = format!(
+                    "deflected: after touching the slot the cone moves away at {:.4} m/s",
+                    g.axial_rate_m_s
+                );
             } else if old == Free && dock.magnet_on {
                 new = Attracting;
                 reason = format!("magnet on at gap {:.3} m", g.gap_m);
