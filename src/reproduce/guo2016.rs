@@ -1203,6 +1203,7 @@ fn build_report(
     rep.code(format!(
         "rpod reproduce guo2016 --out DIR      # this report ({wall_s:.1} s of wall time here)\n\
          rpod run scenes/guo2016_corridor.ron   # trajectory.csv with guo2016.* columns\n\
+         rpod run scenes/guo2016_corridor.ron --set controllers.0.0.reaching_gain_per_s=1.0  # the extra case (σ(0) as in the scene)\n\
          cargo test --release --test val_guo2016"
     ));
     rep
