@@ -1,8 +1,1210 @@
-//! `rpod reproduce guo2016` (to be written by the guo2016 integration).
+//! `rpod reproduce guo2016`: Guo, Song, Li (2016), Section 5, in the full simulation
+//! (f64 truth, rapier contacts, full-geometry monitor), and a campaign beyond the paper.
+//!
+//! Cases (scenes `scenes/guo2016_corridor.ron` and `scenes/guo2016_no_avoidance.ron`, bundled
+//! into the binary so the reproduction runs from any directory):
+//! - **paper, k2 = 0.02** and **paper, k2 = 0**: the paper's gains, 100 s;
+//! - **extra, not in the paper**: the same with a linear reaching term `k_r = 1/s`
+//!   (`reaching_gain_per_s`), σ(0) = 0, 20 s — what the law does when its errors do converge;
+//! - **campaign, beyond the paper**: [`CAMPAIGN_RUNS`] seeded start positions and velocities
+//!   inside the corridor, reaching variant, k2 = 0.02, [`CAMPAIGN_DURATION_S`] each: how often
+//!   the point-mass corridor held while the chaser's full geometry came within
+//!   [`PANEL_CLEARANCE_M`] of a target solar-wing part (panel or boom).
+//!
+//! [`compute`] runs everything and returns the numbers; [`run`] also writes `REPORT.md`, the
+//! plots and `claims.json`. Tests use [`run_case`] with shortened horizons.
 
+use crate::control::ControllerSpec;
+use crate::control::guo2016::SceneSpec;
+use crate::geometry::cissoid::Cissoid;
+use crate::scene::{AttitudeSpec, LoadedScene, PartRole, load_scene_str};
+use crate::sim::laws::guo2016::Guo2016Controllers;
+use crate::sim::monitor::shape_distance;
+use crate::sim::{BodyState, Part, Roster, SimBody, Simulation};
+use bevy_rapier3d::rapier::prelude as rp;
+use nalgebra::{Isometry3, Vector3};
 use std::path::Path;
 
+/// The k2 = 0.02 scene text.
+pub const CORRIDOR_SCENE: &str = include_str!("../../scenes/guo2016_corridor.ron");
+/// The k2 = 0 scene text.
+pub const NO_AVOIDANCE_SCENE: &str = include_str!("../../scenes/guo2016_no_avoidance.ron");
+/// Horizon of the paper-gain cases, s (the paper's is in its lost figures).
+pub const PAPER_DURATION_S: f64 = 100.0;
+/// Horizon of the reaching-variant cases, s.
+pub const REACHING_DURATION_S: f64 = 20.0;
+/// Linear reaching gain of the extra cases, 1/s (not in the paper).
+pub const REACHING_GAIN_PER_S: f64 = 1.0;
+/// Campaign size.
+pub const CAMPAIGN_RUNS: usize = 50;
+/// Campaign horizon per run, s.
+pub const CAMPAIGN_DURATION_S: f64 = 15.0;
+/// Clearance to a target solar-wing part (panel or boom) that the campaign counts as "close", m.
+pub const PANEL_CLEARANCE_M: f64 = 0.5;
+/// Largest initial attitude error of a campaign start, deg.
+pub const CAMPAIGN_MAX_TILT_DEG: f64 = 40.0;
+/// Campaign seed.
+pub const CAMPAIGN_SEED: u64 = 2016;
+
+/// Loads one of the bundled scenes by its file name.
+pub fn load_bundled(file: &str) -> Result<LoadedScene, String> {
+    let text = match file {
+        "scenes/guo2016_corridor.ron" => CORRIDOR_SCENE,
+        "scenes/guo2016_no_avoidance.ron" => NO_AVOIDANCE_SCENE,
+        other => return Err(format!("no bundled scene {other}")),
+    };
+    load_scene_str(text, file, &[]).map_err(|e| e.to_string())
+}
+
+/// The scene's (first) Guo2016 controller entry, for changes made before a run.
+pub fn spec_mut(loaded: &mut LoadedScene) -> Option<&mut SceneSpec> {
+    loaded.scene.controllers.iter_mut().find_map(|c| match c {
+        ControllerSpec::Guo2016(s) => Some(s),
+        _ => None,
+    })
+}
+
+/// One recorded sample of a run.
+#[derive(Debug, Clone, Copy)]
+pub struct Sample {
+    /// Time, s.
+    pub t_s: f64,
+    /// Attitude error σ_e (MRP).
+    pub sigma_e: Vector3<f64>,
+    /// Angular-velocity error ω_e, chaser body axes, rad/s.
+    pub omega_e_rad_s: Vector3<f64>,
+    /// Commanded torque, chaser body axes, N·m.
+    pub torque_body_nm: Vector3<f64>,
+    /// Commanded force, chaser body axes, N.
+    pub force_body_n: Vector3<f64>,
+    /// Chaser centre of mass in target body axes, m.
+    pub r1_target_m: Vector3<f64>,
+    /// Its rate seen in the target frame, target axes, m/s.
+    pub v1_target_m_s: Vector3<f64>,
+    /// |r_e|, m.
+    pub r_e_m: f64,
+    /// Corridor function h, m².
+    pub h_m2: f64,
+    /// Signed distance to the corridor wall, m.
+    pub corridor_margin_m: f64,
+    /// Full-geometry minimum distance chaser–target, m.
+    pub min_distance_m: f64,
+}
+
+/// What one run measured.
+#[derive(Debug, Clone)]
+pub struct CaseRun {
+    /// Label.
+    pub label: String,
+    /// Samples (every step for the first 2 s, then every 10 steps, and the last step).
+    pub samples: Vec<Sample>,
+    /// h > 0 (strictly inside) at every control step.
+    pub corridor_held: bool,
+    /// First control step found outside, s.
+    pub first_exit_s: Option<f64>,
+    /// Chaser centre of mass at that step, target axes, m.
+    pub first_exit_r1_m: Option<Vector3<f64>>,
+    /// Smallest h over the run, m².
+    pub min_h_m2: f64,
+    /// Smallest signed distance to the corridor wall (monitor guarantee), m.
+    pub min_corridor_margin_m: f64,
+    /// Final |r_e|, m.
+    pub final_r_e_m: f64,
+    /// Final |σ_e|.
+    pub final_sigma_e: f64,
+    /// Largest |F| commanded, N.
+    pub max_force_n: f64,
+    /// Largest distance of the chaser centre of mass from the target centre, m.
+    pub max_range_m: f64,
+    /// Largest |τ| commanded, N·m.
+    pub max_torque_nm: f64,
+    /// Smallest full-geometry distance chaser–target over the run, m.
+    pub min_distance_m: f64,
+    /// The parts of that closest approach (`body/part`).
+    pub min_distance_parts: (String, String),
+    /// When, s.
+    pub min_distance_t_s: f64,
+    /// Smallest distance from any chaser part to a target solar-wing part (panel or boom), m.
+    pub min_wing_distance_m: f64,
+    /// Which target wing part, and when (s).
+    pub min_wing_part: String,
+    /// When, s.
+    pub min_wing_t_s: f64,
+    /// First contact of any two parts, s.
+    pub first_contact_s: Option<f64>,
+    /// First collision (contact between non-docking parts), s.
+    pub first_collision_s: Option<f64>,
+    /// Wall-clock time of the run, s.
+    pub wall_s: f64,
+}
+
+/// World poses and shapes of the colliders of one body.
+fn body_colliders(
+    sim: &mut Simulation,
+    body: usize,
+    filter: impl Fn(PartRole) -> bool,
+) -> Vec<(String, Isometry3<f64>, rp::SharedShape)> {
+    let w = sim.app.world_mut();
+    let roster = w.resource::<Roster>().clone();
+    let e = roster.bodies[body];
+    let b = w.get::<SimBody>(e).expect("body").clone();
+    let s = w.get::<BodyState>(e).expect("state").clone();
+    let pose = s.body_pose(&b.com_body_m);
+    roster.parts[body]
+        .iter()
+        .filter_map(|pe| {
+            let p = w.get::<Part>(*pe).expect("part");
+            filter(p.role).then(|| (p.name.clone(), pose * p.pose_body, p.shape.clone()))
+        })
+        .collect()
+}
+
+/// Smallest distance between any chaser part and any target solar-wing part, with the wing part.
+fn wing_distance(sim: &mut Simulation, chaser: usize, target: usize) -> (f64, String) {
+    let c = body_colliders(sim, chaser, |_| true);
+    let t = body_colliders(sim, target, |r| {
+        matches!(r, PartRole::Panel | PartRole::Boom)
+    });
+    let mut best = (f64::INFINITY, String::new());
+    for (_, pa, sa) in &c {
+        for (nb, pb, sb) in &t {
+            let d = shape_distance(pa, &**sa, pb, &**sb);
+            if d < best.0 {
+                best = (d, nb.clone());
+            }
+        }
+    }
+    best
+}
+
+/// Runs a loaded Guo 2016 scene for `duration_s` and measures it. `wing_every_steps`: how
+/// often the chaser–wing distance is computed (0 = never).
+pub fn run_case(
+    loaded: &LoadedScene,
+    label: &str,
+    duration_s: f64,
+    wing_every_steps: u64,
+) -> Result<CaseRun, String> {
+    let mut sim = Simulation::new(loaded).map_err(|e| e.to_string())?;
+    let steps = sim.steps_for(duration_s);
+    let (chaser, target) = {
+        let c = &sim.app.world().resource::<Guo2016Controllers>().list[0];
+        (c.chaser, c.target)
+    };
+    let mut run = CaseRun {
+        label: label.to_string(),
+        samples: Vec::new(),
+        corridor_held: true,
+        first_exit_s: None,
+        first_exit_r1_m: None,
+        min_h_m2: f64::INFINITY,
+        min_corridor_margin_m: f64::INFINITY,
+        final_r_e_m: f64::NAN,
+        final_sigma_e: f64::NAN,
+        max_force_n: 0.0,
+        max_range_m: 0.0,
+        max_torque_nm: 0.0,
+        min_distance_m: f64::INFINITY,
+        min_distance_parts: (String::new(), String::new()),
+        min_distance_t_s: 0.0,
+        min_wing_distance_m: f64::INFINITY,
+        min_wing_part: String::new(),
+        min_wing_t_s: 0.0,
+        first_contact_s: None,
+        first_collision_s: None,
+        wall_s: 0.0,
+    };
+    let dt = sim.scene.dt_s;
+    let dense = (2.0 / dt).round() as u64;
+    let t0 = std::time::Instant::now();
+    for k in 0..=steps {
+        if wing_every_steps > 0 && k % wing_every_steps == 0 {
+            let (d, part) = wing_distance(&mut sim, chaser, target);
+            if d < run.min_wing_distance_m {
+                run.min_wing_distance_m = d;
+                run.min_wing_part = part;
+                run.min_wing_t_s = sim.t_s();
+            }
+        }
+        if k == steps {
+            break;
+        }
+        sim.step(1);
+        // The control step just taken ran at t = (k) dt; read what it saw and commanded.
+        let w = sim.app.world();
+        let c = &w.resource::<Guo2016Controllers>().list[0];
+        let d = c.diagnostics.expect("the law ran");
+        let t = k as f64 * dt;
+        if !d.inside && run.first_exit_s.is_none() {
+            run.first_exit_s = Some(t);
+            run.first_exit_r1_m = Some(d.r1_target_m);
+            run.corridor_held = false;
+        }
+        run.min_h_m2 = run.min_h_m2.min(d.h_m2);
+        run.max_range_m = run.max_range_m.max(d.r1_target_m.norm());
+        run.max_force_n = run.max_force_n.max(c.command.force_body_n.norm());
+        run.max_torque_nm = run.max_torque_nm.max(c.command.torque_body_nm.norm());
+        let r_e = Vector3::new(d.x[3], d.x[4], d.x[5]).norm();
+        run.final_r_e_m = r_e;
+        run.final_sigma_e = Vector3::new(d.x[0], d.x[1], d.x[2]).norm();
+        if k < dense || k % 10 == 0 || k + 1 == steps {
+            let obs = c.observation.expect("observed");
+            let q_t = obs.q_target_body_to_world;
+            let r1 = d.r1_target_m;
+            let v1 = q_t.inverse() * obs.vel_rel_world_m_s - obs.rate_target_body_rad_s.cross(&r1);
+            let mon = w.resource::<crate::sim::MonitorState>();
+            run.samples.push(Sample {
+                t_s: t,
+                sigma_e: Vector3::new(d.x[0], d.x[1], d.x[2]),
+                omega_e_rad_s: d.omega_e_body_rad_s,
+                torque_body_nm: c.command.torque_body_nm,
+                force_body_n: c.command.force_body_n,
+                r1_target_m: r1,
+                v1_target_m_s: v1,
+                r_e_m: r_e,
+                h_m2: d.h_m2,
+                corridor_margin_m: c.corridor_margin_m,
+                min_distance_m: mon.pairs.first().map_or(f64::NAN, |p| p.distance_m),
+            });
+        }
+    }
+    run.wall_s = t0.elapsed().as_secs_f64();
+    let g = sim.guarantees();
+    if let Some(i) = g.list.iter().position(|x| x.name() == spec_name(loaded)) {
+        run.min_corridor_margin_m = g.status[i].worst_margin;
+    }
+    let mon = sim.monitor();
+    if let (Some(m), Some(p)) = (mon.min_per_pair.first(), mon.pairs.first()) {
+        run.min_distance_m = m.distance_m;
+        run.min_distance_parts = (
+            mon.part_name(p.a, m.part_a).to_string(),
+            mon.part_name(p.b, m.part_b).to_string(),
+        );
+        run.min_distance_t_s = m.t_s;
+    }
+    let cs = sim.contacts();
+    run.first_contact_s = cs.first_contact_s;
+    run.first_collision_s = cs.first_collision_s;
+    Ok(run)
+}
+
+fn spec_name(loaded: &LoadedScene) -> String {
+    loaded
+        .scene
+        .controllers
+        .iter()
+        .find_map(|c| match c {
+            ControllerSpec::Guo2016(s) => Some(s.corridor_guarantee.clone()),
+            _ => None,
+        })
+        .unwrap_or_default()
+}
+
+/// The bundled scene with the reaching variant: `k_r` = [`REACHING_GAIN_PER_S`], σ(0) = 0
+/// (chaser aligned with D0), at rest in attitude.
+pub fn reaching_variant(file: &str) -> Result<LoadedScene, String> {
+    let mut l = load_bundled(file)?;
+    spec_mut(&mut l)
+        .ok_or("no Guo2016 controller")?
+        .reaching_gain_per_s = REACHING_GAIN_PER_S;
+    set_chaser_aligned(&mut l);
+    Ok(l)
+}
+
+/// Sets the chaser attitude to D0 (the target frame turned by π about z; the bundled
+/// target starts at the identity attitude).
+fn set_chaser_aligned(l: &mut LoadedScene) {
+    if let Some(b) = l.scene.bodies.iter_mut().find(|b| b.name == "chaser") {
+        b.initial.attitude = AttitudeSpec::Quat {
+            w: 0.0,
+            x: 0.0,
+            y: 0.0,
+            z: 1.0,
+        };
+    }
+}
+
+/// A deterministic 64-bit LCG (Knuth's MMIX constants), uniform in [0, 1).
+#[derive(Debug, Clone)]
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    /// Next uniform number in [0, 1).
+    pub fn uniform(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// One campaign start: position and velocity in the target frame (= world axes).
+#[derive(Debug, Clone, Copy)]
+pub struct CampaignStart {
+    /// Chaser centre of mass, target axes, m.
+    pub r0_m: Vector3<f64>,
+    /// Chaser velocity, target axes, m/s.
+    pub v0_m_s: Vector3<f64>,
+    /// Chaser attitude relative to D0 (MRP): the initial attitude error.
+    pub sigma0: Vector3<f64>,
+}
+
+/// The campaign's starts: axial coordinate x uniform in [1.6, 12] m, radial distance
+/// `0.9·ρ(x)·√u` (uniform over the corridor's cross-section inside 90 % of its radius),
+/// azimuth uniform, velocity uniform in direction with speed uniform in [0, 0.5] m/s, attitude
+/// error about a uniformly random axis with angle uniform in [0, [`CAMPAIGN_MAX_TILT_DEG`]].
+pub fn campaign_starts(corridor: &Cissoid, n: usize, seed: u64) -> Vec<CampaignStart> {
+    let mut rng = Lcg(seed);
+    (0..n)
+        .map(|_| {
+            let x = 1.6 + (12.0 - 1.6) * rng.uniform();
+            let rho = 0.9 * corridor.radius_at_m(x).unwrap_or(0.0) * rng.uniform().sqrt();
+            let phi = std::f64::consts::TAU * rng.uniform();
+            let cz = 2.0 * rng.uniform() - 1.0;
+            let az = std::f64::consts::TAU * rng.uniform();
+            let sz = (1.0 - cz * cz).sqrt();
+            let speed = 0.5 * rng.uniform();
+            let cz2 = 2.0 * rng.uniform() - 1.0;
+            let az2 = std::f64::consts::TAU * rng.uniform();
+            let sz2 = (1.0 - cz2 * cz2).sqrt();
+            let angle = CAMPAIGN_MAX_TILT_DEG.to_radians() * rng.uniform();
+            CampaignStart {
+                r0_m: Vector3::new(x, rho * phi.cos(), rho * phi.sin()),
+                v0_m_s: Vector3::new(sz * az.cos(), sz * az.sin(), cz) * speed,
+                // MRP of a rotation by `angle` about the unit axis: tan(angle/4)·axis.
+                sigma0: Vector3::new(sz2 * az2.cos(), sz2 * az2.sin(), cz2) * (angle / 4.0).tan(),
+            }
+        })
+        .collect()
+}
+
+/// Outcome of one campaign start.
+#[derive(Debug, Clone)]
+pub struct CampaignRun {
+    /// The start.
+    pub start: CampaignStart,
+    /// `None` if the start itself was refused (chaser parts overlapping the target at t = 0),
+    /// with the reason.
+    pub refused: Option<String>,
+    /// The run, if it ran.
+    pub run: Option<CaseRun>,
+}
+
+impl CampaignRun {
+    /// Outcome category: 0 corridor held and wings clear, 1 corridor held but a wing part
+    /// within [`PANEL_CLEARANCE_M`], 2 corridor left, wings clear, 3 corridor left and wing
+    /// close, 4 refused at t = 0 (overlap).
+    pub fn category(&self) -> usize {
+        match &self.run {
+            None => 4,
+            Some(r) => {
+                let close = r.min_wing_distance_m < PANEL_CLEARANCE_M;
+                match (r.corridor_held, close) {
+                    (true, false) => 0,
+                    (true, true) => 1,
+                    (false, false) => 2,
+                    (false, true) => 3,
+                }
+            }
+        }
+    }
+}
+
+/// Names of [`CampaignRun::category`].
+pub const CATEGORIES: [&str; 5] = [
+    "corridor held, wings clear",
+    "corridor held, wing part within 0.5 m",
+    "corridor left, wings clear",
+    "corridor left, wing part within 0.5 m",
+    "refused: overlaps the target at t = 0",
+];
+
+/// Runs the campaign (reaching variant, k2 = 0.02; the bundled target is at rest with the
+/// identity attitude, so target frame = world axes).
+pub fn campaign(n: usize, seed: u64, duration_s: f64) -> Result<Vec<CampaignRun>, String> {
+    let base = reaching_variant("scenes/guo2016_corridor.ron")?;
+    let corridor = spec_of(&base)
+        .params(1.0, nalgebra::Matrix3::identity())
+        .corridor();
+    let mut out = Vec::new();
+    for s in campaign_starts(&corridor, n, seed) {
+        let mut l = base.clone();
+        if let Some(b) = l.scene.bodies.iter_mut().find(|b| b.name == "chaser") {
+            b.initial.pos_m = s.r0_m.into();
+            b.initial.vel_m_s = s.v0_m_s.into();
+            let q = crate::control::guo2016::q_d0_to_target()
+                * crate::math::mrp::quat_from_mrp(&s.sigma0);
+            b.initial.attitude = AttitudeSpec::Quat {
+                w: q.w,
+                x: q.i,
+                y: q.j,
+                z: q.k,
+            };
+        }
+        match run_case(&l, "campaign", duration_s, 1) {
+            Ok(r) => out.push(CampaignRun {
+                start: s,
+                refused: None,
+                run: Some(r),
+            }),
+            Err(e) if e.contains("overlaps") => out.push(CampaignRun {
+                start: s,
+                refused: Some(e),
+                run: None,
+            }),
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(out)
+}
+
+/// The scene's Guo2016 entry.
+pub fn spec_of(l: &LoadedScene) -> SceneSpec {
+    l.scene
+        .controllers
+        .iter()
+        .find_map(|c| match c {
+            ControllerSpec::Guo2016(s) => Some(s.clone()),
+            _ => None,
+        })
+        .expect("a Guo2016 controller")
+}
+
+/// Everything the reproduction measured.
+#[derive(Debug, Clone)]
+pub struct Results {
+    /// Paper gains, k2 = 0.02.
+    pub corridor: CaseRun,
+    /// Paper gains, k2 = 0.
+    pub no_avoidance: CaseRun,
+    /// Reaching variant (not in the paper), k2 = 0.02.
+    pub reaching: CaseRun,
+    /// Reaching variant, k2 = 0.
+    pub reaching_no_avoidance: CaseRun,
+    /// Largest distance between the k2 = 0.02 and k2 = 0 paper-gain paths at the common
+    /// samples, m.
+    pub max_path_difference_m: f64,
+    /// The campaign.
+    pub campaign: Vec<CampaignRun>,
+    /// The corridor (target body frame).
+    pub corridor_shape: Cissoid,
+}
+
+/// Runs every case and the campaign.
+pub fn compute() -> Result<Results, String> {
+    let corridor = run_case(
+        &load_bundled("scenes/guo2016_corridor.ron")?,
+        "paper gains, k2 = 0.02",
+        PAPER_DURATION_S,
+        10,
+    )?;
+    let no_avoidance = run_case(
+        &load_bundled("scenes/guo2016_no_avoidance.ron")?,
+        "paper gains, k2 = 0",
+        PAPER_DURATION_S,
+        10,
+    )?;
+    let reaching = run_case(
+        &reaching_variant("scenes/guo2016_corridor.ron")?,
+        "k_r = 1/s (not in the paper), k2 = 0.02",
+        REACHING_DURATION_S,
+        1,
+    )?;
+    let reaching_no_avoidance = run_case(
+        &reaching_variant("scenes/guo2016_no_avoidance.ron")?,
+        "k_r = 1/s (not in the paper), k2 = 0",
+        REACHING_DURATION_S,
+        1,
+    )?;
+    let max_path_difference_m = corridor
+        .samples
+        .iter()
+        .zip(&no_avoidance.samples)
+        .map(|(a, b)| (a.r1_target_m - b.r1_target_m).norm())
+        .fold(0.0, f64::max);
+    let campaign = campaign(CAMPAIGN_RUNS, CAMPAIGN_SEED, CAMPAIGN_DURATION_S)?;
+    let corridor_shape = spec_of(&load_bundled("scenes/guo2016_corridor.ron")?)
+        .params(1.0, nalgebra::Matrix3::identity())
+        .corridor();
+    Ok(Results {
+        corridor,
+        no_avoidance,
+        reaching,
+        reaching_no_avoidance,
+        max_path_difference_m,
+        campaign,
+        corridor_shape,
+    })
+}
+
+/// |ṙ1| at the sample nearest `t_s`, m/s.
+fn speed_at(r: &CaseRun, t_s: f64) -> f64 {
+    r.samples
+        .iter()
+        .min_by(|a, b| (a.t_s - t_s).abs().total_cmp(&(b.t_s - t_s).abs()))
+        .map_or(f64::NAN, |s| s.v1_target_m_s.norm())
+}
+
+fn opt_s(t: Option<f64>) -> String {
+    t.map_or("none".to_string(), |t| format!("{t:.2} s"))
+}
+
+fn geometry_sentence(r: &CaseRun) -> String {
+    format!(
+        "closest full-geometry approach {:.3} m between `{}` and `{}` at t = {:.2} s; first contact: {}; first collision: {}",
+        r.min_distance_m,
+        r.min_distance_parts.0,
+        r.min_distance_parts.1,
+        r.min_distance_t_s,
+        opt_s(r.first_contact_s),
+        opt_s(r.first_collision_s)
+    )
+}
+
+/// The claims of issue 5 as measured.
+pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
+    use crate::report::Claim;
+    let c = &r.corridor;
+    let z = &r.no_avoidance;
+    let counts = campaign_counts(&r.campaign);
+    let ran = r.campaign.iter().filter(|c| c.run.is_some()).count();
+    vec![
+        Claim::new(
+            "guo2016-corridor-held",
+            "With k2 = 0.02 the chaser's centre of mass stays inside the corridor (h > 0) for the whole run.",
+            Some("the corridor is never left (h > 0 throughout)"),
+            format!(
+                "min h = {:.2} m², min distance to the corridor wall {:.3} m, first exit: {} (t = 0–{PAPER_DURATION_S} s)",
+                c.min_h_m2,
+                c.min_corridor_margin_m,
+                opt_s(c.first_exit_s)
+            ),
+            c.corridor_held && c.min_corridor_margin_m > 0.0,
+        ),
+        Claim::new(
+            "guo2016-errors-converge",
+            "With k2 = 0.02 the position and attitude errors converge: final |r_e| < 1 cm and |σ_e| < 1e-4.",
+            Some("position and attitude errors converge to zero"),
+            format!(
+                "at t = {PAPER_DURATION_S} s: |r_e| = {:.3} m, |σ_e| = {:.3e}",
+                c.final_r_e_m, c.final_sigma_e
+            ),
+            c.final_r_e_m < 0.01 && c.final_sigma_e < 1e-4,
+        ),
+        Claim::new(
+            "guo2016-no-collision",
+            "With k2 = 0.02 no part of the chaser touches the target.",
+            None,
+            geometry_sentence(c),
+            c.first_contact_s.is_none(),
+        ),
+        Claim::new(
+            "guo2016-k2-0-leaves-corridor",
+            "With k2 = 0 the chaser leaves the corridor.",
+            Some("without the corridor term the chaser leaves the corridor"),
+            format!(
+                "min h = {:.2} m², first exit: {}; {}",
+                z.min_h_m2,
+                opt_s(z.first_exit_s),
+                geometry_sentence(z)
+            ),
+            !z.corridor_held,
+        ),
+        Claim::new(
+            "guo2016-k2-changes-path",
+            "The corridor term changes the path: k2 = 0.02 and k2 = 0 differ by more than 1 cm.",
+            Some("the paths with and without the corridor term differ"),
+            format!(
+                "largest position difference {:.2e} m over {PAPER_DURATION_S} s",
+                r.max_path_difference_m
+            ),
+            r.max_path_difference_m > 0.01,
+        ),
+        Claim::new(
+            "guo2016-reaching-converges",
+            "Not in the paper: with an added reaching term k_r = 1/s the errors converge (|r_e| < 1 cm, |σ_e| < 1e-4).",
+            None,
+            format!(
+                "at t = {REACHING_DURATION_S} s: |r_e| = {:.2e} m, |σ_e| = {:.2e}",
+                r.reaching.final_r_e_m, r.reaching.final_sigma_e
+            ),
+            r.reaching.final_r_e_m < 0.01 && r.reaching.final_sigma_e < 1e-4,
+        ),
+        Claim::new(
+            "guo2016-reaching-corridor-held",
+            "Not in the paper: with k_r = 1/s and k2 = 0.02 the corridor still holds.",
+            None,
+            format!(
+                "first exit {}, min h = {:.2} m², min distance to the wall {:.3} m; largest |F| {:.3e} N; {}",
+                opt_s(r.reaching.first_exit_s),
+                r.reaching.min_h_m2,
+                r.reaching.min_corridor_margin_m,
+                r.reaching.max_force_n,
+                geometry_sentence(&r.reaching)
+            ),
+            r.reaching.corridor_held,
+        ),
+        Claim::new(
+            "guo2016-campaign-corridor-keeps-wings-clear",
+            format!(
+                "Beyond the paper: whenever the point-mass corridor held, the chaser's full geometry stayed more than {PANEL_CLEARANCE_M} m from every target solar-wing part."
+            ),
+            None,
+            format!(
+                "{ran} runs (k_r = 1/s, k2 = 0.02, seed {CAMPAIGN_SEED}): corridor held and wings clear {}, corridor held but a wing part within {PANEL_CLEARANCE_M} m {}, corridor left {}; {} starts refused (overlap at t = 0)",
+                counts[0],
+                counts[1],
+                counts[2] + counts[3],
+                counts[4]
+            ),
+            counts[1] == 0,
+        ),
+    ]
+}
+
+/// Runs per [`CampaignRun::category`].
+pub fn campaign_counts(c: &[CampaignRun]) -> [usize; 5] {
+    let mut n = [0; 5];
+    for r in c {
+        n[r.category()] += 1;
+    }
+    n
+}
+
+/// Whether the straight segment from `r0` to r_d = (2, 0, 0) m stays strictly inside the
+/// corridor (1000 points).
+pub fn straight_line_inside(c: &Cissoid, r0: &Vector3<f64>) -> bool {
+    let rd = Vector3::new(2.0, 0.0, 0.0);
+    (0..=1000).all(|i| c.inside(&(r0 + (rd - r0) * (i as f64 / 1000.0))))
+}
+
+/// Rotation angle of an MRP, deg.
+fn tilt_deg(sigma: &Vector3<f64>) -> f64 {
+    4.0 * sigma.norm().atan().to_degrees()
+}
+
+fn rho(v: &Vector3<f64>) -> f64 {
+    v.y.hypot(v.z)
+}
+
+/// Corridor meridian curve (x, ρ) up to `rho_max_m`.
+fn corridor_curve(c: &Cissoid, x_max_m: f64, rho_max_m: f64) -> Vec<(f64, f64)> {
+    (0..=600)
+        .map(|i| x_max_m * i as f64 / 600.0)
+        .filter_map(|x| c.radius_at_m(x).map(|r| (x, r)))
+        .take_while(|p| p.1 <= rho_max_m)
+        .collect()
+}
+
+/// Time plots of one quantity for the two paper-gain runs: full run and the first 2 s.
+fn time_figure(
+    title: &str,
+    y_label: &str,
+    runs: [&CaseRun; 2],
+    get: impl Fn(&Sample) -> Vector3<f64>,
+    names: [&str; 3],
+) -> crate::report::Figure {
+    use crate::report::{Figure, Plot};
+    let mut fig = Figure::new(title).cols(2);
+    for (zoom, t_max) in [(false, PAPER_DURATION_S), (true, 2.0)] {
+        for r in runs {
+            let mut p = Plot::new(if zoom {
+                format!("{} (first 2 s)", r.label)
+            } else {
+                r.label.clone()
+            })
+            .x_label("t (s)")
+            .y_label(y_label);
+            for (k, name) in names.iter().enumerate() {
+                p = p.line(
+                    *name,
+                    r.samples
+                        .iter()
+                        .filter(|s| s.t_s <= t_max)
+                        .map(|s| (s.t_s, get(s)[k])),
+                );
+            }
+            fig = fig.plot(p);
+        }
+    }
+    fig
+}
+
 /// Runs the paper's cases and writes REPORT.md, plots and claims.json into `out`.
-pub fn run(_out: &Path) -> Result<(), String> {
-    Err("the guo2016 reproduction is not written yet".into())
+pub fn run(out: &Path) -> Result<(), String> {
+    let t0 = std::time::Instant::now();
+    let r = compute()?;
+    let claims = write(out, &r, t0.elapsed().as_secs_f64())?;
+    let held = claims.iter().filter(|c| c.held).count();
+    println!(
+        "guo2016: {held} of {} claims held; wrote REPORT.md, claims.json and plots ({:.1} s)",
+        claims.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// Writes REPORT.md, the PNG plots and claims.json for computed results into `out`;
+/// `wall_s` is the computing time quoted in the report. Returns the claims.
+pub fn write(out: &Path, r: &Results, wall_s: f64) -> Result<Vec<crate::report::Claim>, String> {
+    let claims = claims(r);
+    build_report(r, &claims, wall_s)
+        .write(out)
+        .map_err(|e| format!("cannot write the guo2016 report: {e}"))?;
+    Ok(claims)
+}
+
+fn build_report(
+    r: &Results,
+    claims: &[crate::report::Claim],
+    wall_s: f64,
+) -> crate::report::ReportBuilder {
+    use crate::report::{Color, Dash, Figure, LineStyle, Plot, ReportBuilder};
+    let c = &r.corridor;
+    let z = &r.no_avoidance;
+    let mut rep = ReportBuilder::new(
+        "Guo, Song, Li (2016): coupled sliding-mode control with an elliptic-cissoid corridor",
+    );
+    rep.paragraph(
+        "Section 5 of the paper in rpod's full simulation: f64 orbit (a = 7178 km, e = 0.01, \
+         i = 30°, J2 on), both spacecraft 100 kg, r0 = [14.9, 17.1, 37.7] m and \
+         ṙ0 = [0.05, 0.5, −0.24] m/s in the target frame, r_d = [2, 0, 0] m, \
+         σ_d = 0.001·[sin(t/40), sin(t/50), sin(t/60)], d_τ = 0.001·[cos nt, 2 cos nt, 3 cos nt] N·m \
+         (chaser body axes, n = mean motion), gains k1 = 9, k2 = 0.02 (or 0), k3 = 1, \
+         k4 = 0.005, corridor a = 25 m; dt = 0.01 s. The monitor checks every step the \
+         corridor guarantee (signed distance of the chaser centre of mass to the cissoid wall) \
+         and the exact distance between every chaser part and every target part. \
+         Scenes: `scenes/guo2016_corridor.ron`, `scenes/guo2016_no_avoidance.ron`.",
+    );
+    rep.heading("Claims");
+    rep.claims(claims);
+    rep.heading("Choices where the paper is silent");
+    rep.paragraph(
+        "- tan θ = 5 (θ ≈ 78.7°): r0 read in the target frame is inside the corridor only for \
+         tan θ > 4.265; 5 puts it 1.31 m inside (h(r0) = 642 m²).\n\
+         - r_b = target − chaser (line of sight) in chaser axes, so r_d = [2, 0, 0] m puts the \
+         target 2 m ahead of the chaser's docking cone; attitude relative to the docking frame \
+         D0 = target frame turned by π about z; at zero error the chaser sits on the target's \
+         docking axis (+x) 2 m out, cone facing the slot.\n\
+         - Chaser inertia J = diag(15, 17, 20) kg·m², target inertia diag(20, 24, 24) kg·m²; \
+         σ(0) = [0.05, −0.05, 0.05] relative to D0 (≈ 20°), ω(0) = 0; boundary layer 1e-3; \
+         no gravity-gradient torque (the paper's only torque disturbance is d_τ); the law's \
+         differential gravity includes J2 (~1e-8 m/s² at 40 m).\n\
+         - Geometry (not in the paper): target bus 1.6 × 1.2 × 1.2 m, docking slot on +x, two \
+         wings along ±y whose panels face +x at x = 0.6 m, 0.9–4.6 m from the docking axis; \
+         chaser 1 m cube bus, docking cone (0.2 m) on +x, wings along ±y to 2.75 m. At r_e = 0 \
+         the cone tip is 0.3 m from the slot mouth.",
+    );
+
+    rep.heading("Findings");
+    rep.paragraph(format!(
+        "**The paper's gains do not converge.** The chaser brakes within ~0.5 s (|ṙ1| from \
+         {:.3} m/s to {:.4} m/s at t = 0.5 s) and then drifts at {:.4} m/s where the sliding \
+         variable put it: final |r_e| = {:.3} m, |σ_e| = {:.3e} \
+         (k2 = 0.02, t = {PAPER_DURATION_S} s). The reaching term k4‖B2‖sat(S/ε) can change each \
+         translational S component by at most β·k4·‖B2‖/m ≈ 2e-4 m/s² while |S(0)| ≈ 393 m/s, \
+         so S stays near S(0) and x settles near S(0)/k1. The disturbance torque also enters the \
+         translation rows through ω̇ × r_b (m·|r_b|·|J⁻¹d_τ| ≈ 0.8 N ≫ k4), which the proof's \
+         condition k4 > ‖d‖ does not cover.\n\n\
+         **k2 = 0 does not leave the corridor either**: the two runs differ by at most {:.2e} m. \
+         The barrier k2/h² only matters for h ≲ √k2 ≈ 0.14 m² (a layer millimetres thick at the \
+         wall); here min h = {:.1} m² (k2 = 0.02) and {:.1} m² (k2 = 0). Against the full geometry \
+         nothing happens in either run: {} (k2 = 0.02); {} (k2 = 0).\n\n\
+         **With a reaching term that makes S → 0 (k_r = 1/s, not in the paper)** the errors do \
+         converge (|r_e| = {:.1e} m, |σ_e| = {:.1e} at {REACHING_DURATION_S} s), but on S = 0 the \
+         motion ẋ = −k1x/β keeps the direction of x: the path is the straight line r0 → r_d, \
+         which crosses the corridor wall for tan θ = 5 (h ≈ −65 m² at its midpoint). The chaser \
+         left the corridor at t = {} with k2 = 0.02 (at r1 = {}) and at t = {} with k2 = 0. \
+         In continuous \
+         time the barrier can only hold by demanding unbounded force (βẋ = S − k1x is \
+         continuous, so the approach speed must vanish inside the mm-thick layer); at \
+         dt = 0.01 s it is jumped over (largest |F| {:.3e} N). Against the full geometry: \
+         {}.\n\n\
+         The corridor guarantee concerns the centre of mass only; the monitor's full-geometry \
+         distances are what say whether a panel was met.",
+        speed_at(c, 0.0),
+        speed_at(c, 0.5),
+        speed_at(c, PAPER_DURATION_S),
+        c.final_r_e_m,
+        c.final_sigma_e,
+        r.max_path_difference_m,
+        c.min_h_m2,
+        z.min_h_m2,
+        geometry_sentence(c),
+        geometry_sentence(z),
+        r.reaching.final_r_e_m,
+        r.reaching.final_sigma_e,
+        opt_s(r.reaching.first_exit_s),
+        r.reaching
+            .first_exit_r1_m
+            .map_or("—".to_string(), |v| format!(
+                "[{:.1}, {:.1}, {:.1}] m, {:.1} m from the target centre",
+                v.x,
+                v.y,
+                v.z,
+                v.norm()
+            )),
+        opt_s(r.reaching_no_avoidance.first_exit_s),
+        r.reaching.max_force_n,
+        geometry_sentence(&r.reaching),
+    ));
+
+    // Paths in the meridian plane of the target frame.
+    let shape = &r.corridor_shape;
+    let wing = |p: Plot| {
+        p.polygon(
+            "target wing panels (x = 0.6 m)",
+            [(0.585, 0.9), (0.615, 0.9), (0.615, 4.6), (0.585, 4.6)],
+            Color::RED,
+        )
+        .polygon(
+            "target bus",
+            [(-0.8, 0.0), (0.8, 0.0), (0.8, 0.85), (-0.8, 0.85)],
+            Color::GRAY,
+        )
+    };
+    let gray = LineStyle {
+        color: Some(Color::DARK_GRAY),
+        width_px: 1.5,
+        dash: Dash::Dashed,
+    };
+    let path_plot = |title: &str, x_max: f64, rho_max: f64| {
+        let mut p = Plot::new(title)
+            .x_label("x, target docking axis (m)")
+            .y_label("ρ = √(y² + z²), target frame (m)")
+            .x_range(-1.0, x_max)
+            .y_range(0.0, rho_max)
+            .equal_aspect()
+            .line_styled(
+                "corridor wall (tan θ = 5, a = 25 m); inside is below it",
+                corridor_curve(shape, x_max, 1.3 * rho_max),
+                gray,
+            );
+        for run in [c, z, &r.reaching, &r.reaching_no_avoidance] {
+            p = p.line(
+                run.label.clone(),
+                run.samples
+                    .iter()
+                    .map(|s| (s.r1_target_m.x, rho(&s.r1_target_m))),
+            );
+        }
+        let end = |run: &CaseRun| {
+            run.samples
+                .last()
+                .map(|s| (s.r1_target_m.x, rho(&s.r1_target_m)))
+        };
+        p = p.scatter(
+            "paper gains: where the chaser stops (both k2)",
+            [end(c), end(z)].into_iter().flatten(),
+        );
+        p = p.scatter("r_d (hold point, 2 m out)", [(2.0, 0.0)]);
+        wing(p)
+    };
+    rep.heading("Path and corridor (meridian plane of the target frame)");
+    rep.figure(
+        "path_corridor",
+        "chaser centre-of-mass paths in the (x, ρ) plane with the corridor wall",
+        Figure::new("Chaser centre of mass in the target frame's meridian plane")
+            .cols(2)
+            .size_px(1400, 620)
+            .plot(path_plot("whole approach", 50.0, 45.0))
+            .plot(path_plot("near the target", 16.0, 9.0)),
+    );
+    rep.paragraph(
+        "The paper-gain runs (k2 = 0.02 and 0, on top of each other) stop near the start; the \
+         reaching-variant runs cut straight through the wall towards r_d = (2, 0) m.",
+    );
+    let margin_plot = |title: &str, f: &dyn Fn(&Sample) -> f64, y: &str| {
+        let mut p = Plot::new(title)
+            .x_label("t (s)")
+            .y_label(y)
+            .x_range(0.0, 20.0);
+        for run in [c, z, &r.reaching, &r.reaching_no_avoidance] {
+            p = p.line(
+                run.label.clone(),
+                run.samples
+                    .iter()
+                    .filter(|s| s.t_s <= 20.0)
+                    .map(|s| (s.t_s, f(s))),
+            );
+        }
+        p.hline(0.0, "")
+    };
+    rep.figure(
+        "corridor_margin",
+        "distance to the corridor wall and full-geometry distance vs time",
+        Figure::new("Point-mass corridor margin vs full-geometry distance (first 20 s)")
+            .cols(2)
+            .size_px(1400, 520)
+            .plot(margin_plot(
+                "signed distance of the chaser centre of mass to the corridor wall",
+                &|s| s.corridor_margin_m,
+                "distance to wall, + inside (m)",
+            ))
+            .plot(margin_plot(
+                "closest distance chaser ↔ target, full geometry",
+                &|s| s.min_distance_m,
+                "distance (m)",
+            )),
+    );
+
+    rep.heading("Time histories, paper gains (equivalent of the paper's Figs 5–10)");
+    let runs = [c, z];
+    let xyz = ["x", "y", "z"];
+    rep.figure(
+        "attitude_error",
+        "attitude error σ_e",
+        time_figure(
+            "Attitude error σ_e (MRP)",
+            "σ_e (–)",
+            runs,
+            |s| s.sigma_e,
+            ["σ_e1", "σ_e2", "σ_e3"],
+        ),
+    );
+    rep.figure(
+        "rate_error",
+        "angular-velocity error ω_e",
+        time_figure(
+            "Angular-velocity error ω_e, chaser body axes",
+            "ω_e (rad/s)",
+            runs,
+            |s| s.omega_e_rad_s,
+            ["ω_e,x", "ω_e,y", "ω_e,z"],
+        ),
+    );
+    rep.figure(
+        "torque",
+        "commanded torque",
+        time_figure(
+            "Commanded torque τ, chaser body axes",
+            "τ (N·m)",
+            runs,
+            |s| s.torque_body_nm,
+            ["τ_x", "τ_y", "τ_z"],
+        ),
+    );
+    rep.figure(
+        "position",
+        "relative position",
+        time_figure(
+            "Chaser position relative to the target, target frame",
+            "r1 (m)",
+            runs,
+            |s| s.r1_target_m,
+            xyz,
+        ),
+    );
+    rep.figure(
+        "velocity",
+        "relative velocity",
+        time_figure(
+            "Chaser velocity relative to the target, seen in the target frame",
+            "ṙ1 (m/s)",
+            runs,
+            |s| s.v1_target_m_s,
+            xyz,
+        ),
+    );
+    rep.figure(
+        "force",
+        "commanded force",
+        time_figure(
+            "Commanded force F, chaser body axes",
+            "F (N)",
+            runs,
+            |s| s.force_body_n,
+            ["F_x", "F_y", "F_z"],
+        ),
+    );
+    rep.heading("Extra case, not in the paper: reaching term k_r = 1/s");
+    rep.paragraph(
+        "`reaching_gain_per_s: 1.0` adds −β⁻¹k_r M S to the law, so the closed loop has \
+         Ṡ = −k_r S + …; σ(0) = 0, everything else as in the scenes. Shown to see what the \
+         law does when its errors do converge.",
+    );
+    rep.figure(
+        "reaching_variant",
+        "reaching variant time histories",
+        time_figure(
+            "Reaching variant (k_r = 1/s): position relative to the target, target frame",
+            "r1 (m)",
+            [&r.reaching, &r.reaching_no_avoidance],
+            |s| s.r1_target_m,
+            xyz,
+        ),
+    );
+
+    // Campaign.
+    let counts = campaign_counts(&r.campaign);
+    rep.heading("Beyond the paper: does the point-mass corridor keep the panels clear?");
+    rep.paragraph(format!(
+        "{CAMPAIGN_RUNS} seeded starts (64-bit LCG, seed {CAMPAIGN_SEED}): x uniform in \
+         [1.6, 12] m, radial distance 0.9·ρ(x)·√u (uniform over the cross-section within 90 % \
+         of the corridor radius), azimuth uniform, velocity uniform in direction with speed in \
+         [0, 0.5] m/s, attitude error up to {CAMPAIGN_MAX_TILT_DEG}° about a random axis \
+         (the corridor constrains the centre of mass only; a tilted chaser sweeps its wings); \
+         the reaching variant (k_r = 1/s, k2 = 0.02, the \
+         paper's law stops near its start and would answer nothing), {CAMPAIGN_DURATION_S} s \
+         each. \"Close\" = any chaser part within {PANEL_CLEARANCE_M} m of a target solar-wing \
+         part (panel or boom), checked every step with exact shape distances. A start whose \
+         chaser geometry overlaps the target at t = 0 is refused by the scene validation and \
+         counted as such: the corridor admits centre-of-mass positions where the chaser cannot \
+         physically be."
+    ));
+    let rows: Vec<Vec<String>> = CATEGORIES
+        .iter()
+        .zip(counts)
+        .map(|(n, k)| vec![n.to_string(), k.to_string()])
+        .collect();
+    rep.table(&["outcome", "runs"], &rows);
+    let pts: Vec<(f64, f64, usize)> = r
+        .campaign
+        .iter()
+        .map(|c| (c.start.r0_m.x, rho(&c.start.r0_m), c.category()))
+        .collect();
+    let camp_plot = Plot::new("campaign starts in the meridian plane, by outcome")
+        .x_label("x, target docking axis (m)")
+        .y_label("ρ = √(y² + z²), target frame (m)")
+        .x_range(0.0, 13.0)
+        .y_range(0.0, 32.0)
+        .line_styled(
+            "corridor wall (inside is below it)",
+            corridor_curve(shape, 13.0, 40.0),
+            gray,
+        )
+        .outcomes(pts, &CATEGORIES);
+    rep.figure(
+        "campaign",
+        "campaign outcome map",
+        wing(camp_plot).into_figure(),
+    );
+    let ran: Vec<&CaseRun> = r.campaign.iter().filter_map(|c| c.run.as_ref()).collect();
+    let left: Vec<&&CaseRun> = ran.iter().filter(|c| !c.corridor_held).collect();
+    let closest_wing = ran
+        .iter()
+        .min_by(|a, b| a.min_wing_distance_m.total_cmp(&b.min_wing_distance_m));
+    let worst_f = ran.iter().map(|c| c.max_force_n).fold(0.0, f64::max);
+    let worst_range = left.iter().map(|c| c.max_range_m).fold(0.0, f64::max);
+    let start_range = r
+        .campaign
+        .iter()
+        .map(|c| c.start.r0_m.norm())
+        .fold(0.0, f64::max);
+    let line_inside = |c: &CampaignRun| straight_line_inside(shape, &c.start.r0_m);
+    let n_line = r.campaign.iter().filter(|c| line_inside(c)).count();
+    let left_line = r
+        .campaign
+        .iter()
+        .filter(|c| c.run.as_ref().is_some_and(|x| !x.corridor_held) && line_inside(c))
+        .count();
+    let tilts = |held: bool| {
+        let v: Vec<f64> = r
+            .campaign
+            .iter()
+            .filter(|c| c.run.as_ref().is_some_and(|x| x.corridor_held == held))
+            .map(|c| tilt_deg(&c.start.sigma0))
+            .collect();
+        if v.is_empty() {
+            "—".to_string()
+        } else {
+            format!(
+                "{:.1}° (mean, range {:.1}–{:.1}°)",
+                v.iter().sum::<f64>() / v.len() as f64,
+                v.iter().cloned().fold(f64::INFINITY, f64::min),
+                v.iter().cloned().fold(0.0, f64::max)
+            )
+        }
+    };
+    rep.paragraph(format!(
+        "Of {} runs, {} left the corridor. For {n_line} of the {} starts the straight line \
+         r0 → r_d lies inside the corridor (checked at 1000 points with the closed-form h); \
+         {left_line} of the runs that left had such a line. The translation error is defined \
+         in chaser axes (r_e = r_b − r_d), so while the attitude error decays the body-frame \
+         straight line is a curve in the target frame: initial tilt of the runs that left {}, \
+         of those that held {}. Near the wall the \
+         barrier answers with force spikes (largest |F| over the campaign {:.3e} N); the \
+         farthest excursion of a run that left was {:.1} m from the target (starts are at most \
+         {:.1} m out). The closest any chaser part came to a target wing part was {} — \
+         the panels sit 0.9 m or more off the docking axis at x = 0.6 m, and on the approach \
+         to the hold point r_d = 2 m (Section 5 start, aligned) the chaser's parts stay \
+         {:.3} m from them. The corridor held in {} of {} runs.",
+        ran.len(),
+        left.len(),
+        r.campaign.len(),
+        tilts(false),
+        tilts(true),
+        worst_f,
+        worst_range,
+        start_range,
+        closest_wing.map_or("—".to_string(), |c| format!(
+            "{:.3} m (`target/{}` at t = {:.2} s)",
+            c.min_wing_distance_m, c.min_wing_part, c.min_wing_t_s
+        )),
+        r.reaching.min_wing_distance_m,
+        ran.len() - left.len(),
+        ran.len()
+    ));
+    let run_rows: Vec<Vec<String>> = r
+        .campaign
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let s = &c.start;
+            let mut row = vec![
+                i.to_string(),
+                format!("{:.2}", s.r0_m.x),
+                format!("{:.2}", rho(&s.r0_m)),
+                format!("{:.2}", s.v0_m_s.norm()),
+                format!("{:.1}", tilt_deg(&s.sigma0)),
+            ];
+            match &c.run {
+                Some(run) => row.extend([
+                    if run.corridor_held { "yes" } else { "no" }.to_string(),
+                    format!("{:.3}", run.min_corridor_margin_m),
+                    format!("{:.3e}", run.max_force_n),
+                    format!("{:.3} ({})", run.min_wing_distance_m, run.min_wing_part),
+                    format!(
+                        "{:.3} ({} / {})",
+                        run.min_distance_m, run.min_distance_parts.0, run.min_distance_parts.1
+                    ),
+                    opt_s(run.first_contact_s),
+                ]),
+                None => row.extend([
+                    "—".into(),
+                    "—".into(),
+                    "—".into(),
+                    "—".into(),
+                    "overlap at t = 0".into(),
+                    "—".into(),
+                ]),
+            }
+            row
+        })
+        .collect();
+    rep.table(
+        &[
+            "run",
+            "x0 (m)",
+            "ρ0 (m)",
+            "|v0| (m/s)",
+            "tilt0 (deg)",
+            "corridor held",
+            "min wall distance (m)",
+            "max |F| (N)",
+            "min distance to a wing part (m)",
+            "closest approach (m, parts)",
+            "first contact",
+        ],
+        &run_rows,
+    );
+    rep.heading("How to rerun");
+    rep.code(format!(
+        "rpod reproduce guo2016 --out DIR      # this report ({wall_s:.1} s of wall time here)\n\
+         rpod run scenes/guo2016_corridor.ron   # trajectory.csv with guo2016.* columns\n\
+         rpod run scenes/guo2016_corridor.ron --set controllers.0.0.reaching_gain_per_s=1.0  # the extra case (σ(0) as in the scene)\n\
+         cargo test --release --test val_guo2016"
+    ));
+    rep
 }
