@@ -126,8 +126,9 @@ pub struct PolygonStyle {
 /// Where the legend goes (inside the axes).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Legend {
-    /// The corner whose legend box covers the fewest drawn data points (ties: top right, top
-    /// left, bottom right, bottom left).
+    /// Outside (right of the axes) for plots with an outcome map, which fills the axes;
+    /// otherwise the corner whose legend box covers the fewest drawn data points (ties: top
+    /// right, top left, bottom right, bottom left).
     #[default]
     Best,
     /// Top right corner.
@@ -138,6 +139,8 @@ pub enum Legend {
     BottomRight,
     /// Bottom left corner.
     BottomLeft,
+    /// To the right of the axes (the axes get narrower).
+    Outside,
     /// No legend.
     Off,
 }
@@ -201,8 +204,13 @@ const LEGEND_PX: f64 = 12.0;
 const MARKER_LABEL_PX: f64 = 11.0;
 const PAD: f64 = 10.0;
 const TICK_LEN: f64 = 5.0;
+const LEGEND_ROW: f64 = LEGEND_PX + 6.0;
+const LEGEND_SWATCH: f64 = 24.0;
 /// Points of a line closer than this to the last kept point are dropped (px).
 const THIN_PX: f64 = 0.5;
+
+/// A data interval (lo, hi), or `None` when nothing was seen.
+type Span = Option<(f64, f64)>;
 
 fn finite(p: &(f64, f64)) -> bool {
     p.0.is_finite() && p.1.is_finite()
@@ -485,8 +493,7 @@ impl Plot {
     }
 
     /// Data bounds (x, y) over everything drawn, before padding.
-    #[allow(clippy::type_complexity)] // (x range, y range), each absent when nothing is drawn
-    fn bounds(&self) -> (Option<(f64, f64)>, Option<(f64, f64)>) {
+    fn bounds(&self) -> (Span, Span) {
         let mut bx: Option<(f64, f64)> = None;
         let mut by: Option<(f64, f64)> = None;
         let add = |b: &mut Option<(f64, f64)>, v: f64| {
@@ -578,6 +585,30 @@ impl Plot {
         !self.legend_entries().is_empty()
     }
 
+    /// Whether the legend goes right of the axes.
+    fn legend_outside(&self) -> bool {
+        match self.legend {
+            Legend::Outside => self.has_legend_entries(),
+            Legend::Best => self
+                .items
+                .iter()
+                .any(|i| matches!(i, Item::Outcomes { .. })),
+            _ => false,
+        }
+    }
+
+    /// Legend box (width, height) in px.
+    fn legend_size(&self, entries: &[(String, Swatch)]) -> (f64, f64) {
+        let text_w = entries
+            .iter()
+            .map(|(s, _)| text_width_px(s, LEGEND_PX))
+            .fold(0.0, f64::max);
+        (
+            8.0 + LEGEND_SWATCH + 6.0 + text_w + 8.0,
+            6.0 + LEGEND_ROW * entries.len() as f64 + 2.0,
+        )
+    }
+
     fn legend_entries(&self) -> Vec<(String, Swatch)> {
         let mut out = Vec::new();
         for it in &self.items {
@@ -650,7 +681,12 @@ impl Plot {
                 LABEL_PX + 8.0
             }
             - (TICK_PX + TICK_LEN + 6.0);
-        let right = cx + cw - PAD - 14.0;
+        let legend_w = if self.legend_outside() {
+            self.legend_size(&self.legend_entries()).0 + 10.0
+        } else {
+            0.0
+        };
+        let right = cx + cw - PAD - 14.0 - legend_w;
         let (xr0, yr0) = self.ranges();
         let ah = (bottom - top).max(20.0);
         let y_label_w = if self.y_label.is_empty() {
@@ -956,16 +992,9 @@ impl Plot {
             return;
         }
         let entries = self.legend_entries();
-        let row = LEGEND_PX + 6.0;
-        let sw = 24.0;
-        let text_w = entries
-            .iter()
-            .map(|(s, _)| text_width_px(s, LEGEND_PX))
-            .fold(0.0, f64::max);
-        let (bw, bh) = (
-            8.0 + sw + 6.0 + text_w + 8.0,
-            6.0 + row * entries.len() as f64 + 2.0,
-        );
+        let row = LEGEND_ROW;
+        let sw = LEGEND_SWATCH;
+        let (bw, bh) = self.legend_size(&entries);
         let m = 8.0;
         let corner = |l: Legend| -> (f64, f64) {
             let xl = f.x + m;
@@ -980,6 +1009,7 @@ impl Plot {
             }
         };
         let pos = match self.legend {
+            _ if self.legend_outside() => (f.x + f.w + 10.0, f.y),
             Legend::Best => {
                 let order = [
                     Legend::TopRight,
@@ -1406,10 +1436,6 @@ mod tests {
             )
     }
 
-    pub(super) fn busy_figure_pub() -> Figure {
-        busy_figure()
-    }
-
     #[test]
     fn invariant_identical_input_gives_identical_svg_and_png_bytes() {
         let (a, b) = (busy_figure(), busy_figure());
@@ -1581,20 +1607,5 @@ mod tests {
             "{kept} kept, L = {len} px"
         );
         assert!(kept < f64::from(n) / 2.0, "{kept}");
-    }
-}
-#[cfg(test)]
-mod look {
-    #[test]
-    #[ignore]
-    fn write_sample_pngs() {
-        let d = std::path::Path::new("/tmp/report-look");
-        std::fs::create_dir_all(d).unwrap();
-        super::tests::busy_figure_pub()
-            .write_png(&d.join("busy.png"))
-            .unwrap();
-        super::tests::busy_figure_pub()
-            .write_svg(&d.join("busy.svg"))
-            .unwrap();
     }
 }
