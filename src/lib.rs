@@ -4,6 +4,7 @@
 //! - Bevy-free scientific core, f64, unit-tested alone: [`math`], [`orbit`], [`geometry`],
 //!   [`control`], [`actuation`], [`report`].
 //! - `sim` feature: the Bevy + rapier layer that turns a scene into a fixed-step `App`.
+//! - `viewer` feature: `viewer`, the window (`rpod view`, `rpod replay`).
 
 pub mod actuation;
 #[cfg(feature = "sim")]
@@ -21,3 +22,5 @@ pub mod scene;
 pub mod sim;
 #[cfg(feature = "sim")]
 pub mod trials;
+#[cfg(feature = "viewer")]
+pub mod viewer;

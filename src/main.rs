@@ -1,5 +1,6 @@
 //! `rpod`: the command line. `rpod run` (headless run of a scene), `rpod check` (validate
-//! scenes), `rpod bench` (steps/s against the bare rapier and parry floor).
+//! scenes), `rpod bench` (steps/s against the bare rapier and parry floor); with the `viewer`
+//! feature, `rpod view` (live, in a window) and `rpod replay` (a recorded run).
 
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -69,6 +70,73 @@ enum Cmd {
         #[arg(long, default_value_t = 20000)]
         steps: u64,
     },
+    /// Run a scene live in a window (feature `viewer`).
+    #[cfg(feature = "viewer")]
+    View {
+        /// Scene file (RON).
+        scene: PathBuf,
+        /// Override a scene field (repeatable).
+        #[arg(long = "set", value_name = "PATH=VALUE")]
+        set: Vec<String>,
+        #[command(flatten)]
+        win: WindowArgs,
+    },
+    /// Play back a run recorded by `rpod run` in a window (feature `viewer`).
+    #[cfg(feature = "viewer")]
+    Replay {
+        /// Run directory (trajectory.csv, events.jsonl, summary.json).
+        run_dir: PathBuf,
+        /// Scene file (default: the one summary.json names).
+        #[arg(long)]
+        scene: Option<PathBuf>,
+        /// Start at this simulated time, s (default: the start; the end with --screenshot).
+        #[arg(long)]
+        at: Option<f64>,
+        #[command(flatten)]
+        win: WindowArgs,
+    },
+}
+
+/// Window options shared by `view` and `replay`.
+#[cfg(feature = "viewer")]
+#[derive(clap::Args)]
+struct WindowArgs {
+    /// Save a PNG of the window after --frames frames, then exit.
+    #[arg(long)]
+    screenshot: Option<PathBuf>,
+    /// Frames to render (then exit); default: run until the window is closed.
+    #[arg(long)]
+    frames: Option<u32>,
+    /// Window width, px.
+    #[arg(long, default_value_t = 1280)]
+    width: u32,
+    /// Window height, px.
+    #[arg(long, default_value_t = 720)]
+    height: u32,
+    /// Playback speed, × real time (0.1 to 1000).
+    #[arg(long, default_value_t = 1.0)]
+    speed: f64,
+    /// Start playing at once.
+    #[arg(long)]
+    play: bool,
+    /// Hide overlays and the panel (spacecraft only).
+    #[arg(long)]
+    no_overlays: bool,
+}
+
+#[cfg(feature = "viewer")]
+impl WindowArgs {
+    fn options(self, start_s: Option<f64>) -> rpod::viewer::ViewerOptions {
+        rpod::viewer::ViewerOptions {
+            frames: self.frames.or(self.screenshot.as_ref().map(|_| 10)),
+            screenshot: self.screenshot,
+            size_px: (self.width.max(64), self.height.max(64)),
+            overlays: !self.no_overlays,
+            start_s,
+            speed: self.speed,
+            play: self.play,
+        }
+    }
 }
 
 #[derive(clap::Args)]
@@ -232,6 +300,15 @@ fn main() -> ExitCode {
         }
         Cmd::Reproduce { name, out } => reproduce(name, &out),
         Cmd::Trials(cmd) => trials(cmd),
+        #[cfg(feature = "viewer")]
+        Cmd::View { scene, set, win } => viewer_result(rpod::viewer::view(&scene, &set, win.options(None))),
+        #[cfg(feature = "viewer")]
+        Cmd::Replay {
+            run_dir,
+            scene,
+            at,
+            win,
+        } => viewer_result(rpod::viewer::replay(&run_dir, scene.as_deref(), win.options(at))),
         Cmd::Bench { scene, steps } => match rpod::bench::run(&scene, steps) {
             Ok(report) => {
                 out!("{report}");
@@ -242,6 +319,17 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+    }
+}
+
+#[cfg(feature = "viewer")]
+fn viewer_result(r: Result<(), String>) -> ExitCode {
+    match r {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
     }
 }
 

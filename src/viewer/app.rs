@@ -1,0 +1,1065 @@
+//! The Bevy window: spacecraft meshes, overlays (gizmos), the read-out panel, the scrubber,
+//! camera presets and keyboard/mouse controls, for a live run or a recorded one.
+
+use super::geometry::{SceneGeom, part_look, primitive_mesh, to_transform, v3};
+use super::recording::{Recording, Snapshot};
+use super::timeline::{MarkerKind, SPEED_LADDER, Timeline};
+use crate::orbit::integrate::ReferenceOrbit;
+use crate::scene::{BodyRole, Environment, LoadedScene};
+use crate::sim::Simulation;
+use bevy::app::AppExit;
+use bevy::diagnostic::{DiagnosticsStore, FrameTimeDiagnosticsPlugin};
+use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll};
+use bevy::prelude::*;
+use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured, save_to_disk};
+use bevy::window::{PrimaryWindow, WindowResolution};
+use nalgebra::Vector3;
+use std::path::PathBuf;
+
+/// How the viewer is started.
+#[derive(Debug, Clone)]
+pub struct ViewerOptions {
+    /// Save a PNG of the window after `frames` frames, then exit.
+    pub screenshot: Option<PathBuf>,
+    /// Frames to render before the screenshot (or before exiting); `None`: run until closed.
+    pub frames: Option<u32>,
+    /// Window size, physical pixels.
+    pub size_px: (u32, u32),
+    /// Draw overlays and the panel.
+    pub overlays: bool,
+    /// Replay: start at this time, s (default: the end of the recording when taking a
+    /// screenshot, else the start).
+    pub start_s: Option<f64>,
+    /// Initial playback speed, × real time.
+    pub speed: f64,
+    /// Start playing (otherwise paused).
+    pub play: bool,
+}
+
+impl Default for ViewerOptions {
+    fn default() -> Self {
+        Self {
+            screenshot: None,
+            frames: None,
+            size_px: (1280, 720),
+            overlays: true,
+            start_s: None,
+            speed: 1.0,
+            play: false,
+        }
+    }
+}
+
+/// Background colour of the 3-D view.
+pub const BACKGROUND: Color = Color::srgb(0.015, 0.02, 0.045);
+
+/// The recorded run being replayed.
+#[derive(Resource)]
+struct Replay {
+    rec: Recording,
+    timeline: Timeline,
+    /// Reference orbit ECI state (r, v) at each recorded row (orbit scenes).
+    reference: Option<Vec<(Vector3<f64>, Vector3<f64>)>>,
+}
+
+/// The live simulation (a Bevy app of its own: not `Send`, so a non-send resource).
+struct Live {
+    sim: Simulation,
+    /// Simulated time owed to the simulation, s.
+    owed_s: f64,
+    /// Simulated seconds per wall second achieved over the last frame.
+    achieved: f64,
+}
+
+/// Live play/pause and speed.
+#[derive(Resource)]
+struct LiveCtl {
+    playing: bool,
+    speed: f64,
+    single_steps: u64,
+}
+
+/// What is drawn this frame.
+#[derive(Resource, Default)]
+struct Current {
+    snap: Snapshot,
+    /// Reference orbit ECI state (r, v) now, if in orbit.
+    reference: Option<(Vector3<f64>, Vector3<f64>)>,
+    live: bool,
+    scene_name: String,
+    end_s: Option<f64>,
+}
+
+/// Trails: recent centre-of-mass positions per body (live mode).
+#[derive(Resource, Default)]
+struct Trails(Vec<Vec<Vec3>>);
+
+/// Layer toggles.
+#[derive(Resource)]
+struct Layers {
+    ports: bool,
+    lvlh: bool,
+    trails: bool,
+    closest: bool,
+    panel: bool,
+}
+
+/// Camera presets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Preset {
+    /// Frame every body.
+    Overview,
+    /// Orbit the target.
+    OrbitTarget,
+    /// Behind the chaser, looking at the target.
+    FollowChaser,
+    /// From the chaser's docking port along its axis.
+    PortView,
+}
+
+/// Camera state: preset plus the mouse's yaw/pitch/zoom.
+#[derive(Resource)]
+struct CameraRig {
+    preset: Preset,
+    yaw: f32,
+    pitch: f32,
+    zoom: f32,
+}
+
+#[derive(Component)]
+struct BodyMarker(usize);
+#[derive(Component)]
+struct PanelText;
+#[derive(Component)]
+struct ScrubFill;
+#[derive(Component)]
+struct Scrubber;
+
+/// Frames counted, and the screenshot plan.
+#[derive(Resource)]
+struct Run {
+    frame: u32,
+    opts: ViewerOptions,
+    shot_requested: bool,
+    shot_done: bool,
+    /// Wall time of the first counted frame (for the frame rate), s.
+    t_first: Option<f64>,
+    frames_since_first: u32,
+}
+
+/// Opens the window on a live simulation of `loaded`.
+pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String> {
+    let sim = Simulation::new(loaded).map_err(|e| e.to_string())?;
+    let geom = SceneGeom::new(&sim.scene);
+    let mut app = base_app(&opts, &sim.scene.name);
+    let reference = sim.reference_state();
+    let snap = live_snapshot(&sim);
+    app.insert_resource(geom)
+        .insert_resource(Current {
+            snap,
+            reference,
+            live: true,
+            scene_name: sim.scene.name.clone(),
+            end_s: None,
+        })
+        .insert_resource(LiveCtl {
+            playing: opts.play,
+            speed: opts.speed.clamp(0.1, 1000.0),
+            single_steps: 0,
+        })
+        .insert_non_send(Live {
+            sim,
+            owed_s: 0.0,
+            achieved: 0.0,
+        })
+        .add_systems(Update, (live_controls, live_step).chain().before(apply_pose));
+    finish(app)
+}
+
+/// Opens the window on a recorded run (`rpod run` output) of `loaded`.
+pub fn run_replay(loaded: &LoadedScene, rec: Recording, opts: ViewerOptions) -> Result<(), String> {
+    let scene = &loaded.scene;
+    for b in &scene.bodies {
+        if !rec.body_names.contains(&b.name) {
+            return Err(format!(
+                "{}: trajectory.csv has no columns for body `{}` of scene `{}`",
+                rec.dir.display(),
+                b.name,
+                scene.name
+            ));
+        }
+    }
+    // Recording columns in scene order.
+    let order: Vec<usize> = scene
+        .bodies
+        .iter()
+        .map(|b| rec.body_names.iter().position(|n| *n == b.name).expect("checked"))
+        .collect();
+    let (t0, t1) = rec.span_s();
+    let mut timeline = Timeline::new(t0, t1, rec.row_dt_s(), rec.markers());
+    timeline.set_speed(opts.speed);
+    let start = opts
+        .start_s
+        .unwrap_or(if opts.screenshot.is_some() { t1 } else { t0 });
+    timeline.seek(start);
+    timeline.playing = opts.play;
+    let reference = reference_track(loaded, &rec.times_s)?;
+    let geom = SceneGeom::new(scene);
+    let mut app = base_app(&opts, &scene.name);
+    let mut snap = rec.sample(timeline.t_s);
+    snap.bodies = order.iter().map(|&i| snap.bodies[i]).collect();
+    app.insert_resource(geom)
+        .insert_resource(Current {
+            snap,
+            reference: None,
+            live: false,
+            scene_name: scene.name.clone(),
+            end_s: Some(t1),
+        })
+        .insert_resource(ReplayOrder(order))
+        .insert_resource(Replay {
+            rec,
+            timeline,
+            reference,
+        })
+        .add_systems(Update, (replay_controls, replay_sample).chain().before(apply_pose));
+    finish(app)
+}
+
+/// Body order of the recording for each scene body.
+#[derive(Resource)]
+struct ReplayOrder(Vec<usize>);
+
+/// The reference orbit at each row time (propagated in f64 from the scene's t = 0 state).
+fn reference_track(
+    loaded: &LoadedScene,
+    times_s: &[f64],
+) -> Result<Option<Vec<(Vector3<f64>, Vector3<f64>)>>, String> {
+    let Environment::Orbit { j2, .. } = loaded.scene.environment else {
+        return Ok(None);
+    };
+    let sim = Simulation::new(loaded).map_err(|e| e.to_string())?;
+    let Some((r, v)) = sim.reference_state() else {
+        return Ok(None);
+    };
+    let mut orbit = ReferenceOrbit::from_state(r, v, j2);
+    let mut out = Vec::with_capacity(times_s.len());
+    let mut t = 0.0;
+    for &ti in times_s {
+        if ti > t {
+            orbit.step(ti - t);
+            t = ti;
+        }
+        out.push(orbit.state());
+    }
+    Ok(Some(out))
+}
+
+fn base_app(opts: &ViewerOptions, title: &str) -> App {
+    let mut app = App::new();
+    let mut resolution = WindowResolution::new(opts.size_px.0, opts.size_px.1);
+    if opts.screenshot.is_some() {
+        resolution = resolution.with_scale_factor_override(1.0);
+    }
+    app.add_plugins((
+        DefaultPlugins.set(WindowPlugin {
+            primary_window: Some(Window {
+                title: format!("rpod — {title}"),
+                resolution,
+                present_mode: bevy::window::PresentMode::AutoNoVsync,
+                ..default()
+            }),
+            ..default()
+        }),
+        FrameTimeDiagnosticsPlugin::default(),
+    ))
+    .insert_resource(ClearColor(BACKGROUND))
+    .insert_resource(GlobalAmbientLight {
+        color: Color::WHITE,
+        brightness: 600.0,
+        ..default()
+    })
+    .insert_resource(Layers {
+        ports: opts.overlays,
+        lvlh: opts.overlays,
+        trails: opts.overlays,
+        closest: opts.overlays,
+        panel: opts.overlays,
+    })
+    .insert_resource(CameraRig {
+        preset: Preset::Overview,
+        yaw: 0.0,
+        pitch: 0.0,
+        zoom: 1.0,
+    })
+    .insert_resource(Trails::default())
+    .insert_resource(Run {
+        frame: 0,
+        opts: opts.clone(),
+        shot_requested: false,
+        shot_done: false,
+        t_first: None,
+        frames_since_first: 0,
+    })
+    .add_systems(Startup, setup)
+    .add_systems(
+        Update,
+        (
+            apply_pose,
+            view_controls,
+            camera_system,
+            overlays,
+            panel,
+            frames_and_screenshot,
+        )
+            .chain(),
+    );
+    app
+}
+
+fn finish(mut app: App) -> Result<(), String> {
+    match app.run() {
+        AppExit::Success => Ok(()),
+        AppExit::Error(c) => Err(format!("viewer exited with code {c}")),
+    }
+}
+
+fn setup(
+    mut commands: Commands,
+    geom: Res<SceneGeom>,
+    mut meshes: ResMut<Assets<Mesh>>,
+    mut materials: ResMut<Assets<StandardMaterial>>,
+) {
+    for (i, b) in geom.bodies.iter().enumerate() {
+        commands
+            .spawn((BodyMarker(i), Transform::default(), Visibility::default()))
+            .with_children(|c| {
+                for p in &b.parts {
+                    let (color, metallic, rough) = part_look(b.role, p.role);
+                    c.spawn((
+                        Mesh3d(meshes.add(primitive_mesh(&p.shape))),
+                        MeshMaterial3d(materials.add(StandardMaterial {
+                            base_color: color,
+                            metallic,
+                            perceptual_roughness: rough,
+                            ..default()
+                        })),
+                        to_transform(&p.pose_body),
+                        Name::new(p.full_name.clone()),
+                    ));
+                }
+            });
+    }
+    commands.spawn((
+        DirectionalLight {
+            illuminance: 8000.0,
+            shadows_enabled: false,
+            ..default()
+        },
+        Transform::from_xyz(3.0, 5.0, 8.0).looking_at(Vec3::ZERO, Vec3::Z),
+    ));
+    commands.spawn((Camera3d::default(), Transform::from_xyz(0.0, -30.0, 10.0)));
+    commands.spawn((
+        Text::new(""),
+        TextFont::from_font_size(13.0),
+        TextColor(Color::srgb(0.9, 0.92, 0.95)),
+        Node {
+            position_type: PositionType::Absolute,
+            top: Val::Px(6.0),
+            left: Val::Px(8.0),
+            ..default()
+        },
+        PanelText,
+    ));
+}
+
+/// Scrubber bar geometry, logical pixels from the window's left/bottom.
+const SCRUB_MARGIN: f32 = 16.0;
+const SCRUB_BOTTOM: f32 = 12.0;
+const SCRUB_HEIGHT: f32 = 14.0;
+
+fn spawn_scrubber(commands: &mut Commands, timeline: &Timeline) {
+    commands
+        .spawn((
+            Node {
+                position_type: PositionType::Absolute,
+                left: Val::Px(SCRUB_MARGIN),
+                right: Val::Px(SCRUB_MARGIN),
+                bottom: Val::Px(SCRUB_BOTTOM),
+                height: Val::Px(SCRUB_HEIGHT),
+                ..default()
+            },
+            BackgroundColor(Color::srgba(0.3, 0.32, 0.38, 0.8)),
+            Scrubber,
+        ))
+        .with_children(|c| {
+            c.spawn((
+                Node {
+                    position_type: PositionType::Absolute,
+                    left: Val::Px(0.0),
+                    top: Val::Px(0.0),
+                    height: Val::Percent(100.0),
+                    width: Val::Percent(0.0),
+                    ..default()
+                },
+                BackgroundColor(Color::srgba(0.45, 0.6, 0.9, 0.8)),
+                ScrubFill,
+            ));
+            for m in &timeline.markers {
+                let color = marker_color(m.kind);
+                let f = if timeline.end_s > timeline.start_s {
+                    (m.t_s - timeline.start_s) / (timeline.end_s - timeline.start_s)
+                } else {
+                    0.0
+                };
+                c.spawn((
+                    Node {
+                        position_type: PositionType::Absolute,
+                        left: Val::Percent((100.0 * f) as f32),
+                        top: Val::Px(-4.0),
+                        width: Val::Px(3.0),
+                        height: Val::Px(SCRUB_HEIGHT + 8.0),
+                        ..default()
+                    },
+                    BackgroundColor(color),
+                ));
+            }
+        });
+}
+
+fn marker_color(k: MarkerKind) -> Color {
+    match k {
+        MarkerKind::Contact => Color::srgb(1.0, 0.85, 0.2),
+        MarkerKind::Collision => Color::srgb(1.0, 0.2, 0.2),
+        MarkerKind::Violation => Color::srgb(1.0, 0.45, 0.1),
+        MarkerKind::Latch => Color::srgb(0.2, 1.0, 0.4),
+        MarkerKind::Other => Color::srgb(0.7, 0.7, 0.75),
+    }
+}
+
+fn replay_controls(
+    keys: Res<ButtonInput<KeyCode>>,
+    mouse: Res<ButtonInput<MouseButton>>,
+    window: Query<&Window, With<PrimaryWindow>>,
+    time: Res<Time>,
+    layers: Res<Layers>,
+    mut replay: ResMut<Replay>,
+    mut commands: Commands,
+    scrub: Query<(), With<Scrubber>>,
+) {
+    let tl = &mut replay.timeline;
+    if layers.panel && scrub.is_empty() {
+        spawn_scrubber(&mut commands, tl);
+    }
+    if keys.just_pressed(KeyCode::Space) {
+        tl.toggle_play();
+    }
+    if keys.just_pressed(KeyCode::Period) {
+        tl.step(1);
+    }
+    if keys.just_pressed(KeyCode::Comma) {
+        tl.step(-1);
+    }
+    if keys.just_pressed(KeyCode::Equal) || keys.just_pressed(KeyCode::NumpadAdd) {
+        tl.faster();
+    }
+    if keys.just_pressed(KeyCode::Minus) || keys.just_pressed(KeyCode::NumpadSubtract) {
+        tl.slower();
+    }
+    let span = tl.end_s - tl.start_s;
+    if keys.just_pressed(KeyCode::ArrowRight) {
+        tl.seek(tl.t_s + 0.05 * span);
+    }
+    if keys.just_pressed(KeyCode::ArrowLeft) {
+        tl.seek(tl.t_s - 0.05 * span);
+    }
+    if keys.just_pressed(KeyCode::Home) {
+        tl.seek(tl.start_s);
+    }
+    if keys.just_pressed(KeyCode::End) {
+        tl.seek(tl.end_s);
+    }
+    if keys.just_pressed(KeyCode::BracketRight) {
+        tl.next_marker();
+    }
+    if keys.just_pressed(KeyCode::BracketLeft) {
+        tl.prev_marker();
+    }
+    // Click or drag on the scrubber seeks.
+    if mouse.pressed(MouseButton::Left)
+        && let Ok(w) = window.single()
+        && let Some(c) = w.cursor_position()
+    {
+        let (wid, hei) = (w.width(), w.height());
+        let top = hei - SCRUB_BOTTOM - SCRUB_HEIGHT - 6.0;
+        if c.y >= top && c.y <= hei - SCRUB_BOTTOM + 6.0 && wid > 2.0 * SCRUB_MARGIN {
+            tl.seek_fraction(f64::from((c.x - SCRUB_MARGIN) / (wid - 2.0 * SCRUB_MARGIN)));
+        }
+    }
+    tl.advance(f64::from(time.delta_secs()));
+}
+
+fn replay_sample(replay: Res<Replay>, order: Res<ReplayOrder>, mut cur: ResMut<Current>) {
+    let t = replay.timeline.t_s;
+    let mut snap = replay.rec.sample(t);
+    snap.bodies = order.0.iter().map(|&i| snap.bodies[i]).collect();
+    cur.snap = snap;
+    cur.reference = replay
+        .reference
+        .as_ref()
+        .map(|r| r[replay.rec.row_at(t).min(r.len() - 1)]);
+}
+
+fn live_controls(keys: Res<ButtonInput<KeyCode>>, mut ctl: ResMut<LiveCtl>) {
+    if keys.just_pressed(KeyCode::Space) {
+        ctl.playing = !ctl.playing;
+    }
+    if keys.just_pressed(KeyCode::Period) {
+        ctl.playing = false;
+        ctl.single_steps += 1;
+    }
+    if keys.just_pressed(KeyCode::Equal) || keys.just_pressed(KeyCode::NumpadAdd) {
+        ctl.speed = SPEED_LADDER
+            .iter()
+            .copied()
+            .find(|&v| v > ctl.speed * (1.0 + 1e-9))
+            .unwrap_or(1000.0);
+    }
+    if keys.just_pressed(KeyCode::Minus) || keys.just_pressed(KeyCode::NumpadSubtract) {
+        ctl.speed = SPEED_LADDER
+            .iter()
+            .rev()
+            .copied()
+            .find(|&v| v < ctl.speed * (1.0 - 1e-9))
+            .unwrap_or(0.1);
+    }
+}
+
+/// Most fixed steps the live view runs in one frame (keeps the window responsive; at high
+/// speed the simulation then runs as fast as it can, and the panel shows the rate achieved).
+const MAX_STEPS_PER_FRAME: u64 = 2000;
+
+fn live_step(
+    time: Res<Time>,
+    mut ctl: ResMut<LiveCtl>,
+    mut live: NonSendMut<Live>,
+    mut cur: ResMut<Current>,
+    mut trails: ResMut<Trails>,
+) {
+    let dt = live.sim.scene.dt_s;
+    let wall = f64::from(time.delta_secs());
+    let mut n = 0;
+    if ctl.playing {
+        live.owed_s += wall * ctl.speed;
+        n = (live.owed_s / dt).floor() as u64;
+        if n > MAX_STEPS_PER_FRAME {
+            n = MAX_STEPS_PER_FRAME;
+            live.owed_s = 0.0;
+        } else {
+            live.owed_s -= n as f64 * dt;
+        }
+    } else {
+        live.owed_s = 0.0;
+    }
+    n += std::mem::take(&mut ctl.single_steps);
+    if n > 0 {
+        live.sim.step(n);
+    }
+    live.achieved = if wall > 0.0 { n as f64 * dt / wall } else { 0.0 };
+    cur.snap = live_snapshot(&live.sim);
+    cur.reference = live.sim.reference_state();
+    if n > 0 {
+        let nb = cur.snap.bodies.len();
+        trails.0.resize(nb, Vec::new());
+        for (k, (p, _)) in cur.snap.bodies.iter().enumerate() {
+            let tr = &mut trails.0[k];
+            tr.push(v3(p));
+            if tr.len() > 20_000 {
+                tr.drain(..10_000);
+            }
+        }
+    }
+}
+
+/// The live simulation's state as a [`Snapshot`].
+fn live_snapshot(sim: &Simulation) -> Snapshot {
+    let w = sim.app.world();
+    let bodies = sim
+        .scene
+        .bodies
+        .iter()
+        .map(|b| {
+            let s = sim.body(&b.name).expect("body of the scene");
+            (s.pos_m, s.att)
+        })
+        .collect();
+    let mon = sim.monitor();
+    let best = mon
+        .pairs
+        .iter()
+        .min_by(|a, b| a.distance_m.total_cmp(&b.distance_m));
+    let diag = w.resource::<crate::sim::output::Diagnostics>();
+    Snapshot {
+        t_s: sim.t_s(),
+        bodies,
+        min_distance_m: best.map(|p| p.distance_m).unwrap_or(f64::NAN),
+        closest_parts: best.map(|p| {
+            let (a, b) = mon.pair_names(p);
+            (a.to_string(), b.to_string())
+        }),
+        guarantees: sim
+            .guarantees()
+            .status
+            .iter()
+            .map(|s| (s.name.clone(), s.last_margin, s.unit.clone()))
+            .collect(),
+        diagnostics: diag
+            .names
+            .iter()
+            .cloned()
+            .zip(diag.values.iter().copied())
+            .collect(),
+        docking_state: w
+            .get_resource::<crate::sim::docking::Docking>()
+            .map(|d| d.state.name().to_string()),
+    }
+}
+
+fn apply_pose(
+    cur: Res<Current>,
+    geom: Res<SceneGeom>,
+    mut q: Query<(&BodyMarker, &mut Transform)>,
+) {
+    for (m, mut tf) in &mut q {
+        if let Some((p, a)) = cur.snap.bodies.get(m.0) {
+            *tf = to_transform(&geom.bodies[m.0].body_pose(p, a));
+        }
+    }
+}
+
+fn view_controls(
+    keys: Res<ButtonInput<KeyCode>>,
+    mouse: Res<ButtonInput<MouseButton>>,
+    motion: Res<AccumulatedMouseMotion>,
+    scroll: Res<AccumulatedMouseScroll>,
+    mut rig: ResMut<CameraRig>,
+    mut layers: ResMut<Layers>,
+) {
+    for (k, p) in [
+        (KeyCode::Digit0, Preset::Overview),
+        (KeyCode::Digit1, Preset::OrbitTarget),
+        (KeyCode::Digit2, Preset::FollowChaser),
+        (KeyCode::Digit3, Preset::PortView),
+    ] {
+        if keys.just_pressed(k) {
+            *rig = CameraRig {
+                preset: p,
+                yaw: 0.0,
+                pitch: 0.0,
+                zoom: 1.0,
+            };
+        }
+    }
+    if mouse.pressed(MouseButton::Right) || (mouse.pressed(MouseButton::Left) && keys.pressed(KeyCode::ShiftLeft)) {
+        rig.yaw -= motion.delta.x * 0.005;
+        rig.pitch = (rig.pitch + motion.delta.y * 0.005).clamp(-1.5, 1.5);
+    }
+    if scroll.delta.y != 0.0 {
+        rig.zoom = (rig.zoom * (1.0 - 0.1 * scroll.delta.y.signum())).clamp(0.02, 50.0);
+    }
+    let toggles: [(KeyCode, fn(&mut Layers) -> &mut bool); 5] = [
+        (KeyCode::KeyP, |l| &mut l.ports),
+        (KeyCode::KeyL, |l| &mut l.lvlh),
+        (KeyCode::KeyT, |l| &mut l.trails),
+        (KeyCode::KeyC, |l| &mut l.closest),
+        (KeyCode::KeyH, |l| &mut l.panel),
+    ];
+    for (k, f) in toggles {
+        if keys.just_pressed(k) {
+            let b = f(&mut layers);
+            *b = !*b;
+        }
+    }
+}
+
+fn body_index(geom: &SceneGeom, role: BodyRole) -> Option<usize> {
+    geom.bodies.iter().position(|b| b.role == role)
+}
+
+/// Orbit-style placement: `focus`, a base direction from the focus to the eye, distance;
+/// the mouse's yaw (about world z) and pitch turn the direction.
+fn orbit_eye(focus: Vec3, base_dir: Vec3, dist: f32, rig: &CameraRig) -> Vec3 {
+    let d = Quat::from_rotation_z(rig.yaw)
+        * Quat::from_axis_angle(base_dir.cross(Vec3::Z).normalize_or(Vec3::X), rig.pitch)
+        * base_dir.normalize_or(Vec3::NEG_Y);
+    focus + d * dist * rig.zoom
+}
+
+fn camera_system(
+    cur: Res<Current>,
+    geom: Res<SceneGeom>,
+    rig: Res<CameraRig>,
+    mut cam: Query<&mut Transform, With<Camera3d>>,
+) {
+    let Ok(mut tf) = cam.single_mut() else {
+        return;
+    };
+    let bodies = &cur.snap.bodies;
+    if bodies.is_empty() {
+        return;
+    }
+    let pos = |i: usize| v3(&bodies[i].0);
+    let target = body_index(&geom, BodyRole::Target).unwrap_or(0);
+    let chaser = body_index(&geom, BodyRole::Chaser).unwrap_or(bodies.len() - 1);
+    let up = Vec3::Z;
+    match rig.preset {
+        Preset::Overview => {
+            let n = bodies.len() as f32;
+            let centre = (0..bodies.len()).map(pos).sum::<Vec3>() / n;
+            let extent = (0..bodies.len())
+                .map(|i| (pos(i) - centre).length() + geom.bodies[i].radius_m as f32)
+                .fold(1.0, f32::max);
+            // Eye off to the side of the line joining the bodies, so both are seen apart.
+            let line = (pos(chaser) - pos(target)).normalize_or(Vec3::Y);
+            let side = line.cross(up).normalize_or(Vec3::X);
+            let base = (side + 0.35 * up + 0.3 * line).normalize();
+            let eye = orbit_eye(centre, base, 2.6 * extent, &rig);
+            *tf = Transform::from_translation(eye).looking_at(centre, up);
+        }
+        Preset::OrbitTarget => {
+            let c = pos(target);
+            let r = (geom.bodies[target].radius_m as f32).max(1.0);
+            let eye = orbit_eye(c, Vec3::new(-1.0, -1.0, 0.6), 3.5 * r, &rig);
+            *tf = Transform::from_translation(eye).looking_at(c, up);
+        }
+        Preset::FollowChaser => {
+            let c = pos(chaser);
+            let to_target = (pos(target) - c).normalize_or(Vec3::Y);
+            let r = (geom.bodies[chaser].radius_m as f32).max(1.0);
+            let eye = orbit_eye(c, -to_target + 0.3 * up, 4.0 * r, &rig);
+            *tf = Transform::from_translation(eye).looking_at(c + to_target * 2.0, up);
+        }
+        Preset::PortView => {
+            let b = &geom.bodies[chaser];
+            let (p, a) = (&bodies[chaser].0, &bodies[chaser].1);
+            let pose = b.body_pose(p, a);
+            let (origin, axis) = b
+                .ports
+                .first()
+                .map(|(_, o, ax)| (pose * nalgebra::Point3::from(*o), a * ax))
+                .unwrap_or((pose.translation.vector.into(), a * Vector3::x()));
+            // Just ahead of the port (outside the cone) looking along the port axis.
+            let eye = v3(&origin.coords) + v3(&axis) * 0.4;
+            let look = Quat::from_rotation_z(rig.yaw) * Quat::from_rotation_x(rig.pitch);
+            let body_up = v3(&(a * Vector3::z()));
+            *tf = Transform::from_translation(eye).looking_to(look * v3(&axis), body_up);
+        }
+    }
+}
+
+fn overlays(
+    cur: Res<Current>,
+    geom: Res<SceneGeom>,
+    layers: Res<Layers>,
+    replay: Option<Res<Replay>>,
+    order: Option<Res<ReplayOrder>>,
+    trails: Res<Trails>,
+    mut gizmos: Gizmos,
+) {
+    let bodies = &cur.snap.bodies;
+    if layers.ports {
+        for (i, b) in geom.bodies.iter().enumerate() {
+            let Some((p, a)) = bodies.get(i) else {
+                continue;
+            };
+            let pose = b.body_pose(p, a);
+            for (_, o, ax) in &b.ports {
+                let origin = v3(&(pose * nalgebra::Point3::from(*o)).coords);
+                let axw = a * ax;
+                let (u, v) = crate::scene::parts::perpendicular_basis(&axw);
+                gizmos.arrow(origin, origin + v3(&axw) * 0.6, Color::srgb(1.0, 0.3, 0.3));
+                gizmos.line(origin, origin + v3(&u) * 0.3, Color::srgb(0.3, 1.0, 0.3));
+                gizmos.line(origin, origin + v3(&v) * 0.3, Color::srgb(0.3, 0.5, 1.0));
+            }
+        }
+    }
+    if layers.lvlh
+        && let Some((r, v)) = cur.reference
+    {
+        // LVLH (Hill) axes at the reference origin: x radial out, y along-track, z normal.
+        let x = r.normalize();
+        let z = r.cross(&v).normalize();
+        let y = z.cross(&x);
+        let len = 4.0;
+        let o = Vec3::ZERO;
+        gizmos.arrow(o, v3(&x) * len, Color::srgb(1.0, 0.2, 0.2));
+        gizmos.arrow(o, v3(&y) * len, Color::srgb(0.2, 1.0, 0.2));
+        gizmos.arrow(o, v3(&z) * len, Color::srgb(0.3, 0.4, 1.0));
+        // Direction to the Earth's centre.
+        gizmos.arrow(o, -v3(&x) * 2.5 * len, Color::srgb(0.2, 0.9, 1.0));
+    }
+    if layers.trails {
+        let colors = [Color::srgb(0.9, 0.7, 0.3), Color::srgb(0.6, 0.8, 1.0)];
+        if let (Some(rp), Some(order)) = (replay.as_ref(), order.as_ref()) {
+            let upto = rp.rec.row_at(rp.timeline.t_s) + 1;
+            for (k, &col) in order.0.iter().enumerate() {
+                let tr = rp.rec.track(col);
+                let stride = (upto / 3000).max(1);
+                let pts = tr[..upto.min(tr.len())].iter().step_by(stride).map(v3);
+                gizmos.linestrip(pts, colors[k % 2]);
+            }
+        } else {
+            for (k, tr) in trails.0.iter().enumerate() {
+                gizmos.linestrip(tr.iter().copied(), colors[k % 2]);
+            }
+        }
+    }
+    if layers.closest
+        && let Some((a, b)) = &cur.snap.closest_parts
+        && let (Some(pa), Some(pb)) = (geom.find_part(a), geom.find_part(b))
+    {
+        let margin = margin_m(&cur.snap);
+        let color = margin_color(margin, cur.snap.min_distance_m);
+        match geom.closest_points(pa, pb, bodies) {
+            Some((p1, p2)) => {
+                gizmos.line(v3(&p1), v3(&p2), color);
+                gizmos.sphere(Isometry3d::from_translation(v3(&p1)), 0.05, color);
+                gizmos.sphere(Isometry3d::from_translation(v3(&p2)), 0.05, color);
+            }
+            None => {
+                // Touching: mark the contact at the part of a.
+                let bi = pa.0;
+                let (p, q) = &bodies[bi];
+                let w = geom.bodies[bi].body_pose(p, q) * geom.bodies[bi].parts[pa.1].pose_body;
+                gizmos.sphere(
+                    Isometry3d::from_translation(v3(&w.translation.vector)),
+                    0.1,
+                    Color::srgb(1.0, 0.1, 0.1),
+                );
+            }
+        }
+    }
+}
+
+/// The smallest guarantee margin in metres, or the distance when there is none, m.
+fn margin_m(s: &Snapshot) -> f64 {
+    s.guarantees
+        .iter()
+        .filter(|g| g.2 == "m" && g.1.is_finite())
+        .map(|g| g.1)
+        .fold(f64::NAN, f64::min)
+}
+
+/// Closest-points colour: red when a guarantee is violated (margin < 0), amber when the margin
+/// is below the guarantee's own threshold (distance < 2 × threshold), green otherwise; white
+/// when no metre guarantee exists.
+fn margin_color(margin: f64, distance: f64) -> Color {
+    if !margin.is_finite() {
+        return Color::WHITE;
+    }
+    let threshold = distance - margin;
+    if margin < 0.0 {
+        Color::srgb(1.0, 0.15, 0.15)
+    } else if margin < threshold {
+        Color::srgb(1.0, 0.7, 0.1)
+    } else {
+        Color::srgb(0.2, 1.0, 0.3)
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn panel(
+    cur: Res<Current>,
+    layers: Res<Layers>,
+    rig: Res<CameraRig>,
+    replay: Option<Res<Replay>>,
+    live_ctl: Option<Res<LiveCtl>>,
+    live: Option<NonSend<Live>>,
+    diagnostics: Res<DiagnosticsStore>,
+    mut text: Query<&mut Text, With<PanelText>>,
+    mut fill: Query<&mut Node, With<ScrubFill>>,
+    mut scrub_vis: Query<&mut Visibility, With<Scrubber>>,
+) {
+    for mut v in &mut scrub_vis {
+        *v = if layers.panel {
+            Visibility::Inherited
+        } else {
+            Visibility::Hidden
+        };
+    }
+    let Ok(mut text) = text.single_mut() else {
+        return;
+    };
+    if !layers.panel {
+        text.0.clear();
+        return;
+    }
+    use std::fmt::Write;
+    let s = &cur.snap;
+    let mut o = String::new();
+    let fps = diagnostics
+        .get(&FrameTimeDiagnosticsPlugin::FPS)
+        .and_then(|d| d.smoothed())
+        .unwrap_or(0.0);
+    let (state, speed) = if let Some(r) = &replay {
+        (r.timeline.playing, r.timeline.speed())
+    } else if let Some(c) = &live_ctl {
+        (c.playing, c.speed)
+    } else {
+        (false, 1.0)
+    };
+    let _ = writeln!(
+        o,
+        "rpod {} — {}   t = {:.2} s{}   {} {}×   {:.0} frames/s",
+        if cur.live { "view (live)" } else { "replay" },
+        cur.scene_name,
+        s.t_s,
+        cur.end_s.map(|e| format!(" / {e:.2} s")).unwrap_or_default(),
+        if state { "PLAYING" } else { "PAUSED" },
+        speed,
+        fps
+    );
+    if let Some(l) = &live {
+        let _ = writeln!(o, "simulation rate achieved: {:.1}× real time", l.achieved);
+    }
+    let _ = writeln!(
+        o,
+        "min distance {:.4} m   {}",
+        s.min_distance_m,
+        s.closest_parts
+            .as_ref()
+            .map(|(a, b)| format!("{a} ↔ {b}"))
+            .unwrap_or_default()
+    );
+    for (n, m, u) in &s.guarantees {
+        let _ = writeln!(
+            o,
+            "guarantee {n}: {}  margin {m:.4} {u}",
+            if *m >= 0.0 { "ok" } else { "VIOLATED" }
+        );
+    }
+    if let Some(d) = &s.docking_state {
+        let _ = writeln!(o, "docking: {d}");
+    }
+    for (n, v) in s.diagnostics.iter().take(12) {
+        let _ = writeln!(o, "{n} = {v:.5}");
+    }
+    if let Some(r) = &replay {
+        let past: Vec<_> = r.timeline.past_markers().collect();
+        for m in past.iter().rev().take(4).rev() {
+            let _ = writeln!(o, "event t = {:.2} s: {}", m.t_s, m.label);
+        }
+        if let Ok(mut f) = fill.single_mut() {
+            f.width = Val::Percent((100.0 * r.timeline.fraction()) as f32);
+        }
+    }
+    let _ = writeln!(
+        o,
+        "camera: {:?}   layers: ports {} · LVLH/Earth {} · trails {} · closest {}",
+        rig.preset,
+        on(layers.ports),
+        on(layers.lvlh),
+        on(layers.trails),
+        on(layers.closest)
+    );
+    let _ = writeln!(
+        o,
+        "keys: Space play/pause · ./, step · +/- speed · ←/→ seek · [ ] events · 0-3 camera · \
+         P L T C H layers · right-drag rotate · wheel zoom"
+    );
+    text.0 = o;
+}
+
+fn on(b: bool) -> &'static str {
+    if b { "on" } else { "off" }
+}
+
+/// Counts frames; prints the frame rate; takes the screenshot (with a sidecar JSON giving each
+/// body's projected centre, for tests) and exits when asked.
+fn frames_and_screenshot(
+    mut commands: Commands,
+    mut run: ResMut<Run>,
+    time: Res<Time<Real>>,
+    cur: Res<Current>,
+    geom: Res<SceneGeom>,
+    camera: Query<(&Camera, &Transform), With<Camera3d>>,
+    window: Query<&Window, With<PrimaryWindow>>,
+    mut exit: MessageWriter<AppExit>,
+) {
+    run.frame += 1;
+    let now = time.elapsed_secs_f64();
+    // Skip the first frames (pipeline compilation) for the rate.
+    if run.frame == 30 {
+        run.t_first = Some(now);
+    } else if run.t_first.is_some() {
+        run.frames_since_first += 1;
+    }
+    let Some(n) = run.opts.frames else {
+        return;
+    };
+    if run.frame < n {
+        return;
+    }
+    if let Some(path) = run.opts.screenshot.clone() {
+        if !run.shot_requested {
+            run.shot_requested = true;
+            if let (Ok((cam, tf)), Ok(w)) = (camera.single(), window.single()) {
+                let gt = GlobalTransform::from(*tf);
+                let bodies: Vec<_> = geom
+                    .bodies
+                    .iter()
+                    .zip(&cur.snap.bodies)
+                    .map(|(b, (p, _))| {
+                        let c = v3(p);
+                        let px = cam.world_to_viewport(&gt, c).ok();
+                        // Projected radius of a 0.5 m sphere about the centre of mass.
+                        let right = tf.right().as_vec3();
+                        let r_px = px.and_then(|p0| {
+                            cam.world_to_viewport(&gt, c + right * 0.5)
+                                .ok()
+                                .map(|p1| (p1 - p0).length())
+                        });
+                        serde_json::json!({
+                            "name": b.name,
+                            "centre_world_m": [p.x, p.y, p.z],
+                            "centre_px": px.map(|p| [p.x, p.y]),
+                            "half_metre_px": r_px,
+                        })
+                    })
+                    .collect();
+                let side = serde_json::json!({
+                    "width_px": w.physical_width(),
+                    "height_px": w.physical_height(),
+                    "scale_factor": w.scale_factor(),
+                    "t_s": cur.snap.t_s,
+                    "bodies": bodies,
+                });
+                let _ = std::fs::write(
+                    path.with_extension("json"),
+                    serde_json::to_string_pretty(&side).unwrap_or_default(),
+                );
+            }
+            commands
+                .spawn(Screenshot::primary_window())
+                .observe(save_to_disk(path))
+                .observe(|_: On<ScreenshotCaptured>, mut run: ResMut<Run>| {
+                    run.shot_done = true;
+                });
+        }
+        if !run.shot_done {
+            return;
+        }
+    }
+    if let Some(t0) = run.t_first {
+        let frames = run.frames_since_first;
+        let dt = now - t0;
+        if frames > 0 && dt > 0.0 {
+            println!(
+                "rendered {} frames; {frames} frames after warm-up in {dt:.2} s = {:.1} frames/s",
+                run.frame,
+                f64::from(frames) / dt
+            );
+        }
+    }
+    exit.write(AppExit::Success);
+}

@@ -1,0 +1,243 @@
+//! What the viewer draws of a spacecraft, made from the same part description as the colliders
+//! ([`crate::scene::parts::expand_body`]): one render mesh and one parry shape per collider,
+//! so the picture, the contacts and the monitor's distances all see the same geometry.
+
+use crate::scene::parts::{PartCollider, Primitive, expand_body, port_frame};
+use crate::scene::{BodyRole, PartRole, Scene};
+use bevy::asset::RenderAssetUsages;
+use bevy::mesh::{Indices, PrimitiveTopology};
+use bevy::prelude::*;
+use bevy_rapier3d::parry;
+use bevy_rapier3d::rapier::math::Pose;
+use bevy_rapier3d::rapier::prelude as rp;
+use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
+
+/// One collider of a body, ready to draw and to query.
+#[derive(Clone)]
+pub struct PartGeom {
+    /// `body/collider` name, as the monitor and the outputs spell it.
+    pub full_name: String,
+    /// Role (chooses the material).
+    pub role: PartRole,
+    /// The primitive (body frame via `pose_body`).
+    pub shape: Primitive,
+    /// Pose of the primitive in the body frame.
+    pub pose_body: Isometry3<f64>,
+    /// The same primitive as a parry shape (for closest points).
+    pub parry: Option<rp::SharedShape>,
+}
+
+/// One body's geometry.
+#[derive(Clone)]
+pub struct BodyGeom {
+    /// Name.
+    pub name: String,
+    /// Role in the scene.
+    pub role: BodyRole,
+    /// Centre of mass in the body frame, m.
+    pub com_body_m: Vector3<f64>,
+    /// Colliders.
+    pub parts: Vec<PartGeom>,
+    /// Docking ports: name, origin and unit axis in the body frame.
+    pub ports: Vec<(String, Vector3<f64>, Vector3<f64>)>,
+    /// Radius of a sphere about the body origin that holds every part, m.
+    pub radius_m: f64,
+}
+
+impl BodyGeom {
+    /// Pose of the body frame in the world for a centre-of-mass position and attitude.
+    pub fn body_pose(&self, com_world_m: &Vector3<f64>, att: &UnitQuaternion<f64>) -> Isometry3<f64> {
+        let origin = com_world_m - att * self.com_body_m;
+        Isometry3::from_parts(origin.into(), *att)
+    }
+}
+
+/// The geometry of every body of a scene, scene order.
+#[derive(Resource, Clone)]
+pub struct SceneGeom {
+    /// Bodies.
+    pub bodies: Vec<BodyGeom>,
+}
+
+fn parry_shape(p: &Primitive) -> Option<rp::SharedShape> {
+    Some(match p {
+        Primitive::Cuboid { half_m } => {
+            rp::SharedShape::cuboid(half_m.x as f32, half_m.y as f32, half_m.z as f32)
+        }
+        Primitive::Cylinder {
+            radius_m,
+            half_length_m,
+        } => rp::SharedShape::cylinder(*half_length_m as f32, *radius_m as f32),
+        Primitive::Ball { radius_m } => rp::SharedShape::ball(*radius_m as f32),
+        Primitive::ConvexHull { points_m } => {
+            let pts: Vec<_> = points_m
+                .iter()
+                .map(|p| crate::sim::conv::v(&p.coords))
+                .collect();
+            rp::SharedShape::convex_hull(&pts)?
+        }
+    })
+}
+
+impl SceneGeom {
+    /// Expands every body of the scene.
+    pub fn new(scene: &Scene) -> Self {
+        let bodies = scene
+            .bodies
+            .iter()
+            .map(|b| {
+                let parts: Vec<PartGeom> = expand_body(b)
+                    .into_iter()
+                    .map(|pc: PartCollider| PartGeom {
+                        full_name: format!("{}/{}", b.name, pc.name),
+                        role: pc.role,
+                        parry: parry_shape(&pc.shape),
+                        shape: pc.shape,
+                        pose_body: pc.pose_body,
+                    })
+                    .collect();
+                let radius_m = parts
+                    .iter()
+                    .map(|p| p.pose_body.translation.vector.norm() + p.shape.bounding_radius_m())
+                    .fold(0.0, f64::max);
+                let ports = b
+                    .ports
+                    .iter()
+                    .filter_map(|p| {
+                        port_frame(b, &p.name).map(|(o, a)| (p.name.clone(), o, a))
+                    })
+                    .collect();
+                BodyGeom {
+                    name: b.name.clone(),
+                    role: b.role,
+                    com_body_m: Vector3::from(b.com_m),
+                    parts,
+                    ports,
+                    radius_m,
+                }
+            })
+            .collect();
+        Self { bodies }
+    }
+
+    /// (body index, part index) of a `body/collider` name.
+    pub fn find_part(&self, full_name: &str) -> Option<(usize, usize)> {
+        self.bodies.iter().enumerate().find_map(|(i, b)| {
+            b.parts
+                .iter()
+                .position(|p| p.full_name == full_name)
+                .map(|k| (i, k))
+        })
+    }
+
+    /// World-frame closest points between two parts, given the bodies' centre-of-mass
+    /// positions and attitudes (`None` when the parts overlap or a shape is missing).
+    pub fn closest_points(
+        &self,
+        a: (usize, usize),
+        b: (usize, usize),
+        bodies: &[(Vector3<f64>, UnitQuaternion<f64>)],
+    ) -> Option<(Vector3<f64>, Vector3<f64>)> {
+        let (ba, pa) = (&self.bodies[a.0], &self.bodies[a.0].parts[a.1]);
+        let (bb, pb) = (&self.bodies[b.0], &self.bodies[b.0].parts[b.1]);
+        let wa = ba.body_pose(&bodies.get(a.0)?.0, &bodies[a.0].1) * pa.pose_body;
+        let wb = bb.body_pose(&bodies.get(b.0)?.0, &bodies[b.0].1) * pb.pose_body;
+        // Query in part a's frame (small coordinates, f32 stays precise), map back in f64.
+        let rel = wa.inv_mul(&wb);
+        let res = parry::query::closest_points(
+            &Pose::IDENTITY,
+            &*pa.parry.clone()?,
+            &crate::sim::conv::pose(&rel),
+            &*pb.parry.clone()?,
+            f32::MAX,
+        )
+        .ok()?;
+        match res {
+            parry::query::ClosestPoints::WithinMargin(p1, p2) => {
+                let p1 = Point3::new(f64::from(p1.x), f64::from(p1.y), f64::from(p1.z));
+                let p2 = Point3::new(f64::from(p2.x), f64::from(p2.y), f64::from(p2.z));
+                Some(((wa * p1).coords, (wa * p2).coords))
+            }
+            _ => None,
+        }
+    }
+}
+
+/// A render mesh of a primitive in its own frame (flat-shaded hulls).
+pub fn primitive_mesh(p: &Primitive) -> Mesh {
+    match p {
+        Primitive::Cuboid { half_m } => Mesh::from(Cuboid::new(
+            2.0 * half_m.x as f32,
+            2.0 * half_m.y as f32,
+            2.0 * half_m.z as f32,
+        )),
+        Primitive::Cylinder {
+            radius_m,
+            half_length_m,
+        } => Cylinder::new(*radius_m as f32, 2.0 * *half_length_m as f32)
+            .mesh()
+            .resolution(32)
+            .build(),
+        Primitive::Ball { radius_m } => Sphere::new(*radius_m as f32).mesh().uv(32, 16),
+        Primitive::ConvexHull { points_m } => hull_mesh(points_m),
+    }
+}
+
+/// Triangle list of the convex hull of `points`, one normal per face.
+pub fn hull_mesh(points: &[Point3<f64>]) -> Mesh {
+    let pts: Vec<_> = points
+        .iter()
+        .map(|p| crate::sim::conv::v(&p.coords))
+        .collect();
+    let mut pos: Vec<[f32; 3]> = Vec::new();
+    let mut nrm: Vec<[f32; 3]> = Vec::new();
+    if let Ok((v, tris)) = parry::transformation::try_convex_hull(&pts) {
+        for t in tris {
+            let [a, b, c] = t.map(|i| Vec3::new(v[i as usize].x, v[i as usize].y, v[i as usize].z));
+            let n = (b - a).cross(c - a).normalize_or_zero();
+            for p in [a, b, c] {
+                pos.push(p.to_array());
+                nrm.push(n.to_array());
+            }
+        }
+    }
+    let idx: Vec<u32> = (0..pos.len() as u32).collect();
+    Mesh::new(PrimitiveTopology::TriangleList, RenderAssetUsages::default())
+        .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, pos)
+        .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, nrm)
+        .with_inserted_indices(Indices::U32(idx))
+}
+
+/// Base colour, metallic and roughness of a part (so bus, panels, booms, antenna, cone and slot
+/// are told apart; the target's bus is gold foil, the chaser's silver).
+pub fn part_look(body: BodyRole, role: PartRole) -> (Color, f32, f32) {
+    match role {
+        PartRole::Bus => match body {
+            BodyRole::Target => (Color::srgb(0.85, 0.65, 0.2), 0.6, 0.35),
+            BodyRole::Chaser => (Color::srgb(0.8, 0.82, 0.86), 0.6, 0.3),
+            BodyRole::Other => (Color::srgb(0.6, 0.5, 0.45), 0.3, 0.6),
+        },
+        PartRole::Panel => (Color::srgb(0.12, 0.2, 0.6), 0.2, 0.25),
+        PartRole::Boom => (Color::srgb(0.55, 0.55, 0.55), 0.5, 0.5),
+        PartRole::Antenna => (Color::srgb(0.95, 0.95, 0.92), 0.0, 0.6),
+        PartRole::DockingCone => (Color::srgb(0.9, 0.3, 0.15), 0.3, 0.4),
+        PartRole::DockingSlot => (Color::srgb(0.2, 0.75, 0.35), 0.3, 0.4),
+        PartRole::Other => (Color::srgb(0.7, 0.7, 0.7), 0.2, 0.5),
+    }
+}
+
+/// f64 isometry → Bevy transform (f32).
+pub fn to_transform(p: &Isometry3<f64>) -> Transform {
+    let t = p.translation.vector;
+    let q = p.rotation.quaternion();
+    Transform {
+        translation: Vec3::new(t.x as f32, t.y as f32, t.z as f32),
+        rotation: Quat::from_xyzw(q.i as f32, q.j as f32, q.k as f32, q.w as f32).normalize(),
+        scale: Vec3::ONE,
+    }
+}
+
+/// f64 vector → Bevy `Vec3`.
+pub fn v3(v: &Vector3<f64>) -> Vec3 {
+    Vec3::new(v.x as f32, v.y as f32, v.z as f32)
+}
