@@ -142,6 +142,8 @@ struct Run {
     opts: ViewerOptions,
     shot_requested: bool,
     shot_done: bool,
+    /// Screenshots retaken because the frame was still blank.
+    retries: u32,
     /// Wall time of the first counted frame (for the frame rate), s.
     t_first: Option<f64>,
     frames_since_first: u32,
@@ -298,6 +300,7 @@ fn base_app(opts: &ViewerOptions, title: &str) -> App {
         opts: opts.clone(),
         shot_requested: false,
         shot_done: false,
+        retries: 0,
         t_first: None,
         frames_since_first: 0,
     })
@@ -353,7 +356,7 @@ fn setup(
     commands.spawn((
         DirectionalLight {
             illuminance: 8000.0,
-            shadows_enabled: false,
+            shadow_maps_enabled: false,
             ..default()
         },
         Transform::from_xyz(3.0, 5.0, 8.0).looking_at(Vec3::ZERO, Vec3::Z),
@@ -723,7 +726,7 @@ fn camera_system(
             let line = (pos(chaser) - pos(target)).normalize_or(Vec3::Y);
             let side = line.cross(up).normalize_or(Vec3::X);
             let base = (side + 0.35 * up + 0.3 * line).normalize();
-            let eye = orbit_eye(centre, base, 2.6 * extent, &rig);
+            let eye = orbit_eye(centre, base, 1.7 * extent, &rig);
             *tf = Transform::from_translation(eye).looking_at(centre, up);
         }
         Preset::OrbitTarget => {
@@ -974,6 +977,9 @@ fn on(b: bool) -> &'static str {
     if b { "on" } else { "off" }
 }
 
+/// Screenshots retaken at most while the first frames are still blank (10 frames apart).
+const MAX_SHOT_RETRIES: u32 = 60;
+
 /// Counts frames; prints the frame rate; takes the screenshot (with a sidecar JSON giving each
 /// body's projected centre, for tests) and exits when asked.
 fn frames_and_screenshot(
@@ -1042,8 +1048,20 @@ fn frames_and_screenshot(
             commands
                 .spawn(Screenshot::primary_window())
                 .observe(save_to_disk(path))
-                .observe(|_: On<ScreenshotCaptured>, mut run: ResMut<Run>| {
-                    run.shot_done = true;
+                .observe(|cap: On<ScreenshotCaptured>, mut run: ResMut<Run>| {
+                    // A frame of one colour means the render pipelines were still compiling
+                    // (the software renderer takes a while): take another a little later.
+                    let uniform = cap.image.data.as_deref().is_none_or(|d| {
+                        d.chunks_exact(4).all(|p| p == &d[..4])
+                    });
+                    if uniform && run.retries < MAX_SHOT_RETRIES {
+                        run.retries += 1;
+                        run.shot_requested = false;
+                        let next = run.frame + 10;
+                        run.opts.frames = Some(next);
+                    } else {
+                        run.shot_done = true;
+                    }
                 });
         }
         if !run.shot_done {
