@@ -301,14 +301,20 @@ fn main() -> ExitCode {
         Cmd::Reproduce { name, out } => reproduce(name, &out),
         Cmd::Trials(cmd) => trials(cmd),
         #[cfg(feature = "viewer")]
-        Cmd::View { scene, set, win } => viewer_result(rpod::viewer::view(&scene, &set, win.options(None))),
+        Cmd::View { scene, set, win } => {
+            viewer_result(rpod::viewer::view(&scene, &set, win.options(None)))
+        }
         #[cfg(feature = "viewer")]
         Cmd::Replay {
             run_dir,
             scene,
             at,
             win,
-        } => viewer_result(rpod::viewer::replay(&run_dir, scene.as_deref(), win.options(at))),
+        } => viewer_result(rpod::viewer::replay(
+            &run_dir,
+            scene.as_deref(),
+            win.options(at),
+        )),
         Cmd::Bench { scene, steps } => match rpod::bench::run(&scene, steps) {
             Ok(report) => {
                 out!("{report}");

@@ -108,7 +108,10 @@ fn val_viewer_replay_screenshot_shows_spacecraft() {
                 .unwrap();
             let rec: f64 = last[col].parse().unwrap();
             let shown = b["centre_world_m"][k].as_f64().unwrap();
-            assert!((rec - shown).abs() < 1e-9, "{name}.{axis}: {shown} vs {rec}");
+            assert!(
+                (rec - shown).abs() < 1e-9,
+                "{name}.{axis}: {shown} vs {rec}"
+            );
         }
     }
 
@@ -155,8 +158,16 @@ fn val_viewer_replay_screenshot_shows_spacecraft() {
 
     // The image corners (far from both bodies) are background: the foreground is the
     // spacecraft, not noise or a cleared-to-colour failure.
-    for (x, y) in [(2, 2), (img.w - 3, 2), (2, img.h - 3), (img.w - 3, img.h - 3)] {
-        assert!(!differs(img.px(x, y), bg), "corner ({x}, {y}) is not background");
+    for (x, y) in [
+        (2, 2),
+        (img.w - 3, 2),
+        (2, img.h - 3),
+        (img.w - 3, img.h - 3),
+    ] {
+        assert!(
+            !differs(img.px(x, y), bg),
+            "corner ({x}, {y}) is not background"
+        );
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

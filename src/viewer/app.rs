@@ -174,7 +174,10 @@ pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String>
             owed_s: 0.0,
             achieved: 0.0,
         })
-        .add_systems(Update, (live_controls, live_step).chain().before(apply_pose));
+        .add_systems(
+            Update,
+            (live_controls, live_step).chain().before(apply_pose),
+        );
     finish(app)
 }
 
@@ -195,7 +198,12 @@ pub fn run_replay(loaded: &LoadedScene, rec: Recording, opts: ViewerOptions) -> 
     let order: Vec<usize> = scene
         .bodies
         .iter()
-        .map(|b| rec.body_names.iter().position(|n| *n == b.name).expect("checked"))
+        .map(|b| {
+            rec.body_names
+                .iter()
+                .position(|n| *n == b.name)
+                .expect("checked")
+        })
         .collect();
     let (t0, t1) = rec.span_s();
     let mut timeline = Timeline::new(t0, t1, rec.row_dt_s(), rec.markers());
@@ -224,7 +232,10 @@ pub fn run_replay(loaded: &LoadedScene, rec: Recording, opts: ViewerOptions) -> 
             timeline,
             reference,
         })
-        .add_systems(Update, (replay_controls, replay_sample).chain().before(apply_pose));
+        .add_systems(
+            Update,
+            (replay_controls, replay_sample).chain().before(apply_pose),
+        );
     finish(app)
 }
 
@@ -361,7 +372,12 @@ fn setup(
         },
         Transform::from_xyz(3.0, 5.0, 8.0).looking_at(Vec3::ZERO, Vec3::Z),
     ));
-    commands.spawn((Camera3d::default(), Transform::from_xyz(0.0, -30.0, 10.0)));
+    // No multisampling: the software renderer (llvmpipe) pays for every sample.
+    commands.spawn((
+        Camera3d::default(),
+        bevy::render::view::Msaa::Off,
+        Transform::from_xyz(0.0, -30.0, 10.0),
+    ));
     commands.spawn((
         Text::new(""),
         TextFont::from_font_size(13.0),
@@ -568,7 +584,11 @@ fn live_step(
     if n > 0 {
         live.sim.step(n);
     }
-    live.achieved = if wall > 0.0 { n as f64 * dt / wall } else { 0.0 };
+    live.achieved = if wall > 0.0 {
+        n as f64 * dt / wall
+    } else {
+        0.0
+    };
     cur.snap = live_snapshot(&live.sim);
     cur.reference = live.sim.reference_state();
     if n > 0 {
@@ -663,7 +683,9 @@ fn view_controls(
             };
         }
     }
-    if mouse.pressed(MouseButton::Right) || (mouse.pressed(MouseButton::Left) && keys.pressed(KeyCode::ShiftLeft)) {
+    if mouse.pressed(MouseButton::Right)
+        || (mouse.pressed(MouseButton::Left) && keys.pressed(KeyCode::ShiftLeft))
+    {
         rig.yaw -= motion.delta.x * 0.005;
         rig.pitch = (rig.pitch + motion.delta.y * 0.005).clamp(-1.5, 1.5);
     }
@@ -913,17 +935,19 @@ fn panel(
     };
     let _ = writeln!(
         o,
-        "rpod {} — {}   t = {:.2} s{}   {} {}×   {:.0} frames/s",
+        "rpod {} - {}   t = {:.2} s{}   {} {}x   {:.0} frames/s",
         if cur.live { "view (live)" } else { "replay" },
         cur.scene_name,
         s.t_s,
-        cur.end_s.map(|e| format!(" / {e:.2} s")).unwrap_or_default(),
+        cur.end_s
+            .map(|e| format!(" / {e:.2} s"))
+            .unwrap_or_default(),
         if state { "PLAYING" } else { "PAUSED" },
         speed,
         fps
     );
     if let Some(l) = &live {
-        let _ = writeln!(o, "simulation rate achieved: {:.1}× real time", l.achieved);
+        let _ = writeln!(o, "simulation rate achieved: {:.1}x real time", l.achieved);
     }
     let _ = writeln!(
         o,
@@ -931,7 +955,7 @@ fn panel(
         s.min_distance_m,
         s.closest_parts
             .as_ref()
-            .map(|(a, b)| format!("{a} ↔ {b}"))
+            .map(|(a, b)| format!("{a} <-> {b}"))
             .unwrap_or_default()
     );
     for (n, m, u) in &s.guarantees {
@@ -958,7 +982,7 @@ fn panel(
     }
     let _ = writeln!(
         o,
-        "camera: {:?}   layers: ports {} · LVLH/Earth {} · trails {} · closest {}",
+        "camera: {:?}   layers: ports {} | LVLH/Earth {} | trails {} | closest {}",
         rig.preset,
         on(layers.ports),
         on(layers.lvlh),
@@ -967,8 +991,8 @@ fn panel(
     );
     let _ = writeln!(
         o,
-        "keys: Space play/pause · ./, step · +/- speed · ←/→ seek · [ ] events · 0-3 camera · \
-         P L T C H layers · right-drag rotate · wheel zoom"
+        "keys: Space play/pause | . , step | + - speed | Left/Right seek | [ ] events | \
+         0-3 camera | P L T C H layers | right-drag rotate | wheel zoom"
     );
     text.0 = o;
 }
@@ -1051,9 +1075,11 @@ fn frames_and_screenshot(
                 .observe(|cap: On<ScreenshotCaptured>, mut run: ResMut<Run>| {
                     // A frame of one colour means the render pipelines were still compiling
                     // (the software renderer takes a while): take another a little later.
-                    let uniform = cap.image.data.as_deref().is_none_or(|d| {
-                        d.chunks_exact(4).all(|p| p == &d[..4])
-                    });
+                    let uniform = cap
+                        .image
+                        .data
+                        .as_deref()
+                        .is_none_or(|d| d.chunks_exact(4).all(|p| p == &d[..4]));
                     if uniform && run.retries < MAX_SHOT_RETRIES {
                         run.retries += 1;
                         run.shot_requested = false;

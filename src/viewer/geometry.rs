@@ -46,7 +46,11 @@ pub struct BodyGeom {
 
 impl BodyGeom {
     /// Pose of the body frame in the world for a centre-of-mass position and attitude.
-    pub fn body_pose(&self, com_world_m: &Vector3<f64>, att: &UnitQuaternion<f64>) -> Isometry3<f64> {
+    pub fn body_pose(
+        &self,
+        com_world_m: &Vector3<f64>,
+        att: &UnitQuaternion<f64>,
+    ) -> Isometry3<f64> {
         let origin = com_world_m - att * self.com_body_m;
         Isometry3::from_parts(origin.into(), *att)
     }
@@ -103,9 +107,7 @@ impl SceneGeom {
                 let ports = b
                     .ports
                     .iter()
-                    .filter_map(|p| {
-                        port_frame(b, &p.name).map(|(o, a)| (p.name.clone(), o, a))
-                    })
+                    .filter_map(|p| port_frame(b, &p.name).map(|(o, a)| (p.name.clone(), o, a)))
                     .collect();
                 BodyGeom {
                     name: b.name.clone(),
@@ -202,10 +204,13 @@ pub fn hull_mesh(points: &[Point3<f64>]) -> Mesh {
         }
     }
     let idx: Vec<u32> = (0..pos.len() as u32).collect();
-    Mesh::new(PrimitiveTopology::TriangleList, RenderAssetUsages::default())
-        .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, pos)
-        .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, nrm)
-        .with_inserted_indices(Indices::U32(idx))
+    Mesh::new(
+        PrimitiveTopology::TriangleList,
+        RenderAssetUsages::default(),
+    )
+    .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, pos)
+    .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, nrm)
+    .with_inserted_indices(Indices::U32(idx))
 }
 
 /// Base colour, metallic and roughness of a part (so bus, panels, booms, antenna, cone and slot

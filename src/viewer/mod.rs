@@ -55,8 +55,7 @@ pub fn replay(dir: &Path, scene: Option<&Path>, opts: ViewerOptions) -> Result<(
         Some(s) => s.to_path_buf(),
         None => scene_of_run(&rec)?,
     };
-    let loaded =
-        crate::scene::load_scene_file(&scene_path, &[]).map_err(|e| e.to_string())?;
+    let loaded = crate::scene::load_scene_file(&scene_path, &[]).map_err(|e| e.to_string())?;
     run_replay(&loaded, rec, opts)
 }
 

@@ -68,9 +68,8 @@ impl Recording {
     /// Reads a run directory. `body_names` are the scene's bodies in scene order; each must have
     /// its 13 state columns in `trajectory.csv`.
     pub fn load(dir: &Path) -> Result<Self, String> {
-        let summary: serde_json::Value =
-            serde_json::from_str(&read(&dir.join("summary.json"))?)
-                .map_err(|e| format!("{}: {e}", dir.join("summary.json").display()))?;
+        let summary: serde_json::Value = serde_json::from_str(&read(&dir.join("summary.json"))?)
+            .map_err(|e| format!("{}: {e}", dir.join("summary.json").display()))?;
         let text = read(&dir.join("trajectory.csv"))?;
         let events_text = read(&dir.join("events.jsonl")).unwrap_or_default();
         let mut rec = Self::parse(&text, &events_text)?;
@@ -148,10 +147,17 @@ impl Recording {
                 .map(|c| c.parse::<f64>().unwrap_or(f64::NAN))
                 .collect();
             if !nums[0].is_finite() || times_s.last().is_some_and(|&t| nums[0] < t) {
-                return Err(format!("trajectory.csv line {}: bad or decreasing t_s", k + 2));
+                return Err(format!(
+                    "trajectory.csv line {}: bad or decreasing t_s",
+                    k + 2
+                ));
             }
             times_s.push(nums[0]);
-            closest.push(closest_col.map(|c| cells[c].to_string()).unwrap_or_default());
+            closest.push(
+                closest_col
+                    .map(|c| cells[c].to_string())
+                    .unwrap_or_default(),
+            );
             rows.push(nums);
         }
         if rows.is_empty() {
@@ -215,13 +221,19 @@ impl Recording {
 
     /// Index of the last row at or before `t_s` (0 before the start).
     pub fn row_at(&self, t_s: f64) -> usize {
-        self.times_s.partition_point(|&t| t <= t_s).saturating_sub(1)
+        self.times_s
+            .partition_point(|&t| t <= t_s)
+            .saturating_sub(1)
     }
 
     /// Everything at time `t_s` (clamped to the recording).
     pub fn sample(&self, t_s: f64) -> Snapshot {
         let (t0, t1) = self.span_s();
-        let t = if t_s.is_finite() { t_s.clamp(t0, t1) } else { t0 };
+        let t = if t_s.is_finite() {
+            t_s.clamp(t0, t1)
+        } else {
+            t0
+        };
         let i = self.row_at(t);
         let j = (i + 1).min(self.rows.len() - 1);
         let (a, b) = (&self.rows[i], &self.rows[j]);

@@ -46,11 +46,11 @@ impl Marker {
         let (kind, label) = match kind_s {
             "contact_start" => (
                 MarkerKind::Contact,
-                format!("contact {} – {}", s("a"), s("b")),
+                format!("contact {} - {}", s("a"), s("b")),
             ),
             "collision" => (
                 MarkerKind::Collision,
-                format!("collision {} – {}", s("a"), s("b")),
+                format!("collision {} - {}", s("a"), s("b")),
             ),
             "guarantee_violated" => (MarkerKind::Violation, format!("violated {}", s("name"))),
             "docking_state" if s("to") == "LATCHED" => (MarkerKind::Latch, "LATCHED".to_string()),
@@ -150,7 +150,11 @@ impl Timeline {
 
     /// Seeks to a fraction of the recording (scrubber click), clamped to 0..1.
     pub fn seek_fraction(&mut self, f: f64) {
-        let f = if f.is_finite() { f.clamp(0.0, 1.0) } else { 0.0 };
+        let f = if f.is_finite() {
+            f.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         self.seek(self.start_s + f * (self.end_s - self.start_s));
     }
 
@@ -235,7 +239,7 @@ mod tests {
                 (24.4, MarkerKind::Latch),
             ]
         );
-        assert_eq!(t.markers[2].label, "contact target/slot.back – chaser/cone");
+        assert_eq!(t.markers[2].label, "contact target/slot.back - chaser/cone");
     }
 
     #[test]
