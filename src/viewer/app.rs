@@ -53,13 +53,19 @@ impl Default for ViewerOptions {
 /// Background colour of the 3-D view.
 pub const BACKGROUND: Color = Color::srgb(0.015, 0.02, 0.045);
 
+/// Reference-orbit ECI states (position m, velocity m/s), one per recorded row.
+type RvTrack = Vec<(Vector3<f64>, Vector3<f64>)>;
+
+/// A layer toggle: which flag of [`Layers`] a key flips.
+type Toggle = fn(&mut Layers) -> &mut bool;
+
 /// The recorded run being replayed.
 #[derive(Resource)]
 struct Replay {
     rec: Recording,
     timeline: Timeline,
     /// Reference orbit ECI state (r, v) at each recorded row (orbit scenes).
-    reference: Option<Vec<(Vector3<f64>, Vector3<f64>)>>,
+    reference: Option<RvTrack>,
 }
 
 /// The live simulation (a Bevy app of its own: not `Send`, so a non-send resource).
@@ -244,10 +250,7 @@ pub fn run_replay(loaded: &LoadedScene, rec: Recording, opts: ViewerOptions) -> 
 struct ReplayOrder(Vec<usize>);
 
 /// The reference orbit at each row time (propagated in f64 from the scene's t = 0 state).
-fn reference_track(
-    loaded: &LoadedScene,
-    times_s: &[f64],
-) -> Result<Option<Vec<(Vector3<f64>, Vector3<f64>)>>, String> {
+fn reference_track(loaded: &LoadedScene, times_s: &[f64]) -> Result<Option<RvTrack>, String> {
     let Environment::Orbit { j2, .. } = loaded.scene.environment else {
         return Ok(None);
     };
@@ -456,6 +459,7 @@ fn marker_color(k: MarkerKind) -> Color {
     }
 }
 
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 fn replay_controls(
     keys: Res<ButtonInput<KeyCode>>,
     mouse: Res<ButtonInput<MouseButton>>,
@@ -692,7 +696,7 @@ fn view_controls(
     if scroll.delta.y != 0.0 {
         rig.zoom = (rig.zoom * (1.0 - 0.1 * scroll.delta.y.signum())).clamp(0.02, 50.0);
     }
-    let toggles: [(KeyCode, fn(&mut Layers) -> &mut bool); 5] = [
+    let toggles: [(KeyCode, Toggle); 5] = [
         (KeyCode::KeyP, |l| &mut l.ports),
         (KeyCode::KeyL, |l| &mut l.lvlh),
         (KeyCode::KeyT, |l| &mut l.trails),
@@ -1006,6 +1010,7 @@ const MAX_SHOT_RETRIES: u32 = 60;
 
 /// Counts frames; prints the frame rate; takes the screenshot (with a sidecar JSON giving each
 /// body's projected centre, for tests) and exits when asked.
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 fn frames_and_screenshot(
     mut commands: Commands,
     mut run: ResMut<Run>,
