@@ -1,4 +1,5 @@
-//! The viewer renders for real: a recorded run of `free_drift` is replayed in a window (under
+//! The viewer renders for real: a recorded run of `free_drift` is replayed (and the scene is
+//! run live) in a window (under
 //! `xvfb-run` with Mesa's software Vulkan in CI), `--screenshot` saves a PNG, and the PNG is
 //! checked pixel by pixel.
 //!
@@ -115,6 +116,13 @@ fn val_viewer_replay_screenshot_shows_spacecraft() {
         }
     }
 
+    check_picture(&img, &side);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The PNG is not blank, each body's projected centre shows the spacecraft, corners are
+/// background.
+fn check_picture(img: &Png, side: &serde_json::Value) {
     // Not blank: a sensible share of the picture is not background.
     let bg = img.background();
     let total = img.w * img.h;
@@ -169,5 +177,53 @@ fn val_viewer_replay_screenshot_shows_spacecraft() {
             "corner ({x}, {y}) is not background"
         );
     }
+}
+
+#[test]
+fn val_viewer_live_view_screenshot_shows_spacecraft() {
+    assert!(
+        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
+        "no display: run this test under `xvfb-run -a` (see .ci/run)"
+    );
+    let dir = std::env::temp_dir().join(format!("rpod_viewer_live_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let png = dir.join("live.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_rpod"))
+        .args(["view", "scenes/free_drift.ron", "--screenshot"])
+        .arg(&png)
+        .args([
+            "--frames",
+            "12",
+            "--width",
+            "960",
+            "--height",
+            "540",
+            "--no-overlays",
+        ])
+        .output()
+        .expect("rpod runs");
+    assert!(
+        out.status.success(),
+        "rpod view failed: {}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = Png::load(&png);
+    assert_eq!((img.w, img.h), (960, 540));
+    let side: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(png.with_extension("json")).unwrap())
+            .unwrap();
+    // Paused at t = 0: the bodies drawn are where the simulation starts them.
+    assert_eq!(side["t_s"].as_f64().unwrap(), 0.0);
+    let loaded = rpod::scene::load_scene_file(Path::new("scenes/free_drift.ron"), &[]).unwrap();
+    let sim = rpod::sim::Simulation::new(&loaded).unwrap();
+    for b in side["bodies"].as_array().unwrap() {
+        let s = sim.body(b["name"].as_str().unwrap()).unwrap();
+        for k in 0..3 {
+            assert!((b["centre_world_m"][k].as_f64().unwrap() - s.pos_m[k]).abs() < 1e-9);
+        }
+    }
+    check_picture(&img, &side);
     let _ = std::fs::remove_dir_all(&dir);
 }
