@@ -107,6 +107,7 @@ struct Layers {
     lvlh: bool,
     trails: bool,
     closest: bool,
+    contacts: bool,
     panel: bool,
 }
 
@@ -300,6 +301,7 @@ fn base_app(opts: &ViewerOptions, title: &str) -> App {
         lvlh: opts.overlays,
         trails: opts.overlays,
         closest: opts.overlays,
+        contacts: opts.overlays,
         panel: opts.overlays,
     })
     .insert_resource(CameraRig {
@@ -649,6 +651,7 @@ fn live_snapshot(sim: &Simulation) -> Snapshot {
         docking_state: w
             .get_resource::<crate::sim::docking::Docking>()
             .map(|d| d.state.name().to_string()),
+        contacts: sim.contacts().active.keys().cloned().collect(),
     }
 }
 
@@ -696,7 +699,8 @@ fn view_controls(
     if scroll.delta.y != 0.0 {
         rig.zoom = (rig.zoom * (1.0 - 0.1 * scroll.delta.y.signum())).clamp(0.02, 50.0);
     }
-    let toggles: [(KeyCode, Toggle); 5] = [
+    let toggles: [(KeyCode, Toggle); 6] = [
+        (KeyCode::KeyK, |l| &mut l.contacts),
         (KeyCode::KeyP, |l| &mut l.ports),
         (KeyCode::KeyL, |l| &mut l.lvlh),
         (KeyCode::KeyT, |l| &mut l.trails),
@@ -843,6 +847,20 @@ fn overlays(
             }
         }
     }
+    if layers.contacts {
+        // Contact points (on the first part) and normals, from the parts' geometry at the
+        // drawn poses; the recorded runs hold no per-contact force, so normals, not forces.
+        for (a, b) in &cur.snap.contacts {
+            if let (Some(pa), Some(pb)) = (geom.find_part(a), geom.find_part(b))
+                && let Some((p, n)) = geom.contact(pa, pb, bodies)
+            {
+                let p = v3(&p);
+                let c = Color::srgb(1.0, 0.9, 0.1);
+                gizmos.sphere(Isometry3d::from_translation(p), 0.03, c);
+                gizmos.arrow(p, p + v3(&n) * 0.3, c);
+            }
+        }
+    }
     if layers.closest
         && let Some((a, b)) = &cur.snap.closest_parts
         && let (Some(pa), Some(pb)) = (geom.find_part(a), geom.find_part(b))
@@ -972,6 +990,9 @@ fn panel(
     if let Some(d) = &s.docking_state {
         let _ = writeln!(o, "docking: {d}");
     }
+    for (a, b) in &s.contacts {
+        let _ = writeln!(o, "contact: {a} <-> {b}");
+    }
     for (n, v) in s.diagnostics.iter().take(12) {
         let _ = writeln!(o, "{n} = {v:.5}");
     }
@@ -986,17 +1007,18 @@ fn panel(
     }
     let _ = writeln!(
         o,
-        "camera: {:?}   layers: ports {} | LVLH/Earth {} | trails {} | closest {}",
+        "camera: {:?}   layers: ports {} | LVLH/Earth {} | trails {} | closest {} | contacts {}",
         rig.preset,
         on(layers.ports),
         on(layers.lvlh),
         on(layers.trails),
-        on(layers.closest)
+        on(layers.closest),
+        on(layers.contacts)
     );
     let _ = writeln!(
         o,
         "keys: Space play/pause | . , step | + - speed | Left/Right seek | [ ] events | \
-         0-3 camera | P L T C H layers | right-drag rotate | wheel zoom"
+         0-3 camera | P L T C K H layers | right-drag rotate | wheel zoom"
     );
     text.0 = o;
 }

@@ -165,6 +165,42 @@ impl SceneGeom {
     }
 }
 
+impl SceneGeom {
+    /// Contact between two parts: the world point on part `a` and the world unit normal
+    /// pointing from `a` to `b` (`None` when they are more than 2 cm apart).
+    pub fn contact(
+        &self,
+        a: (usize, usize),
+        b: (usize, usize),
+        bodies: &[(Vector3<f64>, UnitQuaternion<f64>)],
+    ) -> Option<(Vector3<f64>, Vector3<f64>)> {
+        let (ba, pa) = (&self.bodies[a.0], &self.bodies[a.0].parts[a.1]);
+        let (bb, pb) = (&self.bodies[b.0], &self.bodies[b.0].parts[b.1]);
+        let wa = ba.body_pose(&bodies.get(a.0)?.0, &bodies[a.0].1) * pa.pose_body;
+        let wb = bb.body_pose(&bodies.get(b.0)?.0, &bodies[b.0].1) * pb.pose_body;
+        let rel = wa.inv_mul(&wb);
+        let c = parry::query::contact(
+            &Pose::IDENTITY,
+            &*pa.parry.clone()?,
+            &crate::sim::conv::pose(&rel),
+            &*pb.parry.clone()?,
+            0.02,
+        )
+        .ok()??;
+        let p = Point3::new(
+            f64::from(c.point1.x),
+            f64::from(c.point1.y),
+            f64::from(c.point1.z),
+        );
+        let n = Vector3::new(
+            f64::from(c.normal1.x),
+            f64::from(c.normal1.y),
+            f64::from(c.normal1.z),
+        );
+        Some(((wa * p).coords, wa.rotation * n))
+    }
+}
+
 /// A render mesh of a primitive in its own frame (flat-shaded hulls).
 pub fn primitive_mesh(p: &Primitive) -> Mesh {
     match p {

@@ -24,6 +24,8 @@ pub struct Snapshot {
     pub diagnostics: Vec<(String, f64)>,
     /// Docking state name, if the scene has a mechanism.
     pub docking_state: Option<String>,
+    /// Part pairs in contact (`body/part`, `body/part`).
+    pub contacts: Vec<(String, String)>,
 }
 
 /// Column indices of one body's state in `trajectory.csv`.
@@ -268,8 +270,35 @@ impl Recording {
                     .any(|(_, n)| n == "dock.state")
                     .then(|| "FREE".to_string())
             });
+        // Contacts open at t: every contact_start not yet closed by its contact_end.
+        let mut contacts: Vec<(String, String)> = Vec::new();
+        for e in &self.events {
+            if e["t_s"].as_f64().unwrap_or(f64::INFINITY) > t + 1e-9 {
+                break;
+            }
+            let pair = || {
+                (
+                    e["a"].as_str().unwrap_or("").to_string(),
+                    e["b"].as_str().unwrap_or("").to_string(),
+                )
+            };
+            match e["kind"].as_str() {
+                Some("contact_start") => {
+                    let p = pair();
+                    if !contacts.contains(&p) {
+                        contacts.push(p);
+                    }
+                }
+                Some("contact_end") => {
+                    let p = pair();
+                    contacts.retain(|c| *c != p);
+                }
+                _ => {}
+            }
+        }
         Snapshot {
             t_s: t,
+            contacts,
             bodies,
             min_distance_m: self.min_col.map(|c| a[c]).unwrap_or(f64::NAN),
             closest_parts,
@@ -316,11 +345,30 @@ mod tests {
         assert_eq!(s.docking_state, None);
         let s = r.sample(0.75);
         assert_eq!(s.docking_state.as_deref(), Some("ATTRACTING"));
+        assert!(s.contacts.is_empty());
         // Clamped past the end: the last row.
         let s = r.sample(9.0);
         assert_eq!(s.t_s, 1.0);
         assert!((s.bodies[0].0.x - 1.0).abs() < 1e-12);
         assert_eq!(s.min_distance_m, 3.0);
+    }
+
+    #[test]
+    fn invariant_recording_open_contacts() {
+        let ev = [
+            r#"{"t_s":0.2,"kind":"contact_start","a":"a/bus","b":"b/cone"}"#,
+            r#"{"t_s":0.3,"kind":"contact_start","a":"a/wing.panel1","b":"b/cone"}"#,
+            r#"{"t_s":0.6,"kind":"contact_end","a":"a/bus","b":"b/cone"}"#,
+        ]
+        .join("\n");
+        let r = Recording::parse(CSV, &ev).unwrap();
+        assert!(r.sample(0.1).contacts.is_empty());
+        assert_eq!(r.sample(0.25).contacts.len(), 1);
+        assert_eq!(r.sample(0.5).contacts.len(), 2);
+        assert_eq!(
+            r.sample(0.7).contacts,
+            vec![("a/wing.panel1".to_string(), "b/cone".to_string())]
+        );
     }
 
     #[test]
