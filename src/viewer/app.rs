@@ -15,6 +15,8 @@ use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured, save_to_dis
 use bevy::window::{PrimaryWindow, WindowResolution};
 use nalgebra::Vector3;
 use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// How the viewer is started.
 #[derive(Debug, Clone)]
@@ -108,6 +110,7 @@ struct Layers {
     trails: bool,
     closest: bool,
     contacts: bool,
+    surfaces: bool,
     panel: bool,
 }
 
@@ -137,10 +140,31 @@ struct CameraRig {
 struct BodyMarker(usize);
 #[derive(Component)]
 struct PanelText;
+/// A semi-transparent constraint surface (layer `surfaces`).
+#[derive(Component)]
+struct ConstraintSurface;
 #[derive(Component)]
 struct ScrubFill;
 #[derive(Component)]
 struct Scrubber;
+
+/// Render pipelines still compiling (written by the render world each frame, read by the
+/// screenshot logic: a picture taken before they are ready lacks whatever they draw).
+#[derive(Resource, Clone)]
+struct PipelinesWaiting(Arc<AtomicUsize>);
+
+fn count_waiting_pipelines(
+    cache: Option<Res<bevy::render::render_resource::PipelineCache>>,
+    waiting: Res<PipelinesWaiting>,
+) {
+    let n = cache.map(|c| c.waiting_pipelines().count()).unwrap_or(1);
+    waiting.0.store(n, Ordering::Relaxed);
+}
+
+/// Frames in a row with no pipeline compiling before the screenshot is taken.
+const READY_FRAMES: u32 = 5;
+/// Give up waiting for the pipelines after this many frames past `--frames`.
+const MAX_READY_WAIT_FRAMES: u32 = 3000;
 
 /// Frames counted, and the screenshot plan.
 #[derive(Resource)]
@@ -151,6 +175,8 @@ struct Run {
     shot_done: bool,
     /// Screenshots retaken because the frame was still blank.
     retries: u32,
+    /// Consecutive frames with no render pipeline compiling.
+    ready_streak: u32,
     /// Wall time of the first counted frame (for the frame rate), s.
     t_first: Option<f64>,
     frames_since_first: u32,
@@ -163,6 +189,7 @@ pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String>
     let mut app = base_app(&opts, &sim.scene.name);
     let reference = sim.reference_state();
     let snap = live_snapshot(&sim);
+    app.insert_resource(Corridors::of(&sim.scene));
     app.insert_resource(geom)
         .insert_resource(Current {
             snap,
@@ -225,6 +252,7 @@ pub fn run_replay(loaded: &LoadedScene, rec: Recording, opts: ViewerOptions) -> 
     let mut app = base_app(&opts, &scene.name);
     let mut snap = rec.sample(timeline.t_s);
     snap.bodies = order.iter().map(|&i| snap.bodies[i]).collect();
+    app.insert_resource(Corridors::of(scene));
     app.insert_resource(geom)
         .insert_resource(Current {
             snap,
@@ -302,6 +330,7 @@ fn base_app(opts: &ViewerOptions, title: &str) -> App {
         trails: opts.overlays,
         closest: opts.overlays,
         contacts: opts.overlays,
+        surfaces: opts.overlays,
         panel: opts.overlays,
     })
     .insert_resource(CameraRig {
@@ -317,11 +346,19 @@ fn base_app(opts: &ViewerOptions, title: &str) -> App {
         shot_requested: false,
         shot_done: false,
         retries: 0,
+        ready_streak: 0,
         t_first: None,
         frames_since_first: 0,
     })
-    .add_systems(Startup, setup)
-    .add_systems(
+    .add_systems(Startup, setup);
+    let waiting = PipelinesWaiting(Arc::new(AtomicUsize::new(usize::MAX)));
+    app.insert_resource(waiting.clone());
+    if let Some(render_app) = app.get_sub_app_mut(bevy::render::RenderApp) {
+        render_app
+            .insert_resource(waiting)
+            .add_systems(bevy::render::Render, count_waiting_pipelines);
+    }
+    app.add_systems(
         Update,
         (
             apply_pose,
@@ -343,9 +380,38 @@ fn finish(mut app: App) -> Result<(), String> {
     }
 }
 
+/// The body a constraint surface rides on.
+#[derive(Component)]
+struct SurfaceOf(usize);
+
+/// Constraint surfaces to draw: (body index, surface of revolution about the body's +x axis
+/// with its vertex at the centre of mass: a, tan θ of the cissoid).
+#[derive(Resource, Default)]
+struct Corridors(Vec<(usize, crate::geometry::cissoid::Cissoid)>);
+
+impl Corridors {
+    fn of(scene: &crate::scene::Scene) -> Self {
+        let mut v = Vec::new();
+        for c in &scene.controllers {
+            if let crate::control::ControllerSpec::Guo2016(g) = c
+                && let Some(i) = scene.bodies.iter().position(|b| b.name == g.target)
+                && g.corridor_a_m > 0.0
+            {
+                v.push((
+                    i,
+                    crate::geometry::cissoid::Cissoid::new(g.corridor_a_m, g.corridor_tan_theta),
+                ));
+            }
+        }
+        Self(v)
+    }
+}
+
 fn setup(
     mut commands: Commands,
     geom: Res<SceneGeom>,
+    corridors: Res<Corridors>,
+    layers: Res<Layers>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<StandardMaterial>>,
 ) {
@@ -368,6 +434,31 @@ fn setup(
                     ));
                 }
             });
+    }
+    // The cissoid approach corridor (Guo et al. 2016) in the target's body frame, vertex at its
+    // centre of mass, axis +x; drawn out to a radius of a (it is asymptotic to x = 2a).
+    for (i, cis) in &corridors.0 {
+        let mesh = super::geometry::revolution_mesh(|x| cis.radius_at_m(x), 2.0 * cis.a_m, cis.a_m);
+        let com = &geom.bodies[*i].com_body_m;
+        commands.spawn((
+            Mesh3d(meshes.add(mesh)),
+            MeshMaterial3d(materials.add(StandardMaterial {
+                base_color: Color::srgba(0.3, 0.85, 1.0, 0.12),
+                alpha_mode: AlphaMode::Blend,
+                cull_mode: None,
+                double_sided: true,
+                unlit: false,
+                ..default()
+            })),
+            Transform::from_translation(v3(com)),
+            if layers.surfaces {
+                Visibility::Inherited
+            } else {
+                Visibility::Hidden
+            },
+            ConstraintSurface,
+            SurfaceOf(*i),
+        ));
     }
     commands.spawn((
         DirectionalLight {
@@ -658,12 +749,25 @@ fn live_snapshot(sim: &Simulation) -> Snapshot {
 fn apply_pose(
     cur: Res<Current>,
     geom: Res<SceneGeom>,
-    mut q: Query<(&BodyMarker, &mut Transform)>,
+    layers: Res<Layers>,
+    mut q: Query<(&BodyMarker, &mut Transform), Without<SurfaceOf>>,
+    mut surfaces: Query<(&SurfaceOf, &mut Transform, &mut Visibility), Without<BodyMarker>>,
 ) {
     for (m, mut tf) in &mut q {
         if let Some((p, a)) = cur.snap.bodies.get(m.0) {
             *tf = to_transform(&geom.bodies[m.0].body_pose(p, a));
         }
+    }
+    // Surfaces in a body frame with the vertex at the centre of mass.
+    for (s, mut tf, mut vis) in &mut surfaces {
+        if let Some((p, a)) = cur.snap.bodies.get(s.0) {
+            *tf = to_transform(&nalgebra::Isometry3::from_parts((*p).into(), *a));
+        }
+        *vis = if layers.surfaces {
+            Visibility::Inherited
+        } else {
+            Visibility::Hidden
+        };
     }
 }
 
@@ -699,7 +803,8 @@ fn view_controls(
     if scroll.delta.y != 0.0 {
         rig.zoom = (rig.zoom * (1.0 - 0.1 * scroll.delta.y.signum())).clamp(0.02, 50.0);
     }
-    let toggles: [(KeyCode, Toggle); 6] = [
+    let toggles: [(KeyCode, Toggle); 7] = [
+        (KeyCode::KeyS, |l| &mut l.surfaces),
         (KeyCode::KeyK, |l| &mut l.contacts),
         (KeyCode::KeyP, |l| &mut l.ports),
         (KeyCode::KeyL, |l| &mut l.lvlh),
@@ -752,12 +857,18 @@ fn camera_system(
             let extent = (0..bodies.len())
                 .map(|i| (pos(i) - centre).length() + geom.bodies[i].radius_m as f32)
                 .fold(1.0, f32::max);
-            // Eye off to the side of the line joining the bodies, so both are seen apart.
+            // Eye off to the side of the line joining the bodies, so both are seen apart, and
+            // the screen's up chosen so that the line runs across the (wider) horizontal.
             let line = (pos(chaser) - pos(target)).normalize_or(Vec3::Y);
             let side = line.cross(up).normalize_or(Vec3::X);
             let base = (side + 0.35 * up + 0.3 * line).normalize();
-            let eye = orbit_eye(centre, base, 1.7 * extent, &rig);
-            *tf = Transform::from_translation(eye).looking_at(centre, up);
+            let eye = orbit_eye(centre, base, 1.9 * extent, &rig);
+            let forward = (centre - eye).normalize_or(Vec3::NEG_Y);
+            let mut screen_up = forward.cross(line).normalize_or(up);
+            if screen_up.dot(up) < 0.0 {
+                screen_up = -screen_up;
+            }
+            *tf = Transform::from_translation(eye).looking_at(centre, screen_up);
         }
         Preset::OrbitTarget => {
             let c = pos(target);
@@ -1007,18 +1118,19 @@ fn panel(
     }
     let _ = writeln!(
         o,
-        "camera: {:?}   layers: ports {} | LVLH/Earth {} | trails {} | closest {} | contacts {}",
+        "camera: {:?}   layers: ports {} | LVLH/Earth {} | trails {} | closest {} | contacts {} | surfaces {}",
         rig.preset,
         on(layers.ports),
         on(layers.lvlh),
         on(layers.trails),
         on(layers.closest),
-        on(layers.contacts)
+        on(layers.contacts),
+        on(layers.surfaces)
     );
     let _ = writeln!(
         o,
         "keys: Space play/pause | . , step | + - speed | Left/Right seek | [ ] events | \
-         0-3 camera | P L T C K H layers | right-drag rotate | wheel zoom"
+         0-3 camera | P L T C K S H layers | right-drag rotate | wheel zoom"
     );
     text.0 = o;
 }
@@ -1041,9 +1153,15 @@ fn frames_and_screenshot(
     geom: Res<SceneGeom>,
     camera: Query<(&Camera, &Transform), With<Camera3d>>,
     window: Query<&Window, With<PrimaryWindow>>,
+    waiting: Res<PipelinesWaiting>,
     mut exit: MessageWriter<AppExit>,
 ) {
     run.frame += 1;
+    if waiting.0.load(Ordering::Relaxed) == 0 {
+        run.ready_streak += 1;
+    } else {
+        run.ready_streak = 0;
+    }
     let now = time.elapsed_secs_f64();
     // Skip the first frames (pipeline compilation) for the rate.
     if run.frame == 30 {
@@ -1058,6 +1176,13 @@ fn frames_and_screenshot(
         return;
     }
     if let Some(path) = run.opts.screenshot.clone() {
+        // Wait (within reason) until no render pipeline is still compiling.
+        if !run.shot_requested
+            && run.ready_streak < READY_FRAMES
+            && run.frame < n + MAX_READY_WAIT_FRAMES
+        {
+            return;
+        }
         if !run.shot_requested {
             run.shot_requested = true;
             if let (Ok((cam, tf)), Ok(w)) = (camera.single(), window.single()) {
