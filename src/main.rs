@@ -122,6 +122,10 @@ struct WindowArgs {
     /// Hide overlays and the panel (spacecraft only).
     #[arg(long)]
     no_overlays: bool,
+    /// Initial camera: overview, target (orbit the target), chaser (follow the chaser), port
+    /// (out of the chaser's docking port).
+    #[arg(long, default_value = "overview")]
+    camera: String,
 }
 
 #[cfg(feature = "viewer")]
@@ -135,6 +139,7 @@ impl WindowArgs {
             start_s,
             speed: self.speed,
             play: self.play,
+            camera: self.camera,
         }
     }
 }

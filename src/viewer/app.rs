@@ -36,6 +36,8 @@ pub struct ViewerOptions {
     pub speed: f64,
     /// Start playing (otherwise paused).
     pub play: bool,
+    /// Initial camera preset: `overview`, `target`, `chaser` or `port`.
+    pub camera: String,
 }
 
 impl Default for ViewerOptions {
@@ -48,6 +50,7 @@ impl Default for ViewerOptions {
             start_s: None,
             speed: 1.0,
             play: false,
+            camera: "overview".into(),
         }
     }
 }
@@ -184,6 +187,7 @@ struct Run {
 
 /// Opens the window on a live simulation of `loaded`.
 pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String> {
+    check_camera(&opts)?;
     let sim = Simulation::new(loaded).map_err(|e| e.to_string())?;
     let geom = SceneGeom::new(&sim.scene);
     let mut app = base_app(&opts, &sim.scene.name);
@@ -217,6 +221,7 @@ pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String>
 
 /// Opens the window on a recorded run (`rpod run` output) of `loaded`.
 pub fn run_replay(loaded: &LoadedScene, rec: Recording, opts: ViewerOptions) -> Result<(), String> {
+    check_camera(&opts)?;
     let scene = &loaded.scene;
     for b in &scene.bodies {
         if !rec.body_names.contains(&b.name) {
@@ -272,6 +277,15 @@ pub fn run_replay(loaded: &LoadedScene, rec: Recording, opts: ViewerOptions) -> 
             (replay_controls, replay_sample).chain().before(apply_pose),
         );
     finish(app)
+}
+
+fn check_camera(opts: &ViewerOptions) -> Result<(), String> {
+    match opts.camera.as_str() {
+        "overview" | "target" | "chaser" | "port" => Ok(()),
+        other => Err(format!(
+            "--camera must be overview, target, chaser or port, got `{other}`"
+        )),
+    }
 }
 
 /// Body order of the recording for each scene body.
@@ -334,7 +348,12 @@ fn base_app(opts: &ViewerOptions, title: &str) -> App {
         panel: opts.overlays,
     })
     .insert_resource(CameraRig {
-        preset: Preset::Overview,
+        preset: match opts.camera.as_str() {
+            "target" => Preset::OrbitTarget,
+            "chaser" => Preset::FollowChaser,
+            "port" => Preset::PortView,
+            _ => Preset::Overview,
+        },
         yaw: 0.0,
         pitch: 0.0,
         zoom: 1.0,
@@ -892,8 +911,9 @@ fn camera_system(
                 .first()
                 .map(|(_, o, ax)| (pose * nalgebra::Point3::from(*o), a * ax))
                 .unwrap_or((pose.translation.vector.into(), a * Vector3::x()));
-            // Just ahead of the port (outside the cone) looking along the port axis.
-            let eye = v3(&origin.coords) + v3(&axis) * 0.4;
+            // At the port, looking along its axis (the cone's faces point outward, so the
+            // view from inside its base sees through it, out towards the target).
+            let eye = v3(&origin.coords) + v3(&axis) * 0.02;
             let look = Quat::from_rotation_z(rig.yaw) * Quat::from_rotation_x(rig.pitch);
             let body_up = v3(&(a * Vector3::z()));
             *tf = Transform::from_translation(eye).looking_to(look * v3(&axis), body_up);
