@@ -23,6 +23,7 @@
 //! `SimStep` runs exactly [`StepBudget`] times per `App::update`, never by the wall clock; the
 //! same scene gives byte-identical outputs on every run.
 
+pub mod airbearing;
 pub mod build;
 pub mod docking;
 pub mod laws;
