@@ -108,12 +108,20 @@ fn val_airbearing_coulomb_friction_stopping_distance() {
 #[test]
 fn val_airbearing_friction_holds_on_a_shallow_tilt() {
     // μ g > g sin α: a puck at rest stays at rest.
-    let mut s = sim(&puck_scene("tilt_deg: (0.01, 0.0), coulomb_friction: 0.001", [0.0; 3], 0.0));
+    let mut s = sim(&puck_scene(
+        "tilt_deg: (0.01, 0.0), coulomb_friction: 0.001",
+        [0.0; 3],
+        0.0,
+    ));
     s.step(500);
     let p = s.body("puck").unwrap();
     assert_eq!((p.pos_m.x, p.pos_m.y), (0.5, 0.6));
     // μ g < g sin α: it slides at g (sin α − μ cos α).
-    let mut s = sim(&puck_scene("tilt_deg: (0.02, 0.0), coulomb_friction: 0.0001", [0.0; 3], 0.0));
+    let mut s = sim(&puck_scene(
+        "tilt_deg: (0.02, 0.0), coulomb_friction: 0.0001",
+        [0.0; 3],
+        0.0,
+    ));
     s.step(1000);
     let a = G * (0.02f64.to_radians().sin() - 1e-4 * 0.02f64.to_radians().cos());
     let p = s.body("puck").unwrap();
@@ -169,20 +177,31 @@ fn val_airbearing_off_table_event() {
     assert_eq!(ev.len(), 1, "one off_table event");
     assert!((ev[0].t_s - 3.0).abs() <= 0.01 + 1e-9, "at {}", ev[0].t_s);
     let p = s.body("puck").unwrap();
-    assert!(p.pos_m.z < 0.06 - 0.5 * G * 0.9 * 0.9, "falls after leaving: z = {}", p.pos_m.z);
+    assert!(
+        p.pos_m.z < 0.06 - 0.5 * G * 0.9 * 0.9,
+        "falls after leaving: z = {}",
+        p.pos_m.z
+    );
 }
 
 #[test]
 fn regress_airbearing_bad_table_input_is_located() {
     let text = puck_scene("tilt_deg: (60.0, 0.0)", [0.0; 3], 0.0);
-    let e = load_scene_str(&text, "puck.ron", &[]).unwrap_err().to_string();
+    let e = load_scene_str(&text, "puck.ron", &[])
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("tilt_deg") && e.contains("puck.ron:"), "{e}");
     let text = puck_scene("anchored: [\"nobody\"]", [0.0; 3], 0.0);
-    let e = load_scene_str(&text, "puck.ron", &[]).unwrap_err().to_string();
+    let e = load_scene_str(&text, "puck.ron", &[])
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("anchored") && e.contains("nobody"), "{e}");
     // Starting off the table.
     let text = puck_scene("table_corner_m: (1.0, 1.0)", [0.0; 3], 0.0);
     let loaded = load_scene_str(&text, "puck.ron", &[]).unwrap();
-    let e = Simulation::new(&loaded).err().expect("off the table").to_string();
+    let e = Simulation::new(&loaded)
+        .err()
+        .expect("off the table")
+        .to_string();
     assert!(e.contains("off the table"), "{e}");
 }

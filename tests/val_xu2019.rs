@@ -82,7 +82,11 @@ fn val_xu2019_vision_latency_and_noise() {
             // The sensor ran at the start of the step (t − dt): the exposure is the latest
             // k·0.04 s ≤ t − dt − 0.04 s.
             let te = ((t - 0.005 - 0.04) / 0.04 + 1e-9).floor() * 0.04;
-            assert!((o.t_s - te).abs() < 1e-9, "exposure {} vs {te} at t = {t}", o.t_s);
+            assert!(
+                (o.t_s - te).abs() < 1e-9,
+                "exposure {} vs {te} at t = {t}",
+                o.t_s
+            );
             let (_, p) = truth
                 .iter()
                 .find(|(tt, _)| (tt - te).abs() < 1e-9)
@@ -96,7 +100,9 @@ fn val_xu2019_vision_latency_and_noise() {
     }
     assert!(checked > 900);
     // Noise: residuals against the truth at the exposure instants.
-    let mut s = sim(EXPERIMENT_SCENE.replace("latency_s: 0.04", "latency_s: 0.0").as_str());
+    let mut s = sim(EXPERIMENT_SCENE
+        .replace("latency_s: 0.04", "latency_s: 0.0")
+        .as_str());
     let mut res = Vec::new();
     let mut last_t = -1.0;
     for _ in 0..4000 {
@@ -114,7 +120,10 @@ fn val_xu2019_vision_latency_and_noise() {
     }
     let n = res.len() as f64;
     let sd = (res.iter().map(|r| r * r).sum::<f64>() / n).sqrt();
-    eprintln!("vision noise: {} samples, sd {sd:.3e} m (scene 5e-4 m)", res.len());
+    eprintln!(
+        "vision noise: {} samples, sd {sd:.3e} m (scene 5e-4 m)",
+        res.len()
+    );
     // χ²: sd within ±5 standard errors (σ/√(2N)).
     assert!((sd - 5e-4).abs() < 5.0 * 5e-4 / (2.0 * n).sqrt());
 }
@@ -145,7 +154,10 @@ fn val_xu2019_thruster_wrench_and_gas() {
         gas += open as f64 * tp.thrust_per_nozzle_n / (tp.isp_s * G0_M_S2) * dt;
         assert!((c.gas_used_kg - gas).abs() <= 1e-12 * gas.max(1e-12));
     }
-    eprintln!("20 s of valves: {open_steps} nozzle-steps, gas {:.3} g", gas * 1e3);
+    eprintln!(
+        "20 s of valves: {open_steps} nozzle-steps, gas {:.3} g",
+        gas * 1e3
+    );
     assert!(open_steps > 0);
 }
 
@@ -164,7 +176,11 @@ fn val_xu2019_fig13_claims() {
         // During the free approach (before the magnet takes over) the radial distances stay
         // positive, in both forms.
         let n = run.approach_end() + 1;
-        assert!(run.magnet_on_s.is_some(), "{}: the approach reaches the magnet", run.name);
+        assert!(
+            run.magnet_on_s.is_some(),
+            "{}: the approach reaches the magnet",
+            run.name
+        );
         let min = |v: &[f64]| v[..n].iter().copied().fold(f64::INFINITY, f64::min);
         assert!(min(&run.radial_obstacle_eq8_m) > 0.0);
         assert!(min(&run.radial_obstacle_exact_m) > 0.0);
@@ -177,7 +193,10 @@ fn val_xu2019_fig13_claims() {
         );
         // The finding: the centre of mass clears the obstacle, the cone does not. The claim
         // says so with the parts named.
-        let first = run.obstacle_collisions.first().expect("the monitor sees it");
+        let first = run
+            .obstacle_collisions
+            .first()
+            .expect("the monitor sees it");
         assert!(first.1.contains("chaser/cone") || first.2.contains("chaser/cone"));
         assert!(!held(&format!("{}-no-obstacle-collision", run.name)));
     }

@@ -473,7 +473,10 @@ impl SceneSpec {
         let v = &self.vision;
         let bad = |f: &str, m: String| Err((f.to_string(), m));
         if !(v.period_s.is_finite() && v.period_s > 0.0) {
-            return bad("vision.period_s", format!("must be a positive number of seconds, got {}", v.period_s));
+            return bad(
+                "vision.period_s",
+                format!("must be a positive number of seconds, got {}", v.period_s),
+            );
         }
         for (f, x) in [
             ("vision.latency_s", v.latency_s),
@@ -485,9 +488,17 @@ impl SceneSpec {
                 return bad(f, format!("must be finite and non-negative, got {x}"));
             }
         }
-        if let ActuationSpec::Thrusters { params, thrust_noise, .. } = &self.actuation {
+        if let ActuationSpec::Thrusters {
+            params,
+            thrust_noise,
+            ..
+        } = &self.actuation
+        {
             for (f, x) in [
-                ("actuation.params.thrust_per_nozzle_n", params.thrust_per_nozzle_n),
+                (
+                    "actuation.params.thrust_per_nozzle_n",
+                    params.thrust_per_nozzle_n,
+                ),
                 ("actuation.params.lever_arm_m", params.lever_arm_m),
                 ("actuation.params.isp_s", params.isp_s),
                 ("actuation.params.pwpf.k_m", params.pwpf.k_m),
@@ -501,11 +512,17 @@ impl SceneSpec {
             if !(p.u_off >= 0.0 && p.u_off < p.u_on && p.min_on_time_s >= 0.0) {
                 return bad(
                     "actuation.params.pwpf",
-                    format!("needs 0 ≤ u_off < u_on and min_on_time_s ≥ 0, got u_on {}, u_off {}, min_on_time_s {}", p.u_on, p.u_off, p.min_on_time_s),
+                    format!(
+                        "needs 0 ≤ u_off < u_on and min_on_time_s ≥ 0, got u_on {}, u_off {}, min_on_time_s {}",
+                        p.u_on, p.u_off, p.min_on_time_s
+                    ),
                 );
             }
             if !(thrust_noise.is_finite() && *thrust_noise >= 0.0) {
-                return bad("actuation.thrust_noise", format!("must be finite and non-negative, got {thrust_noise}"));
+                return bad(
+                    "actuation.thrust_noise",
+                    format!("must be finite and non-negative, got {thrust_noise}"),
+                );
             }
         }
         Ok(())

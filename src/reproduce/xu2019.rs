@@ -133,13 +133,22 @@ pub const RESTART_S: f64 = 40.0;
 fn restart_overrides(run: &CaseRun, i: usize) -> Vec<String> {
     let v = run.vel[i];
     vec![
-        format!("bodies.chaser.initial.pos_m=({:e}, {:e}, 0.16)", run.x_m[i], run.y_m[i]),
+        format!(
+            "bodies.chaser.initial.pos_m=({:e}, {:e}, 0.16)",
+            run.x_m[i], run.y_m[i]
+        ),
         format!(
             "bodies.chaser.initial.attitude=EulerZyxDeg(yaw: {:e}, pitch: 0.0, roll: 0.0)",
             run.theta_deg[i]
         ),
-        format!("bodies.chaser.initial.vel_m_s=({:e}, {:e}, 0.0)", v[0], v[1]),
-        format!("bodies.chaser.initial.rate_body_deg_s=(0.0, 0.0, {:e})", v[2].to_degrees()),
+        format!(
+            "bodies.chaser.initial.vel_m_s=({:e}, {:e}, 0.0)",
+            v[0], v[1]
+        ),
+        format!(
+            "bodies.chaser.initial.rate_body_deg_s=(0.0, 0.0, {:e})",
+            v[2].to_degrees()
+        ),
     ]
 }
 
@@ -192,8 +201,10 @@ pub fn run_case_with(
         let th = yaw_rad(&c);
         let th = match last_theta {
             None => th,
-            Some(prev) => prev + (th - prev + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
-                - std::f64::consts::PI,
+            Some(prev) => {
+                prev + (th - prev + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
+                    - std::f64::consts::PI
+            }
         };
         last_theta = Some(th);
         run.t_s.push(sim.t_s());
@@ -452,7 +463,9 @@ pub fn claims(r: &Results) -> Vec<Claim> {
     v.push(Claim::new(
         "experiment-lags-in-x-and-y",
         "The experiment (0.05 N nozzles through PWPF) lags the simulation in x and y.",
-        Some("x and y displacements of the experiment lag the simulation (thrust capped at 0.05 N)"),
+        Some(
+            "x and y displacements of the experiment lag the simulation (thrust capped at 0.05 N)",
+        ),
         format!(
             "time to 50 % of the change, experiment − simulation: x {}, y {}; to 90 %: x {}, y {}",
             f(lag(0, 0)),
@@ -478,6 +491,30 @@ pub fn claims(r: &Results) -> Vec<Claim> {
 
 fn pts(t: &[f64], v: &[f64]) -> Vec<(f64, f64)> {
     t.iter().zip(v).map(|(a, b)| (*a, *b)).collect()
+}
+
+/// A run's samples up to the chaser leaving the table (afterwards it falls).
+fn on_table(run: &CaseRun) -> CaseRun {
+    let Some((t_off, _)) = run.off_table.iter().find(|(_, b)| b == "chaser") else {
+        return run.clone();
+    };
+    let n = run.t_s.iter().take_while(|t| *t <= t_off).count();
+    let mut r = run.clone();
+    for v in [
+        &mut r.t_s,
+        &mut r.x_m,
+        &mut r.y_m,
+        &mut r.theta_deg,
+        &mut r.radial_obstacle_eq8_m,
+        &mut r.radial_obstacle_exact_m,
+        &mut r.radial_heart_m,
+        &mut r.geometry_obstacle_m,
+        &mut r.open_nozzles,
+        &mut r.gas_kg,
+    ] {
+        v.truncate(n);
+    }
+    r
 }
 
 /// Runs both cases and writes the report into `out`.
@@ -507,7 +544,7 @@ pub fn run(out: &Path) -> Result<(), String> {
 
 fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String> {
     let p = Xu2019Params::paper();
-    let (s, e) = (&r.simulation, &r.experiment);
+    let (s, e) = (&on_table(&r.simulation), &on_table(&r.experiment));
     let dashed = LineStyle {
         dash: Dash::Dashed,
         ..Default::default()
@@ -531,11 +568,16 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
             (-0.01 + 0.1 * a.cos(), 1.4 + 0.1 * a.sin())
         })
         .collect();
-    let path = Plot::new("Chaser centre-of-mass path, lab frame (table top)")
+    let mut path = Plot::new("Chaser centre-of-mass path, lab frame (table top)")
         .x_label("x (m)")
         .y_label("y (m)")
         .equal_aspect()
-        .outline("obstacle (superquadric a = 0.1 m, b = 0.2 m, s = 4)", obstacle)
+        .x_range(-0.3, 1.7)
+        .y_range(-0.25, 2.25)
+        .outline(
+            "obstacle (superquadric a = 0.1 m, b = 0.2 m, s = 4)",
+            obstacle,
+        )
         .polygon_styled(
             "heart keep-out (R2 = 0.2 m)",
             heart,
@@ -554,38 +596,54 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
             "start (0.809, 0.224) m / goal (0.25, 1.4) m",
             [(0.809, 0.224), (p.goal_pos_lab_m[0], p.goal_pos_lab_m[1])],
         );
-    let states = Figure::new("Chaser state vs time (lab frame)")
-        .cols(3)
-        .plot(
-            Plot::new("x(t)")
-                .x_label("t (s)")
-                .y_label("x (m)")
-                .line("simulation", pts(&s.t_s, &s.x_m))
-                .line("experiment", pts(&e.t_s, &e.x_m))
-                .hline(p.goal_pos_lab_m[0], "goal 0.25 m"),
-        )
-        .plot(
-            Plot::new("y(t)")
-                .x_label("t (s)")
-                .y_label("y (m)")
-                .line("simulation", pts(&s.t_s, &s.y_m))
-                .line("experiment", pts(&e.t_s, &e.y_m))
-                .hline(p.goal_pos_lab_m[1], "goal 1.4 m"),
-        )
-        .plot(
-            Plot::new("θ(t)")
-                .x_label("t (s)")
-                .y_label("θ (deg)")
-                .line("simulation", pts(&s.t_s, &s.theta_deg))
-                .line("experiment", pts(&e.t_s, &e.theta_deg))
-                .hline(90.0, "goal 90°"),
+    if let Some(rs) = &r.restart {
+        path = path.line_styled(
+            format!("simulation restarted at {RESTART_S} s (diagnostic)"),
+            pts(&rs.x_m, &rs.y_m),
+            LineStyle {
+                dash: Dash::Dotted,
+                ..Default::default()
+            },
         );
+    }
+    let states = Figure::new(
+        "Chaser state vs time (lab frame; axes clipped to the approach, the rebound leaves them)",
+    )
+    .cols(1)
+    .plot(
+        Plot::new("x(t)")
+            .x_label("t (s)")
+            .y_label("x (m)")
+            .y_range(0.0, 1.0)
+            .line("simulation", pts(&s.t_s, &s.x_m))
+            .line("experiment", pts(&e.t_s, &e.x_m))
+            .hline(p.goal_pos_lab_m[0], "goal 0.25 m"),
+    )
+    .plot(
+        Plot::new("y(t)")
+            .x_label("t (s)")
+            .y_label("y (m)")
+            .y_range(0.0, 1.8)
+            .line("simulation", pts(&s.t_s, &s.y_m))
+            .line("experiment", pts(&e.t_s, &e.y_m))
+            .hline(p.goal_pos_lab_m[1], "goal 1.4 m"),
+    )
+    .plot(
+        Plot::new("θ(t)")
+            .x_label("t (s)")
+            .y_label("θ (deg)")
+            .y_range(-20.0, 140.0)
+            .line("simulation", pts(&s.t_s, &s.theta_deg))
+            .line("experiment", pts(&e.t_s, &e.theta_deg))
+            .hline(90.0, "goal 90°"),
+    );
     let dist = Figure::new("Distances of the chaser to the constraints")
         .cols(2)
         .plot(
             Plot::new("Radial distance to the obstacle (centre of mass)")
                 .x_label("t (s)")
                 .y_label("radial distance (m)")
+                .y_range(-0.1, 1.2)
                 .line("simulation, eq (8)", pts(&s.t_s, &s.radial_obstacle_eq8_m))
                 .line("experiment, eq (8)", pts(&e.t_s, &e.radial_obstacle_eq8_m))
                 .line_styled(
@@ -604,6 +662,7 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
             Plot::new("Radial distance to the heart keep-out (centre of mass)")
                 .x_label("t (s)")
                 .y_label("radial distance (m)")
+                .y_range(-0.1, 1.4)
                 .line("simulation", pts(&s.t_s, &s.radial_heart_m))
                 .line("experiment", pts(&e.t_s, &e.radial_heart_m))
                 .hline(0.0, "boundary"),
@@ -612,6 +671,7 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
             Plot::new("Full geometry: chaser (body + cone) ↔ obstacle prism")
                 .x_label("t (s)")
                 .y_label("distance (m)")
+                .y_range(-0.05, 1.0)
                 .line("simulation", pts(&s.t_s, &s.geometry_obstacle_m))
                 .line("experiment", pts(&e.t_s, &e.geometry_obstacle_m))
                 .hline(0.0, "contact"),

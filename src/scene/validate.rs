@@ -83,16 +83,26 @@ pub fn validate(s: &Scene) -> Check {
                     "metres",
                 )?;
                 if !(t.table_corner_m[k].is_finite()) {
-                    return fail(format!("environment.0.table_corner_m.{k}"), "must be finite");
+                    return fail(
+                        format!("environment.0.table_corner_m.{k}"),
+                        "must be finite",
+                    );
                 }
                 if !(t.tilt_deg[k].is_finite() && t.tilt_deg[k].abs() < 45.0) {
                     return fail(
                         format!("environment.0.tilt_deg.{k}"),
-                        format!("a table tilt must be finite and below 45°, got {}", t.tilt_deg[k]),
+                        format!(
+                            "a table tilt must be finite and below 45°, got {}",
+                            t.tilt_deg[k]
+                        ),
                     );
                 }
             }
-            positive("environment.0.table_thickness_m", t.table_thickness_m, "metres")?;
+            positive(
+                "environment.0.table_thickness_m",
+                t.table_thickness_m,
+                "metres",
+            )?;
             positive("environment.0.gravity_m_s2", t.gravity_m_s2, "m/s²")?;
             for (f, v) in [
                 ("coulomb_friction", t.coulomb_friction),
@@ -108,7 +118,10 @@ pub fn validate(s: &Scene) -> Check {
             }
             for (i, n) in t.anchored.iter().enumerate() {
                 if !s.bodies.iter().any(|b| &b.name == n) {
-                    return fail(format!("environment.0.anchored.{i}"), format!("no body named `{n}`"));
+                    return fail(
+                        format!("environment.0.anchored.{i}"),
+                        format!("no body named `{n}`"),
+                    );
                 }
             }
         }

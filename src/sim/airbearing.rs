@@ -141,7 +141,6 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
             if let Some(rb) = pw.bodies.get_mut(*h) {
                 if anchored[k] {
                     rb.set_body_type(rp::RigidBodyType::Fixed, true);
-
                 } else {
                     rb.set_locked_axes(planar_locks(), true);
                 }

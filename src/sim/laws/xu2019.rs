@@ -181,8 +181,8 @@ pub fn yaw_rad(s: &BodyState) -> f64 {
 }
 
 fn wrap_pi(a: f64) -> f64 {
-    let w = (a + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
-        - std::f64::consts::PI;
+    let w =
+        (a + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI;
     if w == -std::f64::consts::PI {
         std::f64::consts::PI
     } else {
@@ -493,9 +493,7 @@ pub fn xu2019_actuate(
             .sum();
         diag.values[i + 13] = c.valves.iter().filter(|v| **v).count() as f64;
         diag.values[i + 14] = c.gas_used_kg;
-        diag.values[i + 15] = c
-            .law
-            .potential(Vector3::new(pos.x, pos.y, yaw_rad(s)));
+        diag.values[i + 15] = c.law.potential(Vector3::new(pos.x, pos.y, yaw_rad(s)));
         diag.values[i + 16] = yaw_rad(s).to_degrees();
     }
 }
