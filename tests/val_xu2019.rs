@@ -185,6 +185,7 @@ fn val_xu2019_fig13_claims() {
         assert!(min(&run.radial_obstacle_eq8_m) > 0.0);
         assert!(min(&run.radial_obstacle_exact_m) > 0.0);
         assert!(min(&run.radial_heart_m) > 0.0);
+        assert!(held(&format!("{}-radial-distances-positive", run.name)));
         // The goal is reached within the claim's tolerances.
         let t = run.first_at_goal_s.expect("reaches the goal");
         eprintln!(
