@@ -652,12 +652,12 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
                 .line_styled(
                     "simulation, exact",
                     pts(&s.t_s, &s.radial_obstacle_exact_m),
-                    dashed.clone(),
+                    dashed,
                 )
                 .line_styled(
                     "experiment, exact",
                     pts(&e.t_s, &e.radial_obstacle_exact_m),
-                    dashed.clone(),
+                    dashed,
                 )
                 .hline(0.0, "boundary"),
         )

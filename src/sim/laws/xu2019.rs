@@ -454,8 +454,8 @@ pub fn xu2019_actuate(
             } => {
                 let pw = c.pwpf.as_mut().expect("thrusters have PWPF");
                 let valves = pw.step(params, c.command.force_body_n, c.command.torque_nm, dt);
-                for k in 0..8 {
-                    if valves[k] {
+                for (k, open) in valves.iter().enumerate() {
+                    if *open {
                         c.valve_open_s[k] += dt;
                         if !c.valves[k] {
                             c.valve_openings[k] += 1;
