@@ -764,7 +764,7 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
                 format!("{}: {}", e.dock_state, e.dock_reason),
             ],
             vec![
-                "min radial distance, obstacle eq (8) / exact (m)".into(),
+                "min radial distance over the whole run, obstacle eq (8) / exact (m)".into(),
                 format!(
                     "{:.4} / {:.4}",
                     CaseRun::min(&s.radial_obstacle_eq8_m),
@@ -777,7 +777,7 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
                 ),
             ],
             vec![
-                "min full-geometry distance to the obstacle (m)".into(),
+                "min full-geometry distance to the obstacle, whole run (m)".into(),
                 format!(
                     "{:.4} ({}, {:.2} s)",
                     s.min_geometry_obstacle.0, s.min_geometry_obstacle.1, s.min_geometry_obstacle.2
@@ -854,9 +854,9 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
             .collect();
         rep.paragraph(format!(
             "The simulation case did not latch ({}: {}). The same case restarted from its own \
-             recorded state (rounded to the CSV's digits; fresh rapier world) arrives at the \
-             slot on the same path (magnet on within 0.01 s of the full run's {}) and seats with \
-             the same lateral offset (2.5 mm), yet the outcome differs:",
+             recorded f64 state (fresh rapier world, law and sensor) arrives at the slot on the \
+             same path (the full run's magnet switched on at {}; compare the restarts' times \
+             below), yet the outcome differs:",
             r.simulation.dock_state,
             r.simulation.dock_reason,
             fmt_opt(r.simulation.magnet_on_s),
