@@ -124,6 +124,8 @@ pub struct Docking {
     pub peak_joint_force_n: f64,
     /// Last step with a docking contact, s.
     pub last_docking_contact_s: Option<f64>,
+    /// The chaser port's axial error at the previous step, m (positive: in front of the seat).
+    pub prev_axial_error_m: Option<f64>,
     /// Diagnostics column indices: gap, axial, lateral, misalignment, magnet, state.
     cols: [usize; 6],
 }
@@ -215,6 +217,7 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         joint: None,
         peak_joint_force_n: 0.0,
         last_docking_contact_s: None,
+        prev_axial_error_m: None,
         cols,
     });
     app.add_systems(SimStep, docking_actuate.in_set(Stage::Actuate));
@@ -303,6 +306,10 @@ fn docking_monitor(
         dock.t_first_contact_s.get_or_insert(t);
         dock.max_misalignment_deg = dock.max_misalignment_deg.max(g.misalignment_deg);
     }
+    // "Passed beside" is a crossing of the seat plane from the front this step, not a chaser that
+    // is (or starts) behind the target's port plane while it manoeuvres.
+    let crossed_from_front = dock.prev_axial_error_m.is_some_and(|p| p >= 0.0);
+    dock.prev_axial_error_m = Some(g.axial_error_m);
     let old = dock.state;
     let mut new = old;
     let mut reason = String::new();
@@ -333,7 +340,10 @@ fn docking_monitor(
             if let Some(pair) = collision {
                 new = Missed;
                 reason = format!("collision between {pair} before the latch engaged");
-            } else if g.axial_error_m < 0.0 && g.lateral_m > spec.mouth_radius_m {
+            } else if g.axial_error_m < 0.0
+                && crossed_from_front
+                && g.lateral_m > spec.mouth_radius_m
+            {
                 new = Missed;
                 reason = format!(
                     "the chaser port passed beside the slot: lateral offset {:.3} m > mouth radius {:.3} m",
