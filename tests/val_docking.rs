@@ -164,3 +164,25 @@ fn regress_head_on_1m_s_never_passes_through() {
     assert!(deepest > -wall, "the cone went {deepest} m past the seat");
     assert!(spec.seat_depth_m > 0.0);
 }
+
+/// A chaser that starts behind the target's port plane, far off the axis, has not "passed beside
+/// the slot": MISSED needs a crossing of the seat plane from the front (geometry: the target port
+/// plane is at world x = 0.82 m, the chaser port at x = 1.0 − 0.5 = 0.5 m, 3 m above in z).
+#[test]
+fn regress_docking_start_behind_the_port_plane_is_not_a_miss() {
+    let mut s = sim(
+        "docking_miss",
+        &[
+            "bodies.chaser.initial.pos_m=(1.0, 0.0, 3.0)",
+            "bodies.chaser.initial.vel_m_s=(0.0, 0.01, 0.0)",
+        ],
+    );
+    s.step(s.steps_for(10.0));
+    let d = dock(&s);
+    assert_ne!(d.state, DockState::Missed, "{}", d.reason);
+    assert!(
+        d.geometry.axial_error_m < 0.0,
+        "the chaser port stays behind the plane"
+    );
+    assert!(d.geometry.lateral_m > 2.9, "and far off the axis");
+}

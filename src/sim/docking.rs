@@ -127,6 +127,8 @@ pub struct Docking {
     /// The approach judgements apply (the gap has fallen below `miss.arm_gap_m`, or no such
     /// threshold).
     pub armed: bool,
+    /// The chaser port's axial error at the previous step, m (positive: in front of the seat).
+    pub prev_axial_error_m: Option<f64>,
     /// Diagnostics column indices: gap, axial, lateral, misalignment, magnet, state.
     cols: [usize; 6],
 }
@@ -219,6 +221,7 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         peak_joint_force_n: 0.0,
         last_docking_contact_s: None,
         armed: false,
+        prev_axial_error_m: None,
         cols,
     });
     app.add_systems(SimStep, docking_actuate.in_set(Stage::Actuate));
@@ -311,6 +314,10 @@ fn docking_monitor(
         dock.t_first_contact_s.get_or_insert(t);
         dock.max_misalignment_deg = dock.max_misalignment_deg.max(g.misalignment_deg);
     }
+    // "Passed beside" is a crossing of the seat plane from the front this step, not a chaser that
+    // is (or starts) behind the target's port plane while it manoeuvres.
+    let crossed_from_front = dock.prev_axial_error_m.is_some_and(|p| p >= 0.0);
+    dock.prev_axial_error_m = Some(g.axial_error_m);
     let old = dock.state;
     let mut new = old;
     let mut reason = String::new();
@@ -341,7 +348,11 @@ fn docking_monitor(
             if let Some(pair) = collision {
                 new = Missed;
                 reason = format!("collision between {pair} before the latch engaged");
-            } else if armed && g.axial_error_m < 0.0 && g.lateral_m > spec.mouth_radius_m {
+            } else if armed
+                && g.axial_error_m < 0.0
+                && crossed_from_front
+                && g.lateral_m > spec.mouth_radius_m
+            {
                 new = Missed;
                 reason = format!(
                     "the chaser port passed beside the slot: lateral offset {:.3} m > mouth radius {:.3} m",
