@@ -55,7 +55,7 @@ enum Cmd {
     /// Reproduce a paper's headline result (all papers without a name): REPORT.md, plots,
     /// claims.json under OUT/NAME.
     Reproduce {
-        /// Paper (guo2016, xu2015, geng2015, zhang2018); omit to run every paper.
+        /// Paper (guo2016, xu2015, geng2015, xu2019, zhang2018); omit to run every paper.
         name: Option<String>,
         /// Output directory.
         #[arg(long, default_value = "out/reproduce")]

@@ -164,3 +164,91 @@ fn regress_head_on_1m_s_never_passes_through() {
     assert!(deepest > -wall, "the cone went {deepest} m past the seat");
     assert!(spec.seat_depth_m > 0.0);
 }
+
+/// A chaser that starts behind the target's port plane, far off the axis, has not "passed beside
+/// the slot": MISSED needs a crossing of the seat plane from the front (geometry: the target port
+/// plane is at world x = 0.82 m, the chaser port at x = 1.0 − 0.5 = 0.5 m, 3 m above in z).
+#[test]
+fn regress_docking_start_behind_the_port_plane_is_not_a_miss() {
+    let mut s = sim(
+        "docking_miss",
+        &[
+            "bodies.chaser.initial.pos_m=(1.0, 0.0, 3.0)",
+            "bodies.chaser.initial.vel_m_s=(0.0, 0.01, 0.0)",
+        ],
+    );
+    s.step(s.steps_for(10.0));
+    let d = dock(&s);
+    assert_ne!(d.state, DockState::Missed, "{}", d.reason);
+    assert!(
+        d.geometry.axial_error_m < 0.0,
+        "the chaser port stays behind the plane"
+    );
+    assert!(d.geometry.lateral_m > 2.9, "and far off the axis");
+}
+
+/// A torque commanded once must act once: the `Wrench` contract is a force and torque held over
+/// one step. Before the fix rapier kept every torque ever added (its `reset_forces` does not clear
+/// torques), invisible in f64 free flight but applied in full whenever rapier was the truth (in
+/// contact, latched): on the air-bearing table it spun a 9 kg simulator at 84 rad/s² in the slot.
+/// Reference: the torque rapier holds must be exactly this step's command (zero after step 0),
+/// and angular momentum about the origin must stay L(0) + τ·dt, exactly, in free flight.
+#[test]
+fn regress_commanded_torque_acts_once() {
+    use bevy::prelude::*;
+    use rpod::sim::{Clock, Physics, SimBody, SimStep, Stage, Wrench};
+    let mut s = sim("docking_aligned", &[]);
+    let tau = nalgebra::Vector3::new(0.0, 0.0, 50.0);
+    s.app.add_systems(
+        SimStep,
+        (move |clock: Res<Clock>, mut q: Query<(&SimBody, &mut Wrench)>| {
+            if clock.step == 0 {
+                for (b, mut w) in &mut q {
+                    if b.name == "chaser" {
+                        w.torque_nm += tau;
+                    }
+                }
+            }
+        })
+        .in_set(Stage::Actuate),
+    );
+    let l0 = angular_momentum(&s);
+    let dt = s.scene.dt_s;
+    s.step(1);
+    let held = |s: &Simulation| -> f64 {
+        let phys = s.app.world().resource::<Physics>();
+        phys.world
+            .bodies
+            .iter()
+            .map(|(_, rb)| f64::from(rb.user_torque().length()))
+            .fold(0.0, f64::max)
+    };
+    assert!(held(&s) > 49.0, "step 0 held the commanded torque");
+    s.step(1);
+    assert_eq!(held(&s), 0.0, "the torque must not carry over to step 1");
+    s.step(s.steps_for(15.0));
+    let dl = (angular_momentum(&s) - (l0 + tau * dt)).norm();
+    assert!(
+        dl < 1e-12,
+        "free flight: angular momentum off by {dl:.3e} N·m·s"
+    );
+    s.step(s.steps_for(25.0));
+    assert_eq!(held(&s), 0.0, "nor to the contact and latch phase");
+}
+
+/// Total angular momentum of the bodies about the world origin, N·m·s (world frame).
+fn angular_momentum(s: &Simulation) -> nalgebra::Vector3<f64> {
+    use rpod::sim::{BodyState, SimBody};
+    let mut l = nalgebra::Vector3::zeros();
+    let w = s.app.world();
+    for e in w.resource::<rpod::sim::Roster>().bodies.iter() {
+        let (b, st) = (
+            w.get::<SimBody>(*e).unwrap(),
+            w.get::<BodyState>(*e).unwrap(),
+        );
+        let r = st.att.to_rotation_matrix().into_inner();
+        l += r * b.inertia_kg_m2 * r.transpose() * st.omega_rad_s
+            + st.pos_m.cross(&(st.vel_m_s * b.mass_kg));
+    }
+    l
+}

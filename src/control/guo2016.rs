@@ -517,19 +517,7 @@ mod tests {
     use crate::orbit::constants::{J2_EARTH, MU_EARTH_M3_S2, R_EARTH_M};
     use nalgebra::Quaternion;
 
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        }
-        fn vec(&mut self, s: f64) -> Vector3<f64> {
-            Vector3::new(self.next() * s, self.next() * s, self.next() * s)
-        }
-    }
+    use crate::math::rng::Lcg;
 
     // ---------------- independent plant ----------------
 
@@ -659,19 +647,24 @@ mod tests {
 
     fn random_plant(rng: &mut Lcg) -> Plant {
         let (rt, vt, _) = target_orbit();
-        let qt = UnitQuaternion::from_scaled_axis(rng.vec(2.0));
+        let qt = UnitQuaternion::from_scaled_axis(rng.vec3(2.0));
         // chaser within 60° of the docking attitude, somewhere in the corridor region
         let q_d0 = qt * q_d0_to_target();
-        let qc = q_d0 * quat_from_mrp(&rng.vec(0.15));
+        let qc = q_d0 * quat_from_mrp(&rng.vec3(0.15));
         Plant {
             rt,
             vt,
-            r: qt * Vector3::new(10.0 + 5.0 * rng.next(), rng.next() * 8.0, rng.next() * 8.0),
-            v: rng.vec(0.3),
+            r: qt
+                * Vector3::new(
+                    10.0 + 5.0 * rng.symmetric(),
+                    rng.symmetric() * 8.0,
+                    rng.symmetric() * 8.0,
+                ),
+            v: rng.vec3(0.3),
             qc: *qc.quaternion(),
-            wc: rng.vec(0.1),
+            wc: rng.vec3(0.1),
             qt: *qt.quaternion(),
-            wt: rng.vec(0.02),
+            wt: rng.vec3(0.02),
         }
     }
 
@@ -686,8 +679,8 @@ mod tests {
         let mut rng = Lcg(11);
         for _ in 0..100 {
             let plant = random_plant(&mut rng);
-            let st = law.state(&plant.obs(rng.next().abs() * 100.0));
-            let wdot = rng.vec(0.05);
+            let st = law.state(&plant.obs(rng.symmetric().abs() * 100.0));
+            let wdot = rng.vec3(0.05);
             let m = coupled_model(&p, &st, &wdot);
             assert!((m.m - m.m.transpose()).abs().max() < 1e-12 * m.m.abs().max());
             let eig = m.m.symmetric_eigenvalues();
@@ -736,10 +729,10 @@ mod tests {
         let mut worst_xdd: f64 = 0.0;
         for _ in 0..40 {
             let plant = random_plant(&mut rng);
-            let t = rng.next().abs() * 100.0;
+            let t = rng.symmetric().abs() * 100.0;
             let u = Guo2016Command {
-                force_body_n: rng.vec(2.0),
-                torque_body_nm: rng.vec(0.5),
+                force_body_n: rng.vec3(2.0),
+                torque_body_nm: rng.vec3(0.5),
             };
             let pp = plant.rk4(t, dt, &cfg, &u);
             let pm = plant.rk4(t, -dt, &cfg, &u);

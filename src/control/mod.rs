@@ -18,4 +18,7 @@ pub enum ControllerSpec {
     Xu2015(xu2015::SceneSpec),
     /// Zhang, He, Lü, Wang (2018): differential-game avoidance.
     Zhang2018(zhang2018::SceneSpec),
+    /// Xu, Wen, Wei (2019): artificial potential with superquadric obstacle and heart keep-out,
+    /// on an air-bearing table.
+    Xu2019(xu2019::SceneSpec),
 }

@@ -334,6 +334,201 @@ impl Xu2019Controller {
     }
 }
 
+/// Which variant of the law a scene flies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum LawForm {
+    /// As published ([`Xu2019Params::paper`]): eq (8) radial distance, printed gradient.
+    #[default]
+    Paper,
+    /// Exact radial distance and true gradient ([`Xu2019Params::exact`]).
+    Exact,
+}
+
+/// How the controller's velocity is obtained from the vision system.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum VelocitySource {
+    /// Backward difference of successive (noisy, delayed) pose measurements, optionally
+    /// low-pass filtered (`velocity_filter_s`). The experiment.
+    #[default]
+    Differenced,
+    /// The sensor also measures the velocity exactly (an ideal sensor, for the paper's
+    /// numerical simulation).
+    Ideal,
+}
+
+/// The vision system: a pose (x, y, θ) of the chaser every `period_s`, with noise and latency.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VisionSpec {
+    /// Measurement period, s. Paper: 0.04 s (25 Hz).
+    #[serde(default = "vision_period")]
+    pub period_s: f64,
+    /// Delay from exposure to the controller, s (image processing, radio link).
+    #[serde(default)]
+    pub latency_s: f64,
+    /// Standard deviation of the position noise per axis, m.
+    #[serde(default)]
+    pub position_noise_m: f64,
+    /// Standard deviation of the attitude noise, deg.
+    #[serde(default)]
+    pub angle_noise_deg: f64,
+    /// Where the velocity comes from.
+    #[serde(default)]
+    pub velocity: VelocitySource,
+    /// Time constant of a first-order low-pass filter on the differenced velocity, s
+    /// (0: none).
+    #[serde(default)]
+    pub velocity_filter_s: f64,
+    /// Seed of the noise.
+    #[serde(default)]
+    pub seed: u64,
+}
+
+fn vision_period() -> f64 {
+    0.04
+}
+
+impl Default for VisionSpec {
+    fn default() -> Self {
+        Self {
+            period_s: vision_period(),
+            latency_s: 0.0,
+            position_noise_m: 0.0,
+            angle_noise_deg: 0.0,
+            velocity: VelocitySource::Differenced,
+            velocity_filter_s: 0.0,
+            seed: 0,
+        }
+    }
+}
+
+/// How the command becomes a force on the simulator.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ActuationSpec {
+    /// The commanded (Fx, Fy, T) applied exactly, continuous and unlimited (the paper's
+    /// numerical simulation).
+    Ideal,
+    /// The eight cold-gas nozzles of Fig. 10, on/off, through one PWPF modulator per channel
+    /// (body x, body y, torque), stepped every simulation step.
+    Thrusters {
+        /// Nozzle thrust, lever arm, specific impulse and the PWPF constants
+        /// (default: [`crate::actuation::thrusters::ThrusterParams::paper`]).
+        #[serde(default)]
+        params: crate::actuation::thrusters::ThrusterParams,
+        /// Relative thrust noise: each open nozzle gives F·(1 + σ·N(0, 1)) per step
+        /// (dimensionless standard deviation σ; 0: none).
+        #[serde(default)]
+        thrust_noise: f64,
+        /// Seed of the thrust noise.
+        #[serde(default)]
+        seed: u64,
+    },
+}
+
+/// How a scene asks for the Xu, Wen, Wei (2019) law (`controllers: [Xu2019((...))]`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSpec {
+    /// The chaser simulator.
+    pub chaser: String,
+    /// Published or exact variant.
+    #[serde(default)]
+    pub form: LawForm,
+    /// Goal position in the lab frame, m (default Table 1: (0.25, 1.4)).
+    #[serde(default)]
+    pub goal_pos_m: Option<[f64; 2]>,
+    /// Goal attitude, deg (default Table 1: 90°).
+    #[serde(default)]
+    pub goal_theta_deg: Option<f64>,
+    /// The vision system.
+    #[serde(default)]
+    pub vision: VisionSpec,
+    /// The actuators.
+    pub actuation: ActuationSpec,
+    /// Stop commanding (zero force and torque, valves closed) once the docking electromagnet
+    /// is on: the final centimetres are left to the magnet and the cone/slot guidance.
+    #[serde(default)]
+    pub release_on_magnet: bool,
+}
+
+impl SceneSpec {
+    /// The law's constants for this scene.
+    pub fn params(&self) -> Xu2019Params {
+        let mut p = match self.form {
+            LawForm::Paper => Xu2019Params::paper(),
+            LawForm::Exact => Xu2019Params::exact(),
+        };
+        if let Some(g) = self.goal_pos_m {
+            p.goal_pos_lab_m = g;
+        }
+        if let Some(t) = self.goal_theta_deg {
+            p.goal_theta_rad = t.to_radians();
+        }
+        p
+    }
+
+    /// Checks the numbers; `Err((field, message))` with the field relative to the spec.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let v = &self.vision;
+        let bad = |f: &str, m: String| Err((f.to_string(), m));
+        if !(v.period_s.is_finite() && v.period_s > 0.0) {
+            return bad(
+                "vision.period_s",
+                format!("must be a positive number of seconds, got {}", v.period_s),
+            );
+        }
+        for (f, x) in [
+            ("vision.latency_s", v.latency_s),
+            ("vision.position_noise_m", v.position_noise_m),
+            ("vision.angle_noise_deg", v.angle_noise_deg),
+            ("vision.velocity_filter_s", v.velocity_filter_s),
+        ] {
+            if !(x.is_finite() && x >= 0.0) {
+                return bad(f, format!("must be finite and non-negative, got {x}"));
+            }
+        }
+        if let ActuationSpec::Thrusters {
+            params,
+            thrust_noise,
+            ..
+        } = &self.actuation
+        {
+            for (f, x) in [
+                (
+                    "actuation.params.thrust_per_nozzle_n",
+                    params.thrust_per_nozzle_n,
+                ),
+                ("actuation.params.lever_arm_m", params.lever_arm_m),
+                ("actuation.params.isp_s", params.isp_s),
+                ("actuation.params.pwpf.k_m", params.pwpf.k_m),
+                ("actuation.params.pwpf.t_m_s", params.pwpf.t_m_s),
+            ] {
+                if !(x.is_finite() && x > 0.0) {
+                    return bad(f, format!("must be positive, got {x}"));
+                }
+            }
+            let p = &params.pwpf;
+            if !(p.u_off >= 0.0 && p.u_off < p.u_on && p.min_on_time_s >= 0.0) {
+                return bad(
+                    "actuation.params.pwpf",
+                    format!(
+                        "needs 0 ≤ u_off < u_on and min_on_time_s ≥ 0, got u_on {}, u_off {}, min_on_time_s {}",
+                        p.u_on, p.u_off, p.min_on_time_s
+                    ),
+                );
+            }
+            if !(thrust_noise.is_finite() && *thrust_noise >= 0.0) {
+                return bad(
+                    "actuation.thrust_noise",
+                    format!("must be finite and non-negative, got {thrust_noise}"),
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

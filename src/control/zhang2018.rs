@@ -913,17 +913,7 @@ mod tests {
         L2Params::paper()
     }
 
-    /// Deterministic pseudo-random numbers in [−1, 1) (64-bit LCG, Knuth's constants).
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        }
-    }
+    use crate::math::rng::Lcg;
 
     #[test]
     fn invariant_zhang2018_optimal_directions_extremise_h() {
@@ -939,7 +929,7 @@ mod tests {
         let x = GameState::zeros();
         let mut rng = Lcg(7);
         for _ in 0..20 {
-            let g = Costate::from_fn(|_, _| rng.next());
+            let g = Costate::from_fn(|_, _| rng.symmetric());
             let u_ref = 0.3;
             let v_ref = -1.1;
             let vs = v_star_rad(&g);
@@ -1034,7 +1024,7 @@ mod tests {
         let p = Zhang2018Params::paper();
         let x = paper_initial_state_rot(&l2());
         let mut rng = Lcg(11);
-        let g = Costate::from_fn(|_, _| rng.next());
+        let g = Costate::from_fn(|_, _| rng.symmetric());
         let (u, v) = (u_star_rad(&g), v_star_rad(&g));
         let an = costate_rate(&p, &x, &g);
         for j in 0..8 {

@@ -2,4 +2,5 @@
 //! quaternion/DCM conventions, skew matrices.
 
 pub mod mrp;
+pub mod rng;
 pub mod rot;

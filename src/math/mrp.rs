@@ -140,24 +140,7 @@ mod tests {
     //! (kinematics).
     use super::*;
 
-    /// Deterministic pseudo-random numbers in [-1, 1) (64-bit LCG, no dependency).
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        }
-        fn vec(&mut self, s: f64) -> Vector3<f64> {
-            Vector3::new(self.next() * s, self.next() * s, self.next() * s)
-        }
-        fn quat(&mut self) -> UnitQuaternion<f64> {
-            let v = self.vec(1.0);
-            UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(self.next(), v.x, v.y, v.z))
-        }
-    }
+    use crate::math::rng::Lcg;
 
     /// Angle between two orientations, rad (sign of q irrelevant).
     fn angle_between(a: &UnitQuaternion<f64>, b: &UnitQuaternion<f64>) -> f64 {
@@ -204,7 +187,7 @@ mod tests {
         // Reference: the DCM of eq (17) and the quaternion; the shadow set must give the same.
         let mut rng = Lcg(2);
         for _ in 0..200 {
-            let s = rng.vec(3.0);
+            let s = rng.vec3(3.0);
             if s.norm() < 1e-3 {
                 continue;
             }
@@ -265,7 +248,7 @@ mod tests {
         let dt = 1e-5;
         for _ in 0..200 {
             let q0 = rng.quat();
-            let w = rng.vec(2.0);
+            let w = rng.vec3(2.0);
             let s0 = mrp_from_quat(&q0);
             let qp = q0 * UnitQuaternion::from_scaled_axis(w * dt);
             let qm = q0 * UnitQuaternion::from_scaled_axis(-w * dt);
@@ -296,8 +279,8 @@ mod tests {
     fn invariant_skew_cross_product() {
         // Reference: nalgebra's cross product.
         let mut rng = Lcg(5);
-        let a = rng.vec(3.0);
-        let b = rng.vec(3.0);
+        let a = rng.vec3(3.0);
+        let b = rng.vec3(3.0);
         assert!((skew(&a) * b - a.cross(&b)).norm() < 1e-15);
         assert!((skew(&a) + skew(&a).transpose()).abs().max() == 0.0);
     }

@@ -183,19 +183,10 @@ impl EllipticOrbit {
     /// DCM taking perifocal (P toward perigee, W orbit normal) components to ECI
     /// (the 3-1-3 rotation by −Ω, −i, −ω).
     pub fn dcm_eci_from_perifocal(&self) -> Matrix3<f64> {
-        let (so, co) = self.raan_rad.sin_cos();
-        let (si, ci) = self.inclination_rad.sin_cos();
-        let (sw, cw) = self.arg_perigee_rad.sin_cos();
-        Matrix3::new(
-            co * cw - so * sw * ci,
-            -co * sw - so * cw * ci,
-            so * si,
-            so * cw + co * sw * ci,
-            -so * sw + co * cw * ci,
-            -co * si,
-            sw * si,
-            cw * si,
-            ci,
+        crate::orbit::kepler::dcm_eci_from_perifocal(
+            self.raan_rad,
+            self.inclination_rad,
+            self.arg_perigee_rad,
         )
     }
 

@@ -56,13 +56,26 @@ pub(crate) fn format_tick(v: f64, step: f64) -> String {
     format!("{v:.decimals$}")
 }
 
-/// Linear ticks inside [lo, hi] (inclusive with a small tolerance), about `target` of them.
+/// Linear ticks inside [lo, hi] (inclusive with a small tolerance), about `target` of them and
+/// never fewer than three: a nice step rounded up from span/target can leave a single tick (just
+/// "0") on a short axis, which gives the reader no scale, so the step shrinks until three fit.
 pub(crate) fn linear_ticks(lo: f64, hi: f64, target: usize) -> Vec<Tick> {
+    let mut target = target.max(2);
+    loop {
+        let ticks = linear_ticks_once(lo, hi, target);
+        if ticks.is_empty() || ticks.len() >= 3 || target >= 12 {
+            return ticks;
+        }
+        target += 1;
+    }
+}
+
+fn linear_ticks_once(lo: f64, hi: f64, target: usize) -> Vec<Tick> {
     let span = hi - lo;
     if !(span.is_finite() && span > 0.0) {
         return Vec::new();
     }
-    let step = nice_step(span / target.max(2) as f64);
+    let step = nice_step(span / target as f64);
     let first = (lo / step - 1e-9).ceil() as i64;
     let last = (hi / step + 1e-9).floor() as i64;
     (first..=last)
@@ -155,6 +168,12 @@ mod tests {
             .map(|t| t.label)
             .collect();
         assert_eq!(t, ["0", "25", "50", "75", "100"]);
+        // span 34 / 3 = 11.3 → step 20 leaves only "0" inside ±17; the step shrinks to 10.
+        let t: Vec<String> = linear_ticks(-17.0, 17.0, 3)
+            .into_iter()
+            .map(|t| t.label)
+            .collect();
+        assert_eq!(t, ["-10", "0", "10"]);
         assert_eq!(format_tick(2.5e-5, 5e-6), "2.5e-5");
         assert_eq!(format_tick(-1e-12, 0.1), "0.0");
         assert_eq!(format_tick(7.0e6, 1e6), "7e6");

@@ -807,10 +807,9 @@ pub fn run(out: &Path) -> Result<(), String> {
         "## Do the ports meet, and does anything else touch?\n\nFull geometry: chaser bus, two \
          solar wings and docking cone (tip = P_s); target bus, two wings, antenna and slot \
          (bottom = P_t). Contacts are judged by the core monitor (cone–slot = docking contact, \
-         anything else = collision). The docking mechanism (issue 3) is not in these scenes: \
-         its miss criterion (axial error < 0 with a lateral offset above the mouth radius) \
-         declares MISSED at t = 0.01 s for a chaser that starts behind the port plane of a \
-         tumbling target, as here. The last column but one gives cos(ρ, outward target port \
+         anything else = collision). The docking mechanism (issue 3, magnet and latch) is not in \
+         these scenes: the paper's laws bring the port points together with no capture model. \
+         The last column but one gives cos(ρ, outward target port \
          axis) at the first contact: negative = the chaser port is behind the target port's \
          face. The paper's laws converge ρ axis by axis in the Hill frame with no approach \
          corridor, so the chaser closes from wherever it is while the target turns at 4.7 °/s.\n"

@@ -324,20 +324,7 @@ fn set_chaser_aligned(l: &mut LoadedScene) {
     }
 }
 
-/// A deterministic 64-bit LCG (Knuth's MMIX constants), uniform in [0, 1).
-#[derive(Debug, Clone)]
-pub struct Lcg(pub u64);
-
-impl Lcg {
-    /// Next uniform number in [0, 1).
-    pub fn uniform(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+pub use crate::math::rng::Lcg;
 
 /// One campaign start: position and velocity in the target frame (= world axes).
 #[derive(Debug, Clone, Copy)]

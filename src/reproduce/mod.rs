@@ -7,10 +7,11 @@ use std::path::Path;
 pub mod geng2015;
 pub mod guo2016;
 pub mod xu2015;
+pub mod xu2019;
 pub mod zhang2018;
 
 /// The papers `rpod reproduce` knows, in the order it runs them.
-pub const PAPERS: &[&str] = &["guo2016", "xu2015", "geng2015", "zhang2018"];
+pub const PAPERS: &[&str] = &["guo2016", "xu2015", "geng2015", "xu2019", "zhang2018"];
 
 /// Runs one paper's reproduction into `out` (the paper's own directory).
 pub fn run(name: &str, out: &Path) -> Result<(), String> {
@@ -19,6 +20,7 @@ pub fn run(name: &str, out: &Path) -> Result<(), String> {
         "guo2016" => guo2016::run(out),
         "xu2015" => xu2015::run(out),
         "geng2015" => geng2015::run(out),
+        "xu2019" => xu2019::run(out),
         "zhang2018" => zhang2018::run(out),
         other => Err(format!(
             "unknown paper `{other}`; known: {}",

@@ -137,6 +137,11 @@ pub struct MissSpec {
     pub jam_speed_m_s: f64,
     /// After a docking contact ends, separating faster than this: REBOUND, m/s.
     pub rebound_speed_m_s: f64,
+    /// The approach judgements (passed beside the slot, turned away outside the mouth) apply
+    /// only once the gap has fallen below this, m; absent: from t = 0. For a chaser that
+    /// manoeuvres around obstacles far from the target before its final approach.
+    #[serde(default)]
+    pub arm_gap_m: Option<f64>,
 }
 
 impl Default for MissSpec {
@@ -145,6 +150,7 @@ impl Default for MissSpec {
             jam_time_s: 5.0,
             jam_speed_m_s: 1e-3,
             rebound_speed_m_s: 1e-3,
+            arm_gap_m: None,
         }
     }
 }
@@ -180,6 +186,94 @@ pub enum Environment {
     /// Near the Sun–Earth L2 point (Zhang et al. 2018): the world frame rides on a formation
     /// centre under Sun + Earth–Moon gravity; see [`crate::orbit::l2::L2EnvSpec`].
     SunEarthL2(crate::orbit::l2::L2EnvSpec),
+    /// An air-bearing table in a lab (Xu, Wen, Wei 2019): the lab frame has z up along the
+    /// table normal, the table top at z = 0; simulators float on it and move in its plane
+    /// (x, y, yaw). See [`AirBearingSpec`].
+    AirBearing(AirBearingSpec),
+}
+
+/// An air-bearing (granite) table. Lab frame: x, y in the table top, z along its normal
+/// (up), the top at z = 0. Every body not `anchored` is a *simulator*: its centre-of-mass
+/// height, roll and pitch stay as at t = 0 (the air film carries the normal component of
+/// gravity, m·g·cos α_x·cos α_y), it moves in x, y and yaw under the in-plane gravity component
+/// of the tilt, the air film's residual Coulomb friction and viscous drag, and whatever else
+/// acts on it. A simulator whose centre of mass leaves the table top is no longer supported:
+/// an `off_table` event, and it falls under the full gravity vector.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AirBearingSpec {
+    /// Table top size along lab x and y, m.
+    #[serde(default = "table_size")]
+    pub table_size_m: [f64; 2],
+    /// Lab (x, y) of the table corner with the smallest coordinates, m.
+    #[serde(default)]
+    pub table_corner_m: [f64; 2],
+    /// Table thickness (the fixed collider below z = 0), m.
+    #[serde(default = "table_thickness")]
+    pub table_thickness_m: f64,
+    /// Magnitude of gravity, m/s².
+    #[serde(default = "standard_gravity")]
+    pub gravity_m_s2: f64,
+    /// Tilt of the table, deg: (α_x, α_y). Gravity in the lab frame is
+    /// g·(sin α_x·cos α_y, sin α_y, −cos α_x·cos α_y): α_x alone accelerates a free puck along
+    /// +x at g·sin α_x, α_y alone along +y at g·sin α_y.
+    #[serde(default)]
+    pub tilt_deg: [f64; 2],
+    /// Residual Coulomb friction coefficient of the air film (friction force μ·N against the
+    /// in-plane velocity, N the normal load; sticks when the other in-plane forces are below
+    /// μ·N), dimensionless.
+    #[serde(default)]
+    pub coulomb_friction: f64,
+    /// Viscous drag of the air film on translation, N·s/m (force −c·v).
+    #[serde(default)]
+    pub viscous_drag_n_s_m: f64,
+    /// Viscous drag of the air film on yaw, N·m·s/rad (torque −c·ω_z).
+    #[serde(default)]
+    pub viscous_drag_nm_s_rad: f64,
+    /// Bodies bolted to the table (obstacles, fixtures): fixed, no forces act on them.
+    #[serde(default)]
+    pub anchored: Vec<String>,
+}
+
+fn table_size() -> [f64; 2] {
+    [2.0, 2.5]
+}
+fn table_thickness() -> f64 {
+    0.3
+}
+fn standard_gravity() -> f64 {
+    9.81
+}
+
+impl Default for AirBearingSpec {
+    fn default() -> Self {
+        Self {
+            table_size_m: table_size(),
+            table_corner_m: [0.0, 0.0],
+            table_thickness_m: table_thickness(),
+            gravity_m_s2: standard_gravity(),
+            tilt_deg: [0.0, 0.0],
+            coulomb_friction: 0.0,
+            viscous_drag_n_s_m: 0.0,
+            viscous_drag_nm_s_rad: 0.0,
+            anchored: Vec::new(),
+        }
+    }
+}
+
+impl AirBearingSpec {
+    /// Gravity in the lab frame, m/s².
+    pub fn gravity_lab_m_s2(&self) -> nalgebra::Vector3<f64> {
+        let (ax, ay) = (self.tilt_deg[0].to_radians(), self.tilt_deg[1].to_radians());
+        nalgebra::Vector3::new(ax.sin() * ay.cos(), ay.sin(), -ax.cos() * ay.cos())
+            * self.gravity_m_s2
+    }
+    /// Whether a lab point's (x, y) lies on the table top.
+    pub fn on_table(&self, x_m: f64, y_m: f64) -> bool {
+        let [cx, cy] = self.table_corner_m;
+        let [w, h] = self.table_size_m;
+        x_m >= cx && x_m <= cx + w && y_m >= cy && y_m <= cy + h
+    }
 }
 
 /// The reference orbit's initial state.
@@ -446,6 +540,26 @@ pub enum ShapeSpec {
         /// Radius, m.
         radius_m: f64,
     },
+    /// Prism whose cross-section (in the frame's x-y plane) is the superquadric
+    /// (x²/a²)^s + (y²/b²)^s = 1, extruded along z, centred on its frame. Convex for s ≥ ½;
+    /// the collider is the convex hull of `segments` boundary points on each end face.
+    SuperquadricPrism {
+        /// Half-width along x, a, m.
+        a_m: f64,
+        /// Half-width along y, b, m.
+        b_m: f64,
+        /// Exponent s (≥ 0.5).
+        s: f64,
+        /// Full height along z, m.
+        height_m: f64,
+        /// Boundary points per end face (≥ 8).
+        #[serde(default = "prism_segments")]
+        segments: u32,
+    },
+}
+
+fn prism_segments() -> u32 {
+    96
 }
 
 /// What a part is, for the monitor and the docking mechanism.

@@ -118,6 +118,31 @@ fn shape_primitive(shape: &ShapeSpec) -> (Primitive, UnitQuaternion<f64>) {
             },
             UnitQuaternion::identity(),
         ),
+        ShapeSpec::SuperquadricPrism {
+            a_m,
+            b_m,
+            s,
+            height_m,
+            segments,
+        } => {
+            let n = (*segments).max(8) as usize;
+            let e = 1.0 / s;
+            let mut points_m = Vec::with_capacity(2 * n);
+            for k in 0..n {
+                // Parametric form (eq 5 of Xu et al. 2019): x = a·sgn(c)|c|^{1/s}, y = b·sgn(s)|s|^{1/s}.
+                let t = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+                let (st, ct) = t.sin_cos();
+                let x = a_m * ct.signum() * ct.abs().powf(e);
+                let y = b_m * st.signum() * st.abs().powf(e);
+                for z in [-height_m / 2.0, height_m / 2.0] {
+                    points_m.push(nalgebra::Point3::new(x, y, z));
+                }
+            }
+            (
+                Primitive::ConvexHull { points_m },
+                UnitQuaternion::identity(),
+            )
+        }
     }
 }
 

@@ -75,6 +75,56 @@ pub fn validate(s: &Scene) -> Check {
             }
         },
         Environment::FreeSpace => {}
+        Environment::AirBearing(t) => {
+            for k in 0..2 {
+                positive(
+                    &format!("environment.0.table_size_m.{k}"),
+                    t.table_size_m[k],
+                    "metres",
+                )?;
+                if !(t.table_corner_m[k].is_finite()) {
+                    return fail(
+                        format!("environment.0.table_corner_m.{k}"),
+                        "must be finite",
+                    );
+                }
+                if !(t.tilt_deg[k].is_finite() && t.tilt_deg[k].abs() < 45.0) {
+                    return fail(
+                        format!("environment.0.tilt_deg.{k}"),
+                        format!(
+                            "a table tilt must be finite and below 45°, got {}",
+                            t.tilt_deg[k]
+                        ),
+                    );
+                }
+            }
+            positive(
+                "environment.0.table_thickness_m",
+                t.table_thickness_m,
+                "metres",
+            )?;
+            positive("environment.0.gravity_m_s2", t.gravity_m_s2, "m/s²")?;
+            for (f, v) in [
+                ("coulomb_friction", t.coulomb_friction),
+                ("viscous_drag_n_s_m", t.viscous_drag_n_s_m),
+                ("viscous_drag_nm_s_rad", t.viscous_drag_nm_s_rad),
+            ] {
+                if !(v.is_finite() && v >= 0.0) {
+                    return fail(
+                        format!("environment.0.{f}"),
+                        format!("must be a finite non-negative number, got {v}"),
+                    );
+                }
+            }
+            for (i, n) in t.anchored.iter().enumerate() {
+                if !s.bodies.iter().any(|b| &b.name == n) {
+                    return fail(
+                        format!("environment.0.anchored.{i}"),
+                        format!("no body named `{n}`"),
+                    );
+                }
+            }
+        }
         Environment::SunEarthL2(spec) => spec
             .validate()
             .map_err(|(f, m)| (format!("environment.0.{f}"), m))?,
@@ -240,6 +290,29 @@ fn validate_shape(path: &str, s: &ShapeSpec) -> Check {
         }
         ShapeSpec::Sphere { radius_m } => {
             positive(&format!("{path}.radius_m"), *radius_m, "metres")?
+        }
+        ShapeSpec::SuperquadricPrism {
+            a_m,
+            b_m,
+            s,
+            height_m,
+            segments,
+        } => {
+            positive(&format!("{path}.a_m"), *a_m, "metres")?;
+            positive(&format!("{path}.b_m"), *b_m, "metres")?;
+            positive(&format!("{path}.height_m"), *height_m, "metres")?;
+            if !(s.is_finite() && *s >= 0.5) {
+                return fail(
+                    format!("{path}.s"),
+                    format!("the exponent must be ≥ 0.5 (a convex cross-section), got {s}"),
+                );
+            }
+            if *segments < 8 {
+                return fail(
+                    format!("{path}.segments"),
+                    format!("at least 8 boundary points, got {segments}"),
+                );
+            }
         }
     }
     Ok(())

@@ -140,7 +140,7 @@ impl Simulation {
                 app.insert_resource(env);
                 Some((r, v))
             }
-            Environment::FreeSpace => None,
+            Environment::FreeSpace | Environment::AirBearing(_) => None,
             Environment::SunEarthL2(spec) => {
                 super::laws::zhang2018::install_environment(&mut app, spec, dt)
             }
@@ -348,6 +348,7 @@ impl Simulation {
         });
         super::add_pipeline(&mut app);
         super::docking::install(&mut app, loaded)?;
+        super::airbearing::install(&mut app, loaded)?;
         super::laws::install(&mut app, loaded)?;
         app.finish();
         app.cleanup();
@@ -503,6 +504,7 @@ impl Simulation {
             "frame": match self.scene.environment {
                 Environment::Orbit { .. } => "world: Earth-inertial axes, origin on the reference orbit (the target's unforced orbit); positions are centres of mass",
                 Environment::FreeSpace => "world: inertial, no gravity; positions are centres of mass",
+                Environment::AirBearing(_) => "world: the lab frame of the air-bearing table (x, y in the table top, z up, top at z = 0); positions are centres of mass",
                 _ => "world: non-rotating, origin on the environment's reference trajectory (see the scene's environment); positions are centres of mass",
             },
             "dt_s": self.scene.dt_s,

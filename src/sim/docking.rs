@@ -124,6 +124,11 @@ pub struct Docking {
     pub peak_joint_force_n: f64,
     /// Last step with a docking contact, s.
     pub last_docking_contact_s: Option<f64>,
+    /// The approach judgements apply (the gap has fallen below `miss.arm_gap_m`, or no such
+    /// threshold).
+    pub armed: bool,
+    /// The chaser port's axial error at the previous step, m (positive: in front of the seat).
+    pub prev_axial_error_m: Option<f64>,
     /// Diagnostics column indices: gap, axial, lateral, misalignment, magnet, state.
     cols: [usize; 6],
 }
@@ -215,6 +220,8 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         joint: None,
         peak_joint_force_n: 0.0,
         last_docking_contact_s: None,
+        armed: false,
+        prev_axial_error_m: None,
         cols,
     });
     app.add_systems(SimStep, docking_actuate.in_set(Stage::Actuate));
@@ -296,6 +303,10 @@ fn docking_monitor(
         .last_docking_contact_s
         .is_some_and(|tc| t - tc <= CONTACT_HOLD_S + 1e-9);
     let spec = dock.spec.clone();
+    if !dock.armed && spec.miss.arm_gap_m.is_none_or(|d| g.gap_m <= d) {
+        dock.armed = true;
+    }
+    let armed = dock.armed;
     let seated = g.axial_error_m.abs() <= spec.latch.axial_tolerance_m
         && g.lateral_m <= spec.latch.lateral_tolerance_m
         && g.misalignment_deg <= spec.latch.angle_tolerance_deg;
@@ -303,6 +314,10 @@ fn docking_monitor(
         dock.t_first_contact_s.get_or_insert(t);
         dock.max_misalignment_deg = dock.max_misalignment_deg.max(g.misalignment_deg);
     }
+    // "Passed beside" is a crossing of the seat plane from the front this step, not a chaser that
+    // is (or starts) behind the target's port plane while it manoeuvres.
+    let crossed_from_front = dock.prev_axial_error_m.is_some_and(|p| p >= 0.0);
+    dock.prev_axial_error_m = Some(g.axial_error_m);
     let old = dock.state;
     let mut new = old;
     let mut reason = String::new();
@@ -333,13 +348,18 @@ fn docking_monitor(
             if let Some(pair) = collision {
                 new = Missed;
                 reason = format!("collision between {pair} before the latch engaged");
-            } else if g.axial_error_m < 0.0 && g.lateral_m > spec.mouth_radius_m {
+            } else if armed
+                && g.axial_error_m < 0.0
+                && crossed_from_front
+                && g.lateral_m > spec.mouth_radius_m
+            {
                 new = Missed;
                 reason = format!(
                     "the chaser port passed beside the slot: lateral offset {:.3} m > mouth radius {:.3} m",
                     g.lateral_m, spec.mouth_radius_m
                 );
-            } else if !docking_contact
+            } else if armed
+                && !docking_contact
                 && matches!(old, Free | Attracting)
                 && g.axial_rate_m_s > spec.miss.rebound_speed_m_s
                 && g.lateral_m > spec.mouth_radius_m

@@ -23,6 +23,7 @@
 //! `SimStep` runs exactly [`StepBudget`] times per `App::update`, never by the wall clock; the
 //! same scene gives byte-identical outputs on every run.
 
+pub mod airbearing;
 pub mod build;
 pub mod docking;
 pub mod laws;
@@ -394,7 +395,11 @@ fn physics_step(
         let world = &mut phys.world;
         for (b, _, w) in &q {
             if let Some(rb) = world.bodies.get_mut(b.handle) {
+                // rapier keeps user forces and torques until cleared, and `reset_forces` clears
+                // only the forces: without `reset_torques` every torque ever commanded would
+                // act again whenever rapier is the truth (contact, latch).
                 rb.reset_forces(false);
+                rb.reset_torques(false);
                 rb.add_force(conv::v(&(w.force_n + w.gravity_n)), true);
                 rb.add_torque(conv::v(&w.torque_nm), true);
             }

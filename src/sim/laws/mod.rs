@@ -9,6 +9,7 @@ use bevy::prelude::*;
 pub mod geng2015;
 pub mod guo2016;
 pub mod xu2015;
+pub mod xu2019;
 pub mod zhang2018;
 
 /// Installs the scene's controllers. Called after the pipeline exists, before t = 0 is
@@ -21,6 +22,7 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
             ControllerSpec::Geng2015(s) => geng2015::install(app, loaded, &path, s)?,
             ControllerSpec::Xu2015(s) => xu2015::install(app, loaded, &path, s)?,
             ControllerSpec::Zhang2018(s) => zhang2018::install(app, loaded, &path, s)?,
+            ControllerSpec::Xu2019(s) => xu2019::install(app, loaded, &path, s)?,
         }
     }
     Ok(())
