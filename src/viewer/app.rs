@@ -193,7 +193,8 @@ pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String>
     let mut app = base_app(&opts, &sim.scene.name);
     let reference = sim.reference_state();
     let snap = live_snapshot(&sim);
-    app.insert_resource(Corridors::of(&sim.scene));
+    app.insert_resource(Corridors::of(&sim.scene))
+        .insert_resource(Table::of(&sim.scene));
     app.insert_resource(geom)
         .insert_resource(Current {
             snap,
@@ -257,7 +258,8 @@ pub fn run_replay(loaded: &LoadedScene, rec: Recording, opts: ViewerOptions) -> 
     let mut app = base_app(&opts, &scene.name);
     let mut snap = rec.sample(timeline.t_s);
     snap.bodies = order.iter().map(|&i| snap.bodies[i]).collect();
-    app.insert_resource(Corridors::of(scene));
+    app.insert_resource(Corridors::of(scene))
+        .insert_resource(Table::of(scene));
     app.insert_resource(geom)
         .insert_resource(Current {
             snap,
@@ -399,6 +401,23 @@ fn finish(mut app: App) -> Result<(), String> {
     }
 }
 
+/// An air-bearing scene's table: corner (lab x, y), size (x, y) and thickness, m.
+#[derive(Resource, Default)]
+struct Table(Option<([f64; 2], [f64; 2], f64)>);
+
+impl Table {
+    fn of(scene: &crate::scene::Scene) -> Self {
+        match &scene.environment {
+            Environment::AirBearing(t) => Self(Some((
+                t.table_corner_m,
+                t.table_size_m,
+                t.table_thickness_m,
+            ))),
+            _ => Self(None),
+        }
+    }
+}
+
 /// The body a constraint surface rides on.
 #[derive(Component)]
 struct SurfaceOf(usize);
@@ -430,6 +449,7 @@ fn setup(
     mut commands: Commands,
     geom: Res<SceneGeom>,
     corridors: Res<Corridors>,
+    table: Res<Table>,
     layers: Res<Layers>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<StandardMaterial>>,
@@ -477,6 +497,26 @@ fn setup(
             },
             ConstraintSurface,
             SurfaceOf(*i),
+        ));
+    }
+    // The air-bearing table: its top at z = 0 (lab frame, z up).
+    if let Some((corner, size, thick)) = table.0 {
+        commands.spawn((
+            Mesh3d(meshes.add(Cuboid::new(
+                size[0] as f32,
+                size[1] as f32,
+                thick.max(0.005) as f32,
+            ))),
+            MeshMaterial3d(materials.add(StandardMaterial {
+                base_color: Color::srgb(0.22, 0.23, 0.25),
+                perceptual_roughness: 0.3,
+                ..default()
+            })),
+            Transform::from_xyz(
+                (corner[0] + size[0] / 2.0) as f32,
+                (corner[1] + size[1] / 2.0) as f32,
+                (-thick.max(0.005) / 2.0) as f32,
+            ),
         ));
     }
     commands.spawn((
