@@ -194,7 +194,8 @@ pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String>
     let reference = sim.reference_state();
     let snap = live_snapshot(&sim);
     app.insert_resource(Corridors::of(&sim.scene))
-        .insert_resource(Table::of(&sim.scene));
+        .insert_resource(Table::of(&sim.scene))
+        .insert_resource(Surfaces::of(&sim.scene));
     app.insert_resource(geom)
         .insert_resource(Current {
             snap,
@@ -259,7 +260,8 @@ pub fn run_replay(loaded: &LoadedScene, rec: Recording, opts: ViewerOptions) -> 
     let mut snap = rec.sample(timeline.t_s);
     snap.bodies = order.iter().map(|&i| snap.bodies[i]).collect();
     app.insert_resource(Corridors::of(scene))
-        .insert_resource(Table::of(scene));
+        .insert_resource(Table::of(scene))
+        .insert_resource(Surfaces::of(scene));
     app.insert_resource(geom)
         .insert_resource(Current {
             snap,
@@ -418,6 +420,13 @@ impl Table {
     }
 }
 
+/// A constraint surface's body (if it rides on one), transform and visibility.
+type SurfaceItem = (
+    Option<&'static SurfaceOf>,
+    &'static mut Transform,
+    &'static mut Visibility,
+);
+
 /// The body a constraint surface rides on.
 #[derive(Component)]
 struct SurfaceOf(usize);
@@ -445,10 +454,39 @@ impl Corridors {
     }
 }
 
+/// The constraint surfaces of the laws and guarantees ([`super::surfaces`]), their panel
+/// legend, and the body whose centre-of-mass height the table curves are drawn at.
+#[derive(Resource, Default)]
+struct Surfaces {
+    list: Vec<super::surfaces::Surface>,
+    legend: Vec<String>,
+    curve_body: Option<usize>,
+}
+
+impl Surfaces {
+    fn of(scene: &crate::scene::Scene) -> Self {
+        let list = super::surfaces::scene_surfaces(scene);
+        let legend = list.iter().map(|s| s.legend(scene)).collect();
+        let curve_body = scene.controllers.iter().find_map(|c| match c {
+            crate::control::ControllerSpec::Xu2019(x) => {
+                scene.bodies.iter().position(|b| b.name == x.chaser)
+            }
+            _ => None,
+        });
+        Self {
+            list,
+            legend,
+            curve_body,
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 fn setup(
     mut commands: Commands,
     geom: Res<SceneGeom>,
     corridors: Res<Corridors>,
+    surfaces: Res<Surfaces>,
     table: Res<Table>,
     layers: Res<Layers>,
     mut meshes: ResMut<Assets<Mesh>>,
@@ -498,6 +536,37 @@ fn setup(
             ConstraintSurface,
             SurfaceOf(*i),
         ));
+    }
+    // The laws' and guarantees' constraint surfaces (semi-transparent; a depth bias keeps a
+    // surface that coincides with a collider, such as the Xu 2019 obstacle, in front of it).
+    for s in &surfaces.list {
+        use super::surfaces::Anchor;
+        let [r, g, b, a] = s.rgba;
+        let mut e = commands.spawn((
+            Mesh3d(meshes.add(s.mesh.to_mesh())),
+            MeshMaterial3d(materials.add(StandardMaterial {
+                base_color: Color::srgba(r, g, b, a),
+                alpha_mode: AlphaMode::Blend,
+                cull_mode: None,
+                double_sided: true,
+                depth_bias: 200.0,
+                ..default()
+            })),
+            if layers.surfaces {
+                Visibility::Inherited
+            } else {
+                Visibility::Hidden
+            },
+            ConstraintSurface,
+        ));
+        match s.anchor {
+            Anchor::World(o) => {
+                e.insert(Transform::from_translation(v3(&o)));
+            }
+            Anchor::BodyCom(i) => {
+                e.insert((Transform::default(), SurfaceOf(i)));
+            }
+        }
     }
     // The air-bearing table: its top at z = 0 (lab frame, z up).
     if let Some((corner, size, thick)) = table.0 {
@@ -809,8 +878,8 @@ fn apply_pose(
     cur: Res<Current>,
     geom: Res<SceneGeom>,
     layers: Res<Layers>,
-    mut q: Query<(&BodyMarker, &mut Transform), Without<SurfaceOf>>,
-    mut surfaces: Query<(&SurfaceOf, &mut Transform, &mut Visibility), Without<BodyMarker>>,
+    mut q: Query<(&BodyMarker, &mut Transform), Without<ConstraintSurface>>,
+    mut surfaces: Query<SurfaceItem, (With<ConstraintSurface>, Without<BodyMarker>)>,
 ) {
     for (m, mut tf) in &mut q {
         if let Some((p, a)) = cur.snap.bodies.get(m.0) {
@@ -819,7 +888,9 @@ fn apply_pose(
     }
     // Surfaces in a body frame with the vertex at the centre of mass.
     for (s, mut tf, mut vis) in &mut surfaces {
-        if let Some((p, a)) = cur.snap.bodies.get(s.0) {
+        if let Some(s) = s
+            && let Some((p, a)) = cur.snap.bodies.get(s.0)
+        {
             *tf = to_transform(&nalgebra::Isometry3::from_parts((*p).into(), *a));
         }
         *vis = if layers.surfaces {
@@ -961,6 +1032,7 @@ fn camera_system(
     }
 }
 
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 fn overlays(
     cur: Res<Current>,
     geom: Res<SceneGeom>,
@@ -968,9 +1040,29 @@ fn overlays(
     replay: Option<Res<Replay>>,
     order: Option<Res<ReplayOrder>>,
     trails: Res<Trails>,
+    surfaces: Res<Surfaces>,
     mut gizmos: Gizmos,
 ) {
     let bodies = &cur.snap.bodies;
+    if layers.surfaces {
+        // The table curves the laws keep the chaser's centre of mass out of, at its height.
+        let z = surfaces
+            .curve_body
+            .and_then(|i| bodies.get(i))
+            .map_or(0.0, |(p, _)| p.z as f32);
+        for s in &surfaces.list {
+            if s.curve_lab_m.is_empty() {
+                continue;
+            }
+            let [r, g, b, _] = s.rgba;
+            let pts = s
+                .curve_lab_m
+                .iter()
+                .chain(s.curve_lab_m.first())
+                .map(|p| Vec3::new(p.x as f32, p.y as f32, z));
+            gizmos.linestrip(pts, Color::srgb(r, g, b));
+        }
+    }
     if layers.ports {
         for (i, b) in geom.bodies.iter().enumerate() {
             let Some((p, a)) = bodies.get(i) else {
@@ -1097,6 +1189,7 @@ fn panel(
     mut text: Query<&mut Text, With<PanelText>>,
     mut fill: Query<&mut Node, With<ScrubFill>>,
     mut scrub_vis: Query<&mut Visibility, With<Scrubber>>,
+    surfaces: Res<Surfaces>,
 ) {
     for mut v in &mut scrub_vis {
         *v = if layers.panel {
@@ -1166,6 +1259,11 @@ fn panel(
     }
     for (n, v) in s.diagnostics.iter().take(12) {
         let _ = writeln!(o, "{n} = {v:.5}");
+    }
+    if layers.surfaces {
+        for l in &surfaces.legend {
+            let _ = writeln!(o, "surface: {l}");
+        }
     }
     if let Some(r) = &replay {
         let past: Vec<_> = r.timeline.past_markers().collect();
