@@ -14,6 +14,7 @@ use bevy::prelude::*;
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured, save_to_disk};
 use bevy::window::{PrimaryWindow, WindowResolution};
 use nalgebra::Vector3;
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -80,6 +81,19 @@ struct Live {
     owed_s: f64,
     /// Simulated seconds per wall second achieved over the last frame.
     achieved: f64,
+    /// Accumulated normal impulse of each active contact at the end of the last frame, N·s.
+    impulses: BTreeMap<(String, String), f64>,
+}
+
+/// Live contact forces: per active contact, the mean normal force over the last frame's steps
+/// (the monitor's accumulated per-contact normal impulse: ΔJ / Δt), N; and the arrow scale,
+/// N per m, chosen (1, 2 or 5 × 10^k) so that the run's peak contact force so far is drawn
+/// at most `max_len_m` long (it only grows, so arrows stay comparable within a run).
+#[derive(Resource, Default)]
+struct ContactForces {
+    force_n: BTreeMap<(String, String), f64>,
+    scale_n_per_m: Option<f64>,
+    max_len_m: f64,
 }
 
 /// Live play/pause and speed.
@@ -193,6 +207,18 @@ pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String>
     let mut app = base_app(&opts, &sim.scene.name);
     let reference = sim.reference_state();
     let snap = live_snapshot(&sim);
+    // Force arrows: the run's peak force at most half the smallest body's radius (≥ 5 cm).
+    let max_len_m = (0.5
+        * geom
+            .bodies
+            .iter()
+            .map(|b| b.radius_m)
+            .fold(f64::INFINITY, f64::min))
+    .clamp(0.05, 5.0);
+    app.insert_resource(ContactForces {
+        max_len_m,
+        ..default()
+    });
     app.insert_resource(Corridors::of(&sim.scene))
         .insert_resource(Table::of(&sim.scene))
         .insert_resource(Surfaces::of(&sim.scene));
@@ -213,6 +239,7 @@ pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String>
             sim,
             owed_s: 0.0,
             achieved: 0.0,
+            impulses: BTreeMap::new(),
         })
         .add_systems(
             Update,
@@ -789,6 +816,7 @@ fn live_step(
     mut live: NonSendMut<Live>,
     mut cur: ResMut<Current>,
     mut trails: ResMut<Trails>,
+    mut forces: ResMut<ContactForces>,
 ) {
     let dt = live.sim.scene.dt_s;
     let wall = f64::from(time.delta_secs());
@@ -816,6 +844,34 @@ fn live_step(
     };
     cur.snap = live_snapshot(&live.sim);
     cur.reference = live.sim.reference_state();
+    if n > 0 {
+        // Mean normal force of each contact over this frame's steps, from the monitor's
+        // accumulated impulse (a contact that restarted within the frame counts from 0).
+        let Live { sim, impulses, .. } = &mut *live;
+        let cs = sim.contacts();
+        let span_s = n as f64 * dt;
+        let mut now = BTreeMap::new();
+        forces.force_n.clear();
+        for (k, c) in &cs.active {
+            let before = impulses.get(k).copied().unwrap_or(0.0);
+            let j = if c.impulse_ns >= before {
+                c.impulse_ns - before
+            } else {
+                c.impulse_ns
+            };
+            forces.force_n.insert(k.clone(), j / span_s);
+            now.insert(k.clone(), c.impulse_ns);
+        }
+        *impulses = now;
+        let peak = cs
+            .per_part
+            .values()
+            .map(|s| s.peak_force_n)
+            .fold(0.0, f64::max);
+        let len = forces.max_len_m;
+        forces.scale_n_per_m =
+            (peak > 0.0).then(|| super::geometry::arrow_scale_n_per_m(peak, len));
+    }
     if n > 0 {
         let nb = cur.snap.bodies.len();
         trails.0.resize(nb, Vec::new());
@@ -1041,6 +1097,7 @@ fn overlays(
     order: Option<Res<ReplayOrder>>,
     trails: Res<Trails>,
     surfaces: Res<Surfaces>,
+    forces: Option<Res<ContactForces>>,
     mut gizmos: Gizmos,
 ) {
     let bodies = &cur.snap.bodies;
@@ -1111,8 +1168,10 @@ fn overlays(
         }
     }
     if layers.contacts {
-        // Contact points (on the first part) and normals, from the parts' geometry at the
-        // drawn poses; the recorded runs hold no per-contact force, so normals, not forces.
+        // Contact points (on the first part), from the parts' geometry at the drawn poses.
+        // Live: the force arrow (orange), the contact's normal force along the normal from
+        // the first part to the second, at the panel's scale; replay (no per-contact force
+        // is recorded) and force-free contacts: the unit normal (yellow, 0.3 m).
         for (a, b) in &cur.snap.contacts {
             if let (Some(pa), Some(pb)) = (geom.find_part(a), geom.find_part(b))
                 && let Some((p, n)) = geom.contact(pa, pb, bodies)
@@ -1120,7 +1179,18 @@ fn overlays(
                 let p = v3(&p);
                 let c = Color::srgb(1.0, 0.9, 0.1);
                 gizmos.sphere(Isometry3d::from_translation(p), 0.03, c);
-                gizmos.arrow(p, p + v3(&n) * 0.3, c);
+                let force = forces.as_ref().and_then(|f| {
+                    let fn_ = *f.force_n.get(&(a.clone(), b.clone()))?;
+                    Some(fn_ / f.scale_n_per_m?).filter(|l| *l > 0.0)
+                });
+                match force {
+                    Some(len_m) => {
+                        gizmos.arrow(p, p + v3(&n) * len_m as f32, Color::srgb(1.0, 0.45, 0.1));
+                    }
+                    None => {
+                        gizmos.arrow(p, p + v3(&n) * 0.3, c);
+                    }
+                }
             }
         }
     }
@@ -1190,6 +1260,7 @@ fn panel(
     mut fill: Query<&mut Node, With<ScrubFill>>,
     mut scrub_vis: Query<&mut Visibility, With<Scrubber>>,
     surfaces: Res<Surfaces>,
+    forces: Option<Res<ContactForces>>,
 ) {
     for mut v in &mut scrub_vis {
         *v = if layers.panel {
@@ -1255,7 +1326,27 @@ fn panel(
         let _ = writeln!(o, "docking: {d}");
     }
     for (a, b) in &s.contacts {
-        let _ = writeln!(o, "contact: {a} <-> {b}");
+        match forces
+            .as_ref()
+            .and_then(|f| f.force_n.get(&(a.clone(), b.clone())))
+        {
+            Some(f) => {
+                let _ = writeln!(o, "contact: {a} <-> {b}   normal force {f:.4} N");
+            }
+            None => {
+                let _ = writeln!(o, "contact: {a} <-> {b}");
+            }
+        }
+    }
+    if layers.contacts
+        && !s.contacts.is_empty()
+        && let Some(scale) = forces.as_ref().and_then(|f| f.scale_n_per_m)
+    {
+        let dec = (-scale.log10().floor()).max(0.0) as usize;
+        let _ = writeln!(
+            o,
+            "force arrows (orange): normal force on the second part, {scale:.dec$} N per m of arrow"
+        );
     }
     for (n, v) in s.diagnostics.iter().take(12) {
         let _ = writeln!(o, "{n} = {v:.5}");

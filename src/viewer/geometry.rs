@@ -334,3 +334,52 @@ pub fn to_transform(p: &Isometry3<f64>) -> Transform {
 pub fn v3(v: &Vector3<f64>) -> Vec3 {
     Vec3::new(v.x as f32, v.y as f32, v.z as f32)
 }
+
+/// Arrow scale for forces, N per m: the smallest of 1, 2 or 5 × 10^k N/m that draws `peak_n`
+/// at most `max_len_m` long (a round number to read off the panel).
+pub fn arrow_scale_n_per_m(peak_n: f64, max_len_m: f64) -> f64 {
+    let need = peak_n / max_len_m;
+    if !(need.is_finite() && need > 0.0) {
+        return 1.0;
+    }
+    let decade = 10f64.powf(need.log10().floor());
+    [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .map(|m| m * decade)
+        .find(|s| *s >= need * (1.0 - 1e-12))
+        .unwrap_or(10.0 * decade)
+}
+
+#[cfg(test)]
+mod tests {
+    //! Reference: the definition of the 1-2-5 ladder.
+    use super::*;
+
+    #[test]
+    fn regress_viewer_arrow_scale_is_round_and_fits() {
+        for (peak, len, want) in [
+            (3.2, 1.0, 5.0),
+            (5.0, 1.0, 5.0),
+            (0.011, 1.0, 0.02),
+            (1000.0, 1.0, 1000.0),
+            (0.2, 0.05, 5.0),
+            (7.0, 0.5, 20.0),
+        ] {
+            let s = arrow_scale_n_per_m(peak, len);
+            assert!(
+                (s - want).abs() < 1e-9 * want,
+                "{peak} N in {len} m: {s} N/m"
+            );
+            assert!(peak / s <= len * (1.0 + 1e-9), "arrow longer than {len} m");
+            // The next smaller ladder value would overflow the length.
+            // (1 → 0.5, 2 → 1, 5 → 2 on the ladder.)
+            let mantissa = s / 10f64.powf(s.log10().floor());
+            let smaller = if (mantissa - 5.0).abs() < 1e-9 {
+                0.4 * s
+            } else {
+                0.5 * s
+            };
+            assert!(peak / smaller > len, "{s} N/m is not the smallest fitting");
+        }
+    }
+}
