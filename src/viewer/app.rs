@@ -144,13 +144,17 @@ enum Preset {
     PortView,
 }
 
-/// Camera state: preset plus the mouse's yaw/pitch/zoom.
+/// Camera state: preset plus the mouse's yaw/pitch/zoom and pan.
 #[derive(Resource)]
 struct CameraRig {
     preset: Preset,
     yaw: f32,
     pitch: f32,
     zoom: f32,
+    /// Camera translation added to the preset's placement (world frame), m.
+    pan: Vec3,
+    /// Distance from the eye to the preset's point of interest (sets the pan step), m.
+    focus_dist: f32,
 }
 
 #[derive(Component)]
@@ -388,6 +392,8 @@ fn base_app(opts: &ViewerOptions, title: &str) -> App {
         yaw: 0.0,
         pitch: 0.0,
         zoom: 1.0,
+        pan: Vec3::ZERO,
+        focus_dist: 10.0,
     })
     .insert_resource(Trails::default())
     .insert_resource(Run {
@@ -957,11 +963,14 @@ fn apply_pose(
     }
 }
 
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 fn view_controls(
     keys: Res<ButtonInput<KeyCode>>,
     mouse: Res<ButtonInput<MouseButton>>,
     motion: Res<AccumulatedMouseMotion>,
     scroll: Res<AccumulatedMouseScroll>,
+    cam: Query<(&Transform, &Projection), With<Camera3d>>,
+    window: Query<&Window, With<PrimaryWindow>>,
     mut rig: ResMut<CameraRig>,
     mut layers: ResMut<Layers>,
 ) {
@@ -977,12 +986,24 @@ fn view_controls(
                 yaw: 0.0,
                 pitch: 0.0,
                 zoom: 1.0,
+                pan: Vec3::ZERO,
+                focus_dist: rig.focus_dist,
             };
         }
     }
-    if mouse.pressed(MouseButton::Right)
-        || (mouse.pressed(MouseButton::Left) && keys.pressed(KeyCode::ShiftLeft))
-    {
+    let shift = keys.pressed(KeyCode::ShiftLeft) || keys.pressed(KeyCode::ShiftRight);
+    if mouse.pressed(MouseButton::Middle) || (shift && mouse.pressed(MouseButton::Right)) {
+        // Pan: move the camera in its image plane so the point of interest follows the cursor.
+        if let (Ok((tf, proj)), Ok(w)) = (cam.single(), window.single()) {
+            let fov = match proj {
+                Projection::Perspective(p) => p.fov,
+                _ => std::f32::consts::FRAC_PI_4,
+            };
+            let k = super::geometry::pan_m_per_px(rig.focus_dist, fov, w.height());
+            let d = motion.delta;
+            rig.pan += (-d.x * tf.right().as_vec3() + d.y * tf.up().as_vec3()) * k;
+        }
+    } else if mouse.pressed(MouseButton::Right) || (mouse.pressed(MouseButton::Left) && shift) {
         rig.yaw -= motion.delta.x * 0.005;
         rig.pitch = (rig.pitch + motion.delta.y * 0.005).clamp(-1.5, 1.5);
     }
@@ -1022,7 +1043,7 @@ fn orbit_eye(focus: Vec3, base_dir: Vec3, dist: f32, rig: &CameraRig) -> Vec3 {
 fn camera_system(
     cur: Res<Current>,
     geom: Res<SceneGeom>,
-    rig: Res<CameraRig>,
+    mut rig: ResMut<CameraRig>,
     mut cam: Query<&mut Transform, With<Camera3d>>,
 ) {
     let Ok(mut tf) = cam.single_mut() else {
@@ -1036,7 +1057,8 @@ fn camera_system(
     let target = body_index(&geom, BodyRole::Target).unwrap_or(0);
     let chaser = body_index(&geom, BodyRole::Chaser).unwrap_or(bodies.len() - 1);
     let up = Vec3::Z;
-    match rig.preset {
+    // Each preset places the camera and names its point of interest.
+    let focus = match rig.preset {
         Preset::Overview => {
             let n = bodies.len() as f32;
             let centre = (0..bodies.len()).map(pos).sum::<Vec3>() / n;
@@ -1055,12 +1077,14 @@ fn camera_system(
                 screen_up = -screen_up;
             }
             *tf = Transform::from_translation(eye).looking_at(centre, screen_up);
+            centre
         }
         Preset::OrbitTarget => {
             let c = pos(target);
             let r = (geom.bodies[target].radius_m as f32).max(1.0);
             let eye = orbit_eye(c, Vec3::new(-1.0, -1.0, 0.6), 3.5 * r, &rig);
             *tf = Transform::from_translation(eye).looking_at(c, up);
+            c
         }
         Preset::FollowChaser => {
             let c = pos(chaser);
@@ -1068,6 +1092,7 @@ fn camera_system(
             let r = (geom.bodies[chaser].radius_m as f32).max(1.0);
             let eye = orbit_eye(c, -to_target + 0.3 * up, 4.0 * r, &rig);
             *tf = Transform::from_translation(eye).looking_at(c + to_target * 2.0, up);
+            c
         }
         Preset::PortView => {
             let b = &geom.bodies[chaser];
@@ -1084,8 +1109,12 @@ fn camera_system(
             let look = Quat::from_rotation_z(rig.yaw) * Quat::from_rotation_x(rig.pitch);
             let body_up = v3(&(a * Vector3::z()));
             *tf = Transform::from_translation(eye).looking_to(look * v3(&axis), body_up);
+            pos(target)
         }
-    }
+    };
+    // The mouse's pan moves the camera, not its direction.
+    rig.focus_dist = (focus - tf.translation).length().max(0.01);
+    tf.translation += rig.pan;
 }
 
 #[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
@@ -1379,7 +1408,7 @@ fn panel(
     let _ = writeln!(
         o,
         "keys: Space play/pause | . , step | + - speed | Left/Right seek | [ ] events | \
-         0-3 camera | P L T C K S H layers | right-drag rotate | wheel zoom"
+         0-3 camera | P L T C K S H layers | right-drag rotate | middle-drag pan | wheel zoom"
     );
     text.0 = o;
 }

@@ -350,10 +350,19 @@ pub fn arrow_scale_n_per_m(peak_n: f64, max_len_m: f64) -> f64 {
         .unwrap_or(10.0 * decade)
 }
 
+/// Pan step for the free camera, m per pixel of mouse motion: the width of one pixel at
+/// `dist_m` from a perspective camera of vertical field of view `fov_y_rad` over a view
+/// `height_px` tall, `2 d tan(fov/2) / h` (so the point at that distance follows the cursor).
+pub fn pan_m_per_px(dist_m: f32, fov_y_rad: f32, height_px: f32) -> f32 {
+    2.0 * dist_m * (0.5 * fov_y_rad).tan() / height_px.max(1.0)
+}
+
 #[cfg(test)]
 mod tests {
-    //! Reference: the definition of the 1-2-5 ladder.
+    //! References: the definition of the 1-2-5 ladder; Bevy's own perspective projection
+    //! matrix for the pan step.
     use super::*;
+    use bevy::camera::CameraProjection;
 
     #[test]
     fn regress_viewer_arrow_scale_is_round_and_fits() {
@@ -380,6 +389,36 @@ mod tests {
                 0.5 * s
             };
             assert!(peak / smaller > len, "{s} N/m is not the smallest fitting");
+        }
+    }
+
+    #[test]
+    fn regress_viewer_pan_step_moves_point_one_pixel() {
+        // A point at the pan distance, displaced by N pan steps across the view, projects N
+        // pixels from the centre under Bevy's perspective projection.
+        let (h, w) = (720.0_f32, 1280.0_f32);
+        let proj = PerspectiveProjection {
+            fov: std::f32::consts::FRAC_PI_4,
+            aspect_ratio: w / h,
+            ..default()
+        };
+        let m = proj.get_clip_from_view();
+        for dist in [0.5_f32, 12.0, 3000.0] {
+            let k = pan_m_per_px(dist, proj.fov, h);
+            for n in [1.0_f32, 37.0, 200.0] {
+                let clip = m * Vec4::new(0.0, k * n, -dist, 1.0);
+                let px = clip.y / clip.w * h / 2.0;
+                assert!(
+                    (px - n).abs() < 1e-3 * n.max(1.0),
+                    "{dist} m: {px} px for {n}"
+                );
+                let clip = m * Vec4::new(k * n, 0.0, -dist, 1.0);
+                let px = clip.x / clip.w * w / 2.0;
+                assert!(
+                    (px - n).abs() < 1e-3 * n.max(1.0),
+                    "{dist} m: x {px} px for {n}"
+                );
+            }
         }
     }
 }
