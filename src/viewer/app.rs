@@ -14,6 +14,7 @@ use bevy::prelude::*;
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured, save_to_disk};
 use bevy::window::{PrimaryWindow, WindowResolution};
 use nalgebra::Vector3;
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -80,6 +81,19 @@ struct Live {
     owed_s: f64,
     /// Simulated seconds per wall second achieved over the last frame.
     achieved: f64,
+    /// Accumulated normal impulse of each active contact at the end of the last frame, N·s.
+    impulses: BTreeMap<(String, String), f64>,
+}
+
+/// Live contact forces: per active contact, the mean normal force over the last frame's steps
+/// (the monitor's accumulated per-contact normal impulse: ΔJ / Δt), N; and the arrow scale,
+/// N per m, chosen (1, 2 or 5 × 10^k) so that the run's peak contact force so far is drawn
+/// at most `max_len_m` long (it only grows, so arrows stay comparable within a run).
+#[derive(Resource, Default)]
+struct ContactForces {
+    force_n: BTreeMap<(String, String), f64>,
+    scale_n_per_m: Option<f64>,
+    max_len_m: f64,
 }
 
 /// Live play/pause and speed.
@@ -130,13 +144,17 @@ enum Preset {
     PortView,
 }
 
-/// Camera state: preset plus the mouse's yaw/pitch/zoom.
+/// Camera state: preset plus the mouse's yaw/pitch/zoom and pan.
 #[derive(Resource)]
 struct CameraRig {
     preset: Preset,
     yaw: f32,
     pitch: f32,
     zoom: f32,
+    /// Camera translation added to the preset's placement (world frame), m.
+    pan: Vec3,
+    /// Distance from the eye to the preset's point of interest (sets the pan step), m.
+    focus_dist: f32,
 }
 
 #[derive(Component)]
@@ -193,8 +211,21 @@ pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String>
     let mut app = base_app(&opts, &sim.scene.name);
     let reference = sim.reference_state();
     let snap = live_snapshot(&sim);
+    // Force arrows: the run's peak force at most half the smallest body's radius (≥ 5 cm).
+    let max_len_m = (0.5
+        * geom
+            .bodies
+            .iter()
+            .map(|b| b.radius_m)
+            .fold(f64::INFINITY, f64::min))
+    .clamp(0.05, 5.0);
+    app.insert_resource(ContactForces {
+        max_len_m,
+        ..default()
+    });
     app.insert_resource(Corridors::of(&sim.scene))
-        .insert_resource(Table::of(&sim.scene));
+        .insert_resource(Table::of(&sim.scene))
+        .insert_resource(Surfaces::of(&sim.scene));
     app.insert_resource(geom)
         .insert_resource(Current {
             snap,
@@ -212,6 +243,7 @@ pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String>
             sim,
             owed_s: 0.0,
             achieved: 0.0,
+            impulses: BTreeMap::new(),
         })
         .add_systems(
             Update,
@@ -259,7 +291,8 @@ pub fn run_replay(loaded: &LoadedScene, rec: Recording, opts: ViewerOptions) -> 
     let mut snap = rec.sample(timeline.t_s);
     snap.bodies = order.iter().map(|&i| snap.bodies[i]).collect();
     app.insert_resource(Corridors::of(scene))
-        .insert_resource(Table::of(scene));
+        .insert_resource(Table::of(scene))
+        .insert_resource(Surfaces::of(scene));
     app.insert_resource(geom)
         .insert_resource(Current {
             snap,
@@ -359,6 +392,8 @@ fn base_app(opts: &ViewerOptions, title: &str) -> App {
         yaw: 0.0,
         pitch: 0.0,
         zoom: 1.0,
+        pan: Vec3::ZERO,
+        focus_dist: 10.0,
     })
     .insert_resource(Trails::default())
     .insert_resource(Run {
@@ -418,6 +453,13 @@ impl Table {
     }
 }
 
+/// A constraint surface's body (if it rides on one), transform and visibility.
+type SurfaceItem = (
+    Option<&'static SurfaceOf>,
+    &'static mut Transform,
+    &'static mut Visibility,
+);
+
 /// The body a constraint surface rides on.
 #[derive(Component)]
 struct SurfaceOf(usize);
@@ -445,10 +487,39 @@ impl Corridors {
     }
 }
 
+/// The constraint surfaces of the laws and guarantees ([`super::surfaces`]), their panel
+/// legend, and the body whose centre-of-mass height the table curves are drawn at.
+#[derive(Resource, Default)]
+struct Surfaces {
+    list: Vec<super::surfaces::Surface>,
+    legend: Vec<String>,
+    curve_body: Option<usize>,
+}
+
+impl Surfaces {
+    fn of(scene: &crate::scene::Scene) -> Self {
+        let list = super::surfaces::scene_surfaces(scene);
+        let legend = list.iter().map(|s| s.legend(scene)).collect();
+        let curve_body = scene.controllers.iter().find_map(|c| match c {
+            crate::control::ControllerSpec::Xu2019(x) => {
+                scene.bodies.iter().position(|b| b.name == x.chaser)
+            }
+            _ => None,
+        });
+        Self {
+            list,
+            legend,
+            curve_body,
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 fn setup(
     mut commands: Commands,
     geom: Res<SceneGeom>,
     corridors: Res<Corridors>,
+    surfaces: Res<Surfaces>,
     table: Res<Table>,
     layers: Res<Layers>,
     mut meshes: ResMut<Assets<Mesh>>,
@@ -498,6 +569,37 @@ fn setup(
             ConstraintSurface,
             SurfaceOf(*i),
         ));
+    }
+    // The laws' and guarantees' constraint surfaces (semi-transparent; a depth bias keeps a
+    // surface that coincides with a collider, such as the Xu 2019 obstacle, in front of it).
+    for s in &surfaces.list {
+        use super::surfaces::Anchor;
+        let [r, g, b, a] = s.rgba;
+        let mut e = commands.spawn((
+            Mesh3d(meshes.add(s.mesh.to_mesh())),
+            MeshMaterial3d(materials.add(StandardMaterial {
+                base_color: Color::srgba(r, g, b, a),
+                alpha_mode: AlphaMode::Blend,
+                cull_mode: None,
+                double_sided: true,
+                depth_bias: 200.0,
+                ..default()
+            })),
+            if layers.surfaces {
+                Visibility::Inherited
+            } else {
+                Visibility::Hidden
+            },
+            ConstraintSurface,
+        ));
+        match s.anchor {
+            Anchor::World(o) => {
+                e.insert(Transform::from_translation(v3(&o)));
+            }
+            Anchor::BodyCom(i) => {
+                e.insert((Transform::default(), SurfaceOf(i)));
+            }
+        }
     }
     // The air-bearing table: its top at z = 0 (lab frame, z up).
     if let Some((corner, size, thick)) = table.0 {
@@ -720,6 +822,7 @@ fn live_step(
     mut live: NonSendMut<Live>,
     mut cur: ResMut<Current>,
     mut trails: ResMut<Trails>,
+    mut forces: ResMut<ContactForces>,
 ) {
     let dt = live.sim.scene.dt_s;
     let wall = f64::from(time.delta_secs());
@@ -747,6 +850,34 @@ fn live_step(
     };
     cur.snap = live_snapshot(&live.sim);
     cur.reference = live.sim.reference_state();
+    if n > 0 {
+        // Mean normal force of each contact over this frame's steps, from the monitor's
+        // accumulated impulse (a contact that restarted within the frame counts from 0).
+        let Live { sim, impulses, .. } = &mut *live;
+        let cs = sim.contacts();
+        let span_s = n as f64 * dt;
+        let mut now = BTreeMap::new();
+        forces.force_n.clear();
+        for (k, c) in &cs.active {
+            let before = impulses.get(k).copied().unwrap_or(0.0);
+            let j = if c.impulse_ns >= before {
+                c.impulse_ns - before
+            } else {
+                c.impulse_ns
+            };
+            forces.force_n.insert(k.clone(), j / span_s);
+            now.insert(k.clone(), c.impulse_ns);
+        }
+        *impulses = now;
+        let peak = cs
+            .per_part
+            .values()
+            .map(|s| s.peak_force_n)
+            .fold(0.0, f64::max);
+        let len = forces.max_len_m;
+        forces.scale_n_per_m =
+            (peak > 0.0).then(|| super::geometry::arrow_scale_n_per_m(peak, len));
+    }
     if n > 0 {
         let nb = cur.snap.bodies.len();
         trails.0.resize(nb, Vec::new());
@@ -809,8 +940,8 @@ fn apply_pose(
     cur: Res<Current>,
     geom: Res<SceneGeom>,
     layers: Res<Layers>,
-    mut q: Query<(&BodyMarker, &mut Transform), Without<SurfaceOf>>,
-    mut surfaces: Query<(&SurfaceOf, &mut Transform, &mut Visibility), Without<BodyMarker>>,
+    mut q: Query<(&BodyMarker, &mut Transform), Without<ConstraintSurface>>,
+    mut surfaces: Query<SurfaceItem, (With<ConstraintSurface>, Without<BodyMarker>)>,
 ) {
     for (m, mut tf) in &mut q {
         if let Some((p, a)) = cur.snap.bodies.get(m.0) {
@@ -819,7 +950,9 @@ fn apply_pose(
     }
     // Surfaces in a body frame with the vertex at the centre of mass.
     for (s, mut tf, mut vis) in &mut surfaces {
-        if let Some((p, a)) = cur.snap.bodies.get(s.0) {
+        if let Some(s) = s
+            && let Some((p, a)) = cur.snap.bodies.get(s.0)
+        {
             *tf = to_transform(&nalgebra::Isometry3::from_parts((*p).into(), *a));
         }
         *vis = if layers.surfaces {
@@ -830,11 +963,14 @@ fn apply_pose(
     }
 }
 
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 fn view_controls(
     keys: Res<ButtonInput<KeyCode>>,
     mouse: Res<ButtonInput<MouseButton>>,
     motion: Res<AccumulatedMouseMotion>,
     scroll: Res<AccumulatedMouseScroll>,
+    cam: Query<(&Transform, &Projection), With<Camera3d>>,
+    window: Query<&Window, With<PrimaryWindow>>,
     mut rig: ResMut<CameraRig>,
     mut layers: ResMut<Layers>,
 ) {
@@ -850,12 +986,24 @@ fn view_controls(
                 yaw: 0.0,
                 pitch: 0.0,
                 zoom: 1.0,
+                pan: Vec3::ZERO,
+                focus_dist: rig.focus_dist,
             };
         }
     }
-    if mouse.pressed(MouseButton::Right)
-        || (mouse.pressed(MouseButton::Left) && keys.pressed(KeyCode::ShiftLeft))
-    {
+    let shift = keys.pressed(KeyCode::ShiftLeft) || keys.pressed(KeyCode::ShiftRight);
+    if mouse.pressed(MouseButton::Middle) || (shift && mouse.pressed(MouseButton::Right)) {
+        // Pan: move the camera in its image plane so the point of interest follows the cursor.
+        if let (Ok((tf, proj)), Ok(w)) = (cam.single(), window.single()) {
+            let fov = match proj {
+                Projection::Perspective(p) => p.fov,
+                _ => std::f32::consts::FRAC_PI_4,
+            };
+            let k = super::geometry::pan_m_per_px(rig.focus_dist, fov, w.height());
+            let d = motion.delta;
+            rig.pan += (-d.x * tf.right().as_vec3() + d.y * tf.up().as_vec3()) * k;
+        }
+    } else if mouse.pressed(MouseButton::Right) || (mouse.pressed(MouseButton::Left) && shift) {
         rig.yaw -= motion.delta.x * 0.005;
         rig.pitch = (rig.pitch + motion.delta.y * 0.005).clamp(-1.5, 1.5);
     }
@@ -895,7 +1043,7 @@ fn orbit_eye(focus: Vec3, base_dir: Vec3, dist: f32, rig: &CameraRig) -> Vec3 {
 fn camera_system(
     cur: Res<Current>,
     geom: Res<SceneGeom>,
-    rig: Res<CameraRig>,
+    mut rig: ResMut<CameraRig>,
     mut cam: Query<&mut Transform, With<Camera3d>>,
 ) {
     let Ok(mut tf) = cam.single_mut() else {
@@ -909,7 +1057,8 @@ fn camera_system(
     let target = body_index(&geom, BodyRole::Target).unwrap_or(0);
     let chaser = body_index(&geom, BodyRole::Chaser).unwrap_or(bodies.len() - 1);
     let up = Vec3::Z;
-    match rig.preset {
+    // Each preset places the camera and names its point of interest.
+    let focus = match rig.preset {
         Preset::Overview => {
             let n = bodies.len() as f32;
             let centre = (0..bodies.len()).map(pos).sum::<Vec3>() / n;
@@ -928,12 +1077,14 @@ fn camera_system(
                 screen_up = -screen_up;
             }
             *tf = Transform::from_translation(eye).looking_at(centre, screen_up);
+            centre
         }
         Preset::OrbitTarget => {
             let c = pos(target);
             let r = (geom.bodies[target].radius_m as f32).max(1.0);
             let eye = orbit_eye(c, Vec3::new(-1.0, -1.0, 0.6), 3.5 * r, &rig);
             *tf = Transform::from_translation(eye).looking_at(c, up);
+            c
         }
         Preset::FollowChaser => {
             let c = pos(chaser);
@@ -941,6 +1092,7 @@ fn camera_system(
             let r = (geom.bodies[chaser].radius_m as f32).max(1.0);
             let eye = orbit_eye(c, -to_target + 0.3 * up, 4.0 * r, &rig);
             *tf = Transform::from_translation(eye).looking_at(c + to_target * 2.0, up);
+            c
         }
         Preset::PortView => {
             let b = &geom.bodies[chaser];
@@ -957,10 +1109,15 @@ fn camera_system(
             let look = Quat::from_rotation_z(rig.yaw) * Quat::from_rotation_x(rig.pitch);
             let body_up = v3(&(a * Vector3::z()));
             *tf = Transform::from_translation(eye).looking_to(look * v3(&axis), body_up);
+            pos(target)
         }
-    }
+    };
+    // The mouse's pan moves the camera, not its direction.
+    rig.focus_dist = (focus - tf.translation).length().max(0.01);
+    tf.translation += rig.pan;
 }
 
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 fn overlays(
     cur: Res<Current>,
     geom: Res<SceneGeom>,
@@ -968,9 +1125,30 @@ fn overlays(
     replay: Option<Res<Replay>>,
     order: Option<Res<ReplayOrder>>,
     trails: Res<Trails>,
+    surfaces: Res<Surfaces>,
+    forces: Option<Res<ContactForces>>,
     mut gizmos: Gizmos,
 ) {
     let bodies = &cur.snap.bodies;
+    if layers.surfaces {
+        // The table curves the laws keep the chaser's centre of mass out of, at its height.
+        let z = surfaces
+            .curve_body
+            .and_then(|i| bodies.get(i))
+            .map_or(0.0, |(p, _)| p.z as f32);
+        for s in &surfaces.list {
+            if s.curve_lab_m.is_empty() {
+                continue;
+            }
+            let [r, g, b, _] = s.rgba;
+            let pts = s
+                .curve_lab_m
+                .iter()
+                .chain(s.curve_lab_m.first())
+                .map(|p| Vec3::new(p.x as f32, p.y as f32, z));
+            gizmos.linestrip(pts, Color::srgb(r, g, b));
+        }
+    }
     if layers.ports {
         for (i, b) in geom.bodies.iter().enumerate() {
             let Some((p, a)) = bodies.get(i) else {
@@ -1019,8 +1197,10 @@ fn overlays(
         }
     }
     if layers.contacts {
-        // Contact points (on the first part) and normals, from the parts' geometry at the
-        // drawn poses; the recorded runs hold no per-contact force, so normals, not forces.
+        // Contact points (on the first part), from the parts' geometry at the drawn poses.
+        // Live: the force arrow (orange), the contact's normal force along the normal from
+        // the first part to the second, at the panel's scale; replay (no per-contact force
+        // is recorded) and force-free contacts: the unit normal (yellow, 0.3 m).
         for (a, b) in &cur.snap.contacts {
             if let (Some(pa), Some(pb)) = (geom.find_part(a), geom.find_part(b))
                 && let Some((p, n)) = geom.contact(pa, pb, bodies)
@@ -1028,7 +1208,18 @@ fn overlays(
                 let p = v3(&p);
                 let c = Color::srgb(1.0, 0.9, 0.1);
                 gizmos.sphere(Isometry3d::from_translation(p), 0.03, c);
-                gizmos.arrow(p, p + v3(&n) * 0.3, c);
+                let force = forces.as_ref().and_then(|f| {
+                    let fn_ = *f.force_n.get(&(a.clone(), b.clone()))?;
+                    Some(fn_ / f.scale_n_per_m?).filter(|l| *l > 0.0)
+                });
+                match force {
+                    Some(len_m) => {
+                        gizmos.arrow(p, p + v3(&n) * len_m as f32, Color::srgb(1.0, 0.45, 0.1));
+                    }
+                    None => {
+                        gizmos.arrow(p, p + v3(&n) * 0.3, c);
+                    }
+                }
             }
         }
     }
@@ -1097,6 +1288,8 @@ fn panel(
     mut text: Query<&mut Text, With<PanelText>>,
     mut fill: Query<&mut Node, With<ScrubFill>>,
     mut scrub_vis: Query<&mut Visibility, With<Scrubber>>,
+    surfaces: Res<Surfaces>,
+    forces: Option<Res<ContactForces>>,
 ) {
     for mut v in &mut scrub_vis {
         *v = if layers.panel {
@@ -1162,10 +1355,35 @@ fn panel(
         let _ = writeln!(o, "docking: {d}");
     }
     for (a, b) in &s.contacts {
-        let _ = writeln!(o, "contact: {a} <-> {b}");
+        match forces
+            .as_ref()
+            .and_then(|f| f.force_n.get(&(a.clone(), b.clone())))
+        {
+            Some(f) => {
+                let _ = writeln!(o, "contact: {a} <-> {b}   normal force {f:.4} N");
+            }
+            None => {
+                let _ = writeln!(o, "contact: {a} <-> {b}");
+            }
+        }
+    }
+    if layers.contacts
+        && !s.contacts.is_empty()
+        && let Some(scale) = forces.as_ref().and_then(|f| f.scale_n_per_m)
+    {
+        let dec = (-scale.log10().floor()).max(0.0) as usize;
+        let _ = writeln!(
+            o,
+            "force arrows (orange): normal force on the second part, {scale:.dec$} N per m of arrow"
+        );
     }
     for (n, v) in s.diagnostics.iter().take(12) {
         let _ = writeln!(o, "{n} = {v:.5}");
+    }
+    if layers.surfaces {
+        for l in &surfaces.legend {
+            let _ = writeln!(o, "surface: {l}");
+        }
     }
     if let Some(r) = &replay {
         let past: Vec<_> = r.timeline.past_markers().collect();
@@ -1190,7 +1408,7 @@ fn panel(
     let _ = writeln!(
         o,
         "keys: Space play/pause | . , step | + - speed | Left/Right seek | [ ] events | \
-         0-3 camera | P L T C K S H layers | right-drag rotate | wheel zoom"
+         0-3 camera | P L T C K S H layers | right-drag rotate | middle-drag pan | wheel zoom"
     );
     text.0 = o;
 }

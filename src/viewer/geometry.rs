@@ -334,3 +334,91 @@ pub fn to_transform(p: &Isometry3<f64>) -> Transform {
 pub fn v3(v: &Vector3<f64>) -> Vec3 {
     Vec3::new(v.x as f32, v.y as f32, v.z as f32)
 }
+
+/// Arrow scale for forces, N per m: the smallest of 1, 2 or 5 × 10^k N/m that draws `peak_n`
+/// at most `max_len_m` long (a round number to read off the panel).
+pub fn arrow_scale_n_per_m(peak_n: f64, max_len_m: f64) -> f64 {
+    let need = peak_n / max_len_m;
+    if !(need.is_finite() && need > 0.0) {
+        return 1.0;
+    }
+    let decade = 10f64.powf(need.log10().floor());
+    [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .map(|m| m * decade)
+        .find(|s| *s >= need * (1.0 - 1e-12))
+        .unwrap_or(10.0 * decade)
+}
+
+/// Pan step for the free camera, m per pixel of mouse motion: the width of one pixel at
+/// `dist_m` from a perspective camera of vertical field of view `fov_y_rad` over a view
+/// `height_px` tall, `2 d tan(fov/2) / h` (so the point at that distance follows the cursor).
+pub fn pan_m_per_px(dist_m: f32, fov_y_rad: f32, height_px: f32) -> f32 {
+    2.0 * dist_m * (0.5 * fov_y_rad).tan() / height_px.max(1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    //! References: the definition of the 1-2-5 ladder; Bevy's own perspective projection
+    //! matrix for the pan step.
+    use super::*;
+    use bevy::camera::CameraProjection;
+
+    #[test]
+    fn regress_viewer_arrow_scale_is_round_and_fits() {
+        for (peak, len, want) in [
+            (3.2, 1.0, 5.0),
+            (5.0, 1.0, 5.0),
+            (0.011, 1.0, 0.02),
+            (1000.0, 1.0, 1000.0),
+            (0.2, 0.05, 5.0),
+            (7.0, 0.5, 20.0),
+        ] {
+            let s = arrow_scale_n_per_m(peak, len);
+            assert!(
+                (s - want).abs() < 1e-9 * want,
+                "{peak} N in {len} m: {s} N/m"
+            );
+            assert!(peak / s <= len * (1.0 + 1e-9), "arrow longer than {len} m");
+            // The next smaller ladder value would overflow the length.
+            // (1 → 0.5, 2 → 1, 5 → 2 on the ladder.)
+            let mantissa = s / 10f64.powf(s.log10().floor());
+            let smaller = if (mantissa - 5.0).abs() < 1e-9 {
+                0.4 * s
+            } else {
+                0.5 * s
+            };
+            assert!(peak / smaller > len, "{s} N/m is not the smallest fitting");
+        }
+    }
+
+    #[test]
+    fn regress_viewer_pan_step_moves_point_one_pixel() {
+        // A point at the pan distance, displaced by N pan steps across the view, projects N
+        // pixels from the centre under Bevy's perspective projection.
+        let (h, w) = (720.0_f32, 1280.0_f32);
+        let proj = PerspectiveProjection {
+            fov: std::f32::consts::FRAC_PI_4,
+            aspect_ratio: w / h,
+            ..default()
+        };
+        let m = proj.get_clip_from_view();
+        for dist in [0.5_f32, 12.0, 3000.0] {
+            let k = pan_m_per_px(dist, proj.fov, h);
+            for n in [1.0_f32, 37.0, 200.0] {
+                let clip = m * Vec4::new(0.0, k * n, -dist, 1.0);
+                let px = clip.y / clip.w * h / 2.0;
+                assert!(
+                    (px - n).abs() < 1e-3 * n.max(1.0),
+                    "{dist} m: {px} px for {n}"
+                );
+                let clip = m * Vec4::new(k * n, 0.0, -dist, 1.0);
+                let px = clip.x / clip.w * w / 2.0;
+                assert!(
+                    (px - n).abs() < 1e-3 * n.max(1.0),
+                    "{dist} m: x {px} px for {n}"
+                );
+            }
+        }
+    }
+}

@@ -10,11 +10,14 @@
 //! - [`app`]: the Bevy app — meshes, overlays (docking-port frames, the reference orbit's LVLH
 //!   axes and the direction to the Earth, trails, the monitor's closest-points segment coloured
 //!   by margin), the read-out panel, the scrubber with event markers, camera presets, and
-//!   `--screenshot FILE --frames N` for tests.
+//!   `--screenshot FILE --frames N` for tests;
+//! - [`surfaces`]: the laws' and guarantees' constraint surfaces (Xu 2019 superquadric and
+//!   heart prisms, Zhang 2018 capture spheres, keep-out spheres) as f64 meshes.
 
 pub mod app;
 pub mod geometry;
 pub mod recording;
+pub mod surfaces;
 pub mod timeline;
 
 pub use app::{ViewerOptions, run_live, run_replay};
