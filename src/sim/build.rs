@@ -32,7 +32,9 @@ pub struct Simulation {
     pub wall_s: f64,
 }
 
-fn primitive_shape(p: &Primitive) -> Option<rp::SharedShape> {
+/// The rapier/parry shape of a part primitive (f32, in the part frame); `None` for a hull
+/// parry cannot build. The viewer uses the same shapes as the colliders.
+pub(crate) fn primitive_shape(p: &Primitive) -> Option<rp::SharedShape> {
     Some(match p {
         Primitive::Cuboid { half_m } => {
             rp::SharedShape::cuboid(half_m.x as f32, half_m.y as f32, half_m.z as f32)

@@ -63,26 +63,6 @@ pub struct SceneGeom {
     pub bodies: Vec<BodyGeom>,
 }
 
-fn parry_shape(p: &Primitive) -> Option<rp::SharedShape> {
-    Some(match p {
-        Primitive::Cuboid { half_m } => {
-            rp::SharedShape::cuboid(half_m.x as f32, half_m.y as f32, half_m.z as f32)
-        }
-        Primitive::Cylinder {
-            radius_m,
-            half_length_m,
-        } => rp::SharedShape::cylinder(*half_length_m as f32, *radius_m as f32),
-        Primitive::Ball { radius_m } => rp::SharedShape::ball(*radius_m as f32),
-        Primitive::ConvexHull { points_m } => {
-            let pts: Vec<_> = points_m
-                .iter()
-                .map(|p| crate::sim::conv::v(&p.coords))
-                .collect();
-            rp::SharedShape::convex_hull(&pts)?
-        }
-    })
-}
-
 impl SceneGeom {
     /// Expands every body of the scene.
     pub fn new(scene: &Scene) -> Self {
@@ -95,7 +75,7 @@ impl SceneGeom {
                     .map(|pc: PartCollider| PartGeom {
                         full_name: format!("{}/{}", b.name, pc.name),
                         role: pc.role,
-                        parry: parry_shape(&pc.shape),
+                        parry: crate::sim::build::primitive_shape(&pc.shape),
                         shape: pc.shape,
                         pose_body: pc.pose_body,
                     })
