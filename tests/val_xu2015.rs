@@ -80,25 +80,7 @@ fn reference_for(file: &str, mass_chaser_kg: f64) -> RefRun {
     }
 }
 
-/// Bound on the acceleration difference between the ECS plant and the f64 model, m/s²:
-/// thrust and maneuver are held in the inertial frame over a step while the model holds them
-/// in the tof, which turns by ḟ dt over the step (mean direction error ḟ dt / 2), plus the
-/// mid-step sampling of the maneuver (|F̈| dt²/24 / m_t). Differential gravity on the target's
-/// ≈ 200 m drift enters at 3μ/R⁴ |drift| |ρ| ≈ 1e−11 m/s² (negligible).
-fn model_difference_bound_m_s2(dt_s: f64, mass_chaser_kg: f64) -> f64 {
-    let orbit = EllipticOrbit::xu2015();
-    let f_dot_max = (0..=300)
-        .map(|k| orbit.f_dot_rad_s(orbit.true_anomaly_at(k as f64)))
-        .fold(0.0, f64::max);
-    let man = ManeuverSpec::paper();
-    let a_thrust = 5.0 * 3f64.sqrt() / mass_chaser_kg;
-    let a_man = man.peak_n().norm() / 200.0;
-    let fddot = (0..3)
-        .map(|i| man.amplitude_n[i] * man.omega_rad_s[i].powi(2))
-        .fold(0.0, f64::max)
-        / 200.0;
-    (a_thrust + a_man) * f_dot_max * dt_s / 2.0 + fddot * dt_s * dt_s / 24.0
-}
+use rpod::reproduce::xu2015::model_difference_bound_m_s2;
 
 /// 90 and 100 kg: the ECS run reproduces the f64 relative-model run, and ACCM is more accurate
 /// than PD over the last 100 s at comparable thrust.
