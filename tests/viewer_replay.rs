@@ -56,22 +56,13 @@ fn differs(a: [u8; 3], b: [u8; 3]) -> bool {
     a.iter().zip(&b).any(|(x, y)| x.abs_diff(*y) > 12)
 }
 
-#[test]
-fn val_viewer_replay_screenshot_shows_spacecraft() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "no display: run this test under `xvfb-run -a` (see .ci/run)"
-    );
-    let dir = std::env::temp_dir().join(format!("rpod_viewer_test_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let run = dir.join("run");
-    record_free_drift(&run, 20.0);
-    let png = dir.join("shot.png");
+/// Runs `rpod <command...> --screenshot PNG` at 960×540 with overlays off, asserts it succeeded
+/// and the image size, and returns the image and its side file (projected body centres).
+fn screenshot(command: &[&std::ffi::OsStr], png: &Path) -> (Png, serde_json::Value) {
     let out = Command::new(env!("CARGO_BIN_EXE_rpod"))
-        .args(["replay"])
-        .arg(&run)
+        .args(command)
         .arg("--screenshot")
-        .arg(&png)
+        .arg(png)
         .args([
             "--frames",
             "12",
@@ -85,15 +76,31 @@ fn val_viewer_replay_screenshot_shows_spacecraft() {
         .expect("rpod runs");
     assert!(
         out.status.success(),
-        "rpod replay failed: {}\n{}",
+        "rpod {:?} failed: {}\n{}",
+        command,
         String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );
-    let img = Png::load(&png);
+    let img = Png::load(png);
     assert_eq!((img.w, img.h), (960, 540));
     let side: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(png.with_extension("json")).unwrap())
             .unwrap();
+    (img, side)
+}
+
+#[test]
+fn val_viewer_replay_screenshot_shows_spacecraft() {
+    assert!(
+        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
+        "no display: run this test under `xvfb-run -a` (see .ci/run)"
+    );
+    let dir = std::env::temp_dir().join(format!("rpod_viewer_test_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let run = dir.join("run");
+    record_free_drift(&run, 20.0);
+    let png = dir.join("shot.png");
+    let (img, side) = screenshot(&["replay".as_ref(), run.as_os_str()], &png);
 
     // Shown at the end of the recording: the projected centres are the recorded final states.
     assert!((side["t_s"].as_f64().unwrap() - 20.0).abs() < 1e-9);
@@ -189,31 +196,7 @@ fn val_viewer_live_view_screenshot_shows_spacecraft() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let png = dir.join("live.png");
-    let out = Command::new(env!("CARGO_BIN_EXE_rpod"))
-        .args(["view", "scenes/free_drift.ron", "--screenshot"])
-        .arg(&png)
-        .args([
-            "--frames",
-            "12",
-            "--width",
-            "960",
-            "--height",
-            "540",
-            "--no-overlays",
-        ])
-        .output()
-        .expect("rpod runs");
-    assert!(
-        out.status.success(),
-        "rpod view failed: {}\n{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let img = Png::load(&png);
-    assert_eq!((img.w, img.h), (960, 540));
-    let side: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(png.with_extension("json")).unwrap())
-            .unwrap();
+    let (img, side) = screenshot(&["view".as_ref(), "scenes/free_drift.ron".as_ref()], &png);
     // Paused at t = 0: the bodies drawn are where the simulation starts them.
     assert_eq!(side["t_s"].as_f64().unwrap(), 0.0);
     let loaded = rpod::scene::load_scene_file(Path::new("scenes/free_drift.ron"), &[]).unwrap();

@@ -57,6 +57,16 @@ impl BodyGeom {
 }
 
 /// The geometry of every body of a scene, scene order.
+/// A part pair prepared for a parry query in part a's frame.
+struct PairQuery {
+    shape_a: rp::SharedShape,
+    shape_b: rp::SharedShape,
+    /// Part a's world pose (f64).
+    pose_a: Isometry3<f64>,
+    /// Part b's pose in part a's frame (f32, small coordinates).
+    pose_b_in_a: Pose,
+}
+
 #[derive(Resource, Clone)]
 pub struct SceneGeom {
     /// Bodies.
@@ -112,6 +122,27 @@ impl SceneGeom {
         })
     }
 
+    /// The two parts' shapes, part a's world pose (f64) and part b's pose in part a's frame:
+    /// queries run in part a's frame (small coordinates, so f32 stays precise) and map back in
+    /// f64. `None` when a body state or a shape is missing.
+    fn pair_query(
+        &self,
+        a: (usize, usize),
+        b: (usize, usize),
+        bodies: &[(Vector3<f64>, UnitQuaternion<f64>)],
+    ) -> Option<PairQuery> {
+        let (ba, pa) = (&self.bodies[a.0], &self.bodies[a.0].parts[a.1]);
+        let (bb, pb) = (&self.bodies[b.0], &self.bodies[b.0].parts[b.1]);
+        let pose_a = ba.body_pose(&bodies.get(a.0)?.0, &bodies[a.0].1) * pa.pose_body;
+        let pose_b = bb.body_pose(&bodies.get(b.0)?.0, &bodies[b.0].1) * pb.pose_body;
+        Some(PairQuery {
+            shape_a: pa.parry.clone()?,
+            shape_b: pb.parry.clone()?,
+            pose_b_in_a: crate::sim::conv::pose(&pose_a.inv_mul(&pose_b)),
+            pose_a,
+        })
+    }
+
     /// World-frame closest points between two parts, given the bodies' centre-of-mass
     /// positions and attitudes (`None` when the parts overlap or a shape is missing).
     pub fn closest_points(
@@ -120,17 +151,13 @@ impl SceneGeom {
         b: (usize, usize),
         bodies: &[(Vector3<f64>, UnitQuaternion<f64>)],
     ) -> Option<(Vector3<f64>, Vector3<f64>)> {
-        let (ba, pa) = (&self.bodies[a.0], &self.bodies[a.0].parts[a.1]);
-        let (bb, pb) = (&self.bodies[b.0], &self.bodies[b.0].parts[b.1]);
-        let wa = ba.body_pose(&bodies.get(a.0)?.0, &bodies[a.0].1) * pa.pose_body;
-        let wb = bb.body_pose(&bodies.get(b.0)?.0, &bodies[b.0].1) * pb.pose_body;
-        // Query in part a's frame (small coordinates, f32 stays precise), map back in f64.
-        let rel = wa.inv_mul(&wb);
+        let q = self.pair_query(a, b, bodies)?;
+        let wa = q.pose_a;
         let res = parry::query::closest_points(
             &Pose::IDENTITY,
-            &*pa.parry.clone()?,
-            &crate::sim::conv::pose(&rel),
-            &*pb.parry.clone()?,
+            &*q.shape_a,
+            &q.pose_b_in_a,
+            &*q.shape_b,
             f32::MAX,
         )
         .ok()?;
@@ -154,16 +181,13 @@ impl SceneGeom {
         b: (usize, usize),
         bodies: &[(Vector3<f64>, UnitQuaternion<f64>)],
     ) -> Option<(Vector3<f64>, Vector3<f64>)> {
-        let (ba, pa) = (&self.bodies[a.0], &self.bodies[a.0].parts[a.1]);
-        let (bb, pb) = (&self.bodies[b.0], &self.bodies[b.0].parts[b.1]);
-        let wa = ba.body_pose(&bodies.get(a.0)?.0, &bodies[a.0].1) * pa.pose_body;
-        let wb = bb.body_pose(&bodies.get(b.0)?.0, &bodies[b.0].1) * pb.pose_body;
-        let rel = wa.inv_mul(&wb);
+        let q = self.pair_query(a, b, bodies)?;
+        let wa = q.pose_a;
         let c = parry::query::contact(
             &Pose::IDENTITY,
-            &*pa.parry.clone()?,
-            &crate::sim::conv::pose(&rel),
-            &*pb.parry.clone()?,
+            &*q.shape_a,
+            &q.pose_b_in_a,
+            &*q.shape_b,
             0.02,
         )
         .ok()??;
@@ -340,9 +364,52 @@ pub fn pan_m_per_px(dist_m: f32, fov_y_rad: f32, height_px: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     //! References: the definition of the 1-2-5 ladder; Bevy's own perspective projection
-    //! matrix for the pan step.
+    //! matrix for the pan step; the analytic gap between two parallel box faces for the
+    //! closest-points segment and the contact normal.
     use super::*;
     use bevy::camera::CameraProjection;
+
+    #[test]
+    fn val_viewer_closest_points_and_contact_between_parallel_box_faces() {
+        let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/docking_aligned.ron");
+        let scene = crate::scene::load_scene_file(&p, &[]).unwrap().scene;
+        let geom = SceneGeom::new(&scene);
+        let (ca, cb) = (
+            geom.find_part("target/bus").unwrap(),
+            geom.find_part("chaser/bus").unwrap(),
+        );
+        let half_x = |(b, k): (usize, usize)| match &geom.bodies[b].parts[k].shape {
+            Primitive::Cuboid { half_m } => half_m.x,
+            other => panic!("bus is not a box: {other:?}"),
+        };
+        // Both bodies unrotated, centres of mass on the x axis: the buses' facing x faces are
+        // parallel and overlap in y and z (1.5 m and 1.0 m cubes, centred), so the distance is
+        // the gap between the faces.
+        let part_x = |(b, k): (usize, usize), com_x: f64| {
+            let body = &geom.bodies[b];
+            let origin =
+                body.body_pose(&Vector3::new(com_x, 0.0, 0.0), &UnitQuaternion::identity());
+            (origin * body.parts[k].pose_body).translation.vector.x
+        };
+        for gap_want in [0.7, 0.01] {
+            let com_b = part_x(ca, 0.0) + half_x(ca) + gap_want + half_x(cb) - part_x(cb, 0.0);
+            let bodies = [
+                (Vector3::zeros(), UnitQuaternion::identity()),
+                (Vector3::new(com_b, 0.0, 0.0), UnitQuaternion::identity()),
+            ];
+            let (pa, pb) = geom.closest_points(ca, cb, &bodies).unwrap();
+            assert!(((pb - pa).norm() - gap_want).abs() < 1e-5, "{pa} {pb}");
+            assert!((pa.x - (part_x(ca, 0.0) + half_x(ca))).abs() < 1e-5);
+            // Contact reports only within 2 cm, with the normal from a to b (+x).
+            match geom.contact(ca, cb, &bodies) {
+                Some((_, n)) => {
+                    assert!(gap_want < 0.02);
+                    assert!((n - Vector3::x()).norm() < 1e-6, "{n}");
+                }
+                None => assert!(gap_want >= 0.02),
+            }
+        }
+    }
 
     #[test]
     fn regress_viewer_arrow_scale_is_round_and_fits() {
