@@ -27,7 +27,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Cmd {
-    /// Run a scene headless and write trajectory.csv, events.jsonl and summary.json.
+    /// Run a scene headless and write trajectory.csv, events.jsonl, contacts.csv and summary.json.
     Run {
         /// Scene file (RON).
         scene: PathBuf,
@@ -84,7 +84,7 @@ enum Cmd {
     /// Play back a run recorded by `rpod run` in a window (feature `viewer`).
     #[cfg(feature = "viewer")]
     Replay {
-        /// Run directory (trajectory.csv, events.jsonl, summary.json).
+        /// Run directory (trajectory.csv, events.jsonl, contacts.csv, summary.json).
         run_dir: PathBuf,
         /// Scene file (default: the one summary.json names).
         #[arg(long)]
@@ -122,6 +122,10 @@ struct WindowArgs {
     /// Hide overlays and the panel (spacecraft only).
     #[arg(long)]
     no_overlays: bool,
+    /// Show only these layers at start, comma-separated: ports, lvlh, trails, closest,
+    /// contacts, surfaces, panel (default: all, or none with --no-overlays).
+    #[arg(long, value_delimiter = ',')]
+    layers: Option<Vec<String>>,
     /// Initial camera: overview, target (orbit the target), chaser (follow the chaser), port
     /// (out of the chaser's docking port).
     #[arg(long, default_value = "overview")]
@@ -136,6 +140,7 @@ impl WindowArgs {
             screenshot: self.screenshot,
             size_px: (self.width.max(64), self.height.max(64)),
             overlays: !self.no_overlays,
+            layers: self.layers,
             start_s,
             speed: self.speed,
             play: self.play,
@@ -439,7 +444,7 @@ fn run(
                 );
             }
             out!(
-                "wrote {}/{{trajectory.csv, events.jsonl, summary.json}}",
+                "wrote {}/{{trajectory.csv, events.jsonl, contacts.csv, summary.json}}",
                 out.display()
             );
             ExitCode::SUCCESS

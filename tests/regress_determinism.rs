@@ -1,5 +1,5 @@
-//! Determinism: two runs of `scenes/free_drift.ron` write byte-identical `trajectory.csv` and
-//! `events.jsonl`, and `summary.json` is identical except for the wall-clock fields.
+//! Determinism: two runs of `scenes/free_drift.ron` write byte-identical `trajectory.csv`,
+//! `events.jsonl` and `contacts.csv`, and `summary.json` is identical except for the wall-clock fields.
 //!
 //! Reference: the first run. To see a difference, `diff` the two directories this test prints.
 
@@ -21,7 +21,7 @@ fn regress_free_drift_outputs_are_byte_identical() {
     let (a, b) = (base.join("a"), base.join("b"));
     run(&a);
     run(&b);
-    for f in ["trajectory.csv", "events.jsonl"] {
+    for f in ["trajectory.csv", "events.jsonl", "contacts.csv"] {
         let x = std::fs::read(a.join(f)).unwrap();
         let y = std::fs::read(b.join(f)).unwrap();
         assert!(

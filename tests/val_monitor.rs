@@ -7,7 +7,8 @@
 //! meridional-plane geometry (cone and slot built with the same number of facets and aligned,
 //! so the closest features are facet mid-lines and the distance is a 2-D segment distance);
 //! linear momentum of the two bodies across the impact (differential gravity over the contact
-//! is below 1e-5 N·s).
+//! is below 1e-5 N·s); for `contacts.csv`, the chaser's momentum change read from the recorded
+//! `trajectory.csv` velocities.
 
 use nalgebra::Vector2;
 use rpod::scene::load_scene_str;
@@ -187,4 +188,126 @@ fn val_collision_course_names_the_panel_and_time() {
         (impulse - exchanged).abs() < 3e-3 + 1e-4 * exchanged,
         "impulse {impulse} vs m·Δv {exchanged}"
     );
+}
+
+/// `contacts.csv` of a recorded `collision_course` run: the per-row impulse vectors on the
+/// chaser's bus add up to the momentum the chaser exchanged (m·Δv between the recorded rows
+/// that bracket the contact, read from `trajectory.csv`); the impulse magnitudes add up to at
+/// least that (they sum per-step magnitudes) and to the `contact_end` event's impulse; each
+/// row's force is its impulse over the row interval; and the pair is listed in contact only
+/// between its `contact_start` and `contact_end` events.
+#[test]
+fn val_contacts_csv_impulses_add_up_to_the_momentum_exchanged() {
+    let dir = std::env::temp_dir().join(format!("rpod_contacts_csv_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let loaded = rpod::scene::load_scene_file("scenes/collision_course.ron".as_ref(), &[]).unwrap();
+    let mut sim = Simulation::new(&loaded).unwrap();
+    sim.record_to(&dir).unwrap();
+    sim.step(sim.steps_for(40.0));
+    sim.finish().unwrap();
+
+    let traj = std::fs::read_to_string(dir.join("trajectory.csv")).unwrap();
+    let header: Vec<&str> = traj.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    let (ct, cvx, cvy, cvz) = (
+        col("t_s"),
+        col("chaser.vx_m_s"),
+        col("chaser.vy_m_s"),
+        col("chaser.vz_m_s"),
+    );
+    let rows: Vec<Vec<f64>> = traj
+        .lines()
+        .skip(1)
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse::<f64>().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    let contacts = std::fs::read_to_string(dir.join("contacts.csv")).unwrap();
+    let mut lines = contacts.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "t_s,a,b,docking,force_n,impulse_ns,jx_b_ns,jy_b_ns,jz_b_ns,in_contact"
+    );
+    let mut total = 0.0;
+    let mut total_vec = nalgebra::Vector3::zeros();
+    let (mut first, mut last) = (f64::INFINITY, 0.0f64);
+    let mut in_contact_rows = Vec::new();
+    for l in lines {
+        let f: Vec<&str> = l.split(',').collect();
+        assert_eq!(f.len(), 10, "{l}");
+        assert_eq!(
+            (f[1], f[2], f[3]),
+            ("target/wing_py.panel2", "chaser/bus", "false")
+        );
+        let t: f64 = f[0].parse().unwrap();
+        let force: f64 = f[4].parse().unwrap();
+        let dj: f64 = f[5].parse().unwrap();
+        // The row interval is the recording's: 10 steps of 0.01 s.
+        let k = rows
+            .iter()
+            .position(|r| r[ct] == t)
+            .expect("a trajectory row at t");
+        let span = t - rows[k - 1][ct];
+        assert!((force * span - dj).abs() <= 1e-12 * dj.max(1.0), "{l}");
+        assert!(dj >= 0.0);
+        total += dj;
+        let jb = nalgebra::Vector3::new(
+            f[6].parse::<f64>().unwrap(),
+            f[7].parse::<f64>().unwrap(),
+            f[8].parse::<f64>().unwrap(),
+        );
+        assert!(jb.norm() <= dj * (1.0 + 1e-12), "{l}");
+        total_vec += jb;
+        first = first.min(t);
+        last = last.max(t);
+        if f[9] == "true" {
+            in_contact_rows.push(t);
+        }
+    }
+    assert!(total > 0.0, "no contact impulse recorded");
+    // Rows bracketing the contact: the row before the first contact row, and the last one.
+    let i0 = rows.iter().position(|r| r[ct] == first).unwrap() - 1;
+    let i1 = rows.iter().position(|r| r[ct] == last).unwrap();
+    let v = |r: &Vec<f64>| nalgebra::Vector3::new(r[cvx], r[cvy], r[cvz]);
+    let exchanged = 300.0 * (v(&rows[i1]) - v(&rows[i0]));
+    let window = rows[i1][ct] - rows[i0][ct];
+    println!(
+        "contacts.csv: Σ|ΔJ| {total} N·s, Σ ΔJ_b {total_vec:?} N·s over {first}–{last} s; \
+         m·Δv {exchanged:?} N·s over {window} s"
+    );
+    // Differential gravity over the window: ≤ 300 kg · 1.4e-5 m/s² · window.
+    let gravity = 300.0 * 1.4e-5 * window;
+    assert!(exchanged.norm() > 1.0);
+    assert!(
+        (total_vec - exchanged).norm() < gravity + 1e-4 * exchanged.norm(),
+        "Σ ΔJ_b {total_vec:?} N·s vs m·Δv {exchanged:?} N·s"
+    );
+    assert!(total >= total_vec.norm() * (1.0 - 1e-12));
+    // In contact exactly between the events.
+    let events = std::fs::read_to_string(dir.join("events.jsonl")).unwrap();
+    let ev: Vec<serde_json::Value> = events
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let start = ev.iter().find(|e| e["kind"] == "contact_start").unwrap()["t_s"]
+        .as_f64()
+        .unwrap();
+    let end = ev.iter().find(|e| e["kind"] == "contact_end").unwrap()["t_s"]
+        .as_f64()
+        .unwrap();
+    let end_impulse = ev.iter().find(|e| e["kind"] == "contact_end").unwrap()["impulse_ns"]
+        .as_f64()
+        .unwrap();
+    assert!((total - end_impulse).abs() <= 1e-12 * end_impulse);
+    for t in in_contact_rows {
+        assert!(
+            t >= start && t < end,
+            "in contact at {t} s, contact {start}–{end} s"
+        );
+    }
+    // The last impulse came the step before `contact_end`; its row is the next one.
+    assert!(first >= start && last + 0.01 + 1e-9 >= end && last < end + 0.1 + 1e-9);
+    let _ = std::fs::remove_dir_all(&dir);
 }

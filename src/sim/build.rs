@@ -347,6 +347,8 @@ impl Simulation {
             error: None,
             history: Vec::new(),
             force_row: false,
+            last_row_t_s: None,
+            contact_impulse_at_row: Default::default(),
         });
         super::add_pipeline(&mut app);
         super::docking::install(&mut app, loaded)?;

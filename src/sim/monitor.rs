@@ -46,6 +46,17 @@ pub struct PartContactStats {
     pub net_impulse_ns: [f64; 3],
 }
 
+/// A part pair's contact impulse accumulated since the start of the run.
+#[derive(Debug, Clone, Default)]
+pub struct CumulativeImpulse {
+    /// Both parts are docking parts.
+    pub docking: bool,
+    /// Sum over steps of the pair's impulse magnitude, N·s.
+    pub magnitude_ns: f64,
+    /// Vector sum of the impulse on the pair's second part, world frame, N·s.
+    pub on_b_ns: nalgebra::Vector3<f64>,
+}
+
 /// Contact bookkeeping.
 #[derive(Resource, Debug, Default)]
 pub struct ContactState {
@@ -66,6 +77,9 @@ pub struct ContactState {
     pub first_collision_s: Option<f64>,
     /// Every collision start: (t_s, part, part).
     pub collisions: Vec<(f64, String, String)>,
+    /// Per part pair ever in contact, accumulated over the whole run across restarts, so the
+    /// recorder's per-row differences telescope to the run's totals.
+    pub cumulative_impulse_ns: BTreeMap<(String, String), CumulativeImpulse>,
 }
 
 impl ContactState {
@@ -391,6 +405,20 @@ pub fn contacts(
         let c = cs.active.get_mut(&k).expect("active");
         c.peak_force_n = c.peak_force_n.max(force);
         c.impulse_ns += impulse;
+        let on_b = if raw_per_body[bb] > 0.0 {
+            cs.body_impulse[bb] * (raw / raw_per_body[bb])
+        } else {
+            nalgebra::Vector3::zeros()
+        };
+        let cum = cs
+            .cumulative_impulse_ns
+            .entry(k.clone())
+            .or_insert_with(|| CumulativeImpulse {
+                docking,
+                ..Default::default()
+            });
+        cum.magnitude_ns += impulse;
+        cum.on_b_ns += on_b;
         for (name, body) in [(&k.0, ba), (&k.1, bb)] {
             let vec = if raw_per_body[body] > 0.0 {
                 cs.body_impulse[body] * (raw / raw_per_body[body])

@@ -1,11 +1,14 @@
-//! The output contract: `trajectory.csv`, `events.jsonl`, `summary.json`.
+//! The output contract: `trajectory.csv`, `events.jsonl`, `summary.json`, and `contacts.csv`
+//! (per recorded row, each part pair's mean normal contact force since the previous row).
 //!
-//! All three are written under a temporary name (`NAME.partial`) and renamed when the run
+//! All four are written under a temporary name (`NAME.partial`) and renamed when the run
 //! finishes, so a crash never leaves a file that looks whole. Numbers are printed in Rust's
 //! shortest round-trip form, so the same run gives byte-identical files.
 
+use super::monitor::{ContactState, CumulativeImpulse};
 use super::{BodyState, Clock, EventLog, Guarantees, MonitorState, Roster, SimBody};
 use bevy::prelude::*;
+use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -37,7 +40,20 @@ pub struct OutputFiles {
     pub dir: PathBuf,
     traj: BufWriter<File>,
     events: BufWriter<File>,
+    contacts: BufWriter<File>,
 }
+
+/// The output files, in the order they are renamed into place.
+const FILES: [&str; 4] = [
+    "trajectory.csv",
+    "events.jsonl",
+    "contacts.csv",
+    "summary.json",
+];
+
+/// Header of `contacts.csv`.
+pub const CONTACTS_HEADER: &str =
+    "t_s,a,b,docking,force_n,impulse_ns,jx_b_ns,jy_b_ns,jz_b_ns,in_contact";
 
 /// The recorder resource.
 #[derive(Resource)]
@@ -58,6 +74,10 @@ pub struct Recorder {
     pub history: Vec<super::Event>,
     /// Write a row at the next record call whatever the step.
     pub force_row: bool,
+    /// Time of the last row written, s.
+    pub last_row_t_s: Option<f64>,
+    /// Each part pair's cumulative contact impulse at the last row written.
+    pub contact_impulse_at_row: BTreeMap<(String, String), CumulativeImpulse>,
 }
 
 const STATE_COLS: [&str; 13] = [
@@ -73,22 +93,27 @@ impl OutputFiles {
     /// Creates the directory and the temporary files.
     pub fn create(dir: &Path) -> std::io::Result<Self> {
         std::fs::create_dir_all(dir)?;
+        let mut contacts = BufWriter::new(File::create(partial(dir, "contacts.csv"))?);
+        writeln!(contacts, "{CONTACTS_HEADER}")?;
         Ok(Self {
             dir: dir.to_path_buf(),
             traj: BufWriter::new(File::create(partial(dir, "trajectory.csv"))?),
             events: BufWriter::new(File::create(partial(dir, "events.jsonl"))?),
+            contacts,
         })
     }
 
-    /// Flushes, writes the summary and renames the three files into place.
+    /// Flushes, writes the summary and renames the files into place.
     pub fn finish(mut self, summary: &serde_json::Value) -> std::io::Result<()> {
         self.traj.flush()?;
         self.events.flush()?;
+        self.contacts.flush()?;
         drop(self.traj);
         drop(self.events);
+        drop(self.contacts);
         let s = serde_json::to_string_pretty(summary).map_err(std::io::Error::other)?;
         std::fs::write(partial(&self.dir, "summary.json"), s + "\n")?;
-        for n in ["trajectory.csv", "events.jsonl", "summary.json"] {
+        for n in FILES {
             std::fs::rename(partial(&self.dir, n), self.dir.join(n))?;
         }
         Ok(())
@@ -98,7 +123,7 @@ impl OutputFiles {
     pub fn abandon(self) {
         let dir = self.dir.clone();
         drop(self);
-        for n in ["trajectory.csv", "events.jsonl", "summary.json"] {
+        for n in FILES {
             let _ = std::fs::remove_file(partial(&dir, n));
         }
     }
@@ -186,6 +211,45 @@ fn write_row(
     writeln!(w)
 }
 
+/// Writes one `contacts.csv` line per part pair whose cumulative impulse grew since the last
+/// row or that is in contact now: the mean normal force over the interval (ΔJ / Δt, N), the
+/// impulse magnitude ΔJ (N·s), the impulse vector on the second part (world frame, N·s), and
+/// whether the pair touches at `t_s`. The differences telescope: summed over a run they give
+/// each pair's totals.
+fn write_contacts(
+    w: &mut impl Write,
+    t_s: f64,
+    since_s: f64,
+    cs: &ContactState,
+    at_row: &BTreeMap<(String, String), CumulativeImpulse>,
+) -> std::io::Result<()> {
+    let span_s = t_s - since_s;
+    if span_s <= 0.0 {
+        return Ok(());
+    }
+    let zero = CumulativeImpulse::default();
+    for (k, cum) in &cs.cumulative_impulse_ns {
+        let before = at_row.get(k).unwrap_or(&zero);
+        let in_contact = cs.active.contains_key(k);
+        let dj = cum.magnitude_ns - before.magnitude_ns;
+        let jb = cum.on_b_ns - before.on_b_ns;
+        if dj > 0.0 || in_contact {
+            writeln!(
+                w,
+                "{t_s},{},{},{},{},{dj},{},{},{},{in_contact}",
+                k.0,
+                k.1,
+                cum.docking,
+                dj / span_s,
+                jb.x,
+                jb.y,
+                jb.z
+            )?;
+        }
+    }
+    Ok(())
+}
+
 /// Writes the current state as a row (and pending events) now, whatever the step.
 pub fn record_now(world: &mut World) {
     use bevy::ecs::system::RunSystemOnce;
@@ -205,6 +269,7 @@ fn write_step(
     g: &Guarantees,
     diag: &Diagnostics,
     log: &mut EventLog,
+    cs: &ContactState,
 ) {
     let pending: Vec<super::Event> = std::mem::take(&mut log.pending);
     if let Some(files) = rec.files.as_mut() {
@@ -225,6 +290,24 @@ fn write_step(
     {
         rec.error.get_or_insert(err.to_string());
     }
+    if let (Some(files), Some(since)) = (rec.files.as_mut(), rec.last_row_t_s)
+        && let Err(err) = write_contacts(
+            &mut files.contacts,
+            t,
+            since,
+            cs,
+            &rec.contact_impulse_at_row,
+        )
+    {
+        rec.error.get_or_insert(err.to_string());
+    }
+    rec.contact_impulse_at_row.clear();
+    rec.contact_impulse_at_row.extend(
+        cs.cumulative_impulse_ns
+            .iter()
+            .map(|(k, c)| (k.clone(), c.clone())),
+    );
+    rec.last_row_t_s = Some(t);
     rec.rows += 1;
     rec.last_row_step = Some(step);
 }
@@ -240,6 +323,7 @@ pub fn record(
     diag: Res<Diagnostics>,
     mut log: ResMut<EventLog>,
     mut rec: ResMut<Recorder>,
+    cs: Res<ContactState>,
 ) {
     let rec = &mut *rec;
     let due = clock.step.is_multiple_of(u64::from(rec.every)) || rec.force_row;
@@ -273,6 +357,7 @@ pub fn record(
         &g,
         &diag,
         &mut log,
+        &cs,
     );
 }
 
