@@ -41,6 +41,12 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "inside the Earth",
     ),
     (
+        "missing_model",
+        53,
+        "bodies.target.parts.antenna.model.path",
+        "no model file",
+    ),
+    (
         "negative_mass",
         44,
         "bodies.chaser.mass_kg",

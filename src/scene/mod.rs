@@ -588,6 +588,36 @@ impl PartRole {
     }
 }
 
+/// A glTF model the viewer draws for a part, placed in the body frame.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelSpec {
+    /// File under the assets directory (`assets/` of the repository, or `$RPOD_ASSETS`),
+    /// `.gltf` or `.glb`, e.g. `models/hga_dish.gltf`. Its first scene is drawn, in metres.
+    pub path: String,
+    /// Position of the model's origin in the body frame, m.
+    #[serde(default)]
+    pub pos_m: V3,
+    /// Orientation of the model's axes in the body frame.
+    #[serde(default)]
+    pub attitude: AttitudeSpec,
+    /// Uniform scale applied to the model (model units → m).
+    #[serde(default = "unit_scale")]
+    pub scale: f64,
+}
+
+fn unit_scale() -> f64 {
+    1.0
+}
+
+/// The directory glTF models are read from: `$RPOD_ASSETS` if set, else the repository's
+/// `assets/`.
+pub fn assets_dir() -> std::path::PathBuf {
+    std::env::var_os("RPOD_ASSETS")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets"))
+}
+
 /// A named part of a spacecraft. Positions and rotations are in the body frame.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -607,6 +637,10 @@ pub enum PartSpec {
         /// The part may overlap another body's part at t = 0 without a validation error.
         #[serde(default)]
         allow_initial_overlap: bool,
+        /// Drawn by the viewer as this glTF model instead of the collider shapes (the
+        /// colliders, which the monitor checks, are unchanged).
+        #[serde(default)]
+        model: Option<ModelSpec>,
     },
     /// An antenna (or any other appendage): one primitive shape.
     Antenna {
@@ -623,6 +657,10 @@ pub enum PartSpec {
         /// See [`PartSpec::Bus`].
         #[serde(default)]
         allow_initial_overlap: bool,
+        /// Drawn by the viewer as this glTF model instead of the collider shapes (the
+        /// colliders, which the monitor checks, are unchanged).
+        #[serde(default)]
+        model: Option<ModelSpec>,
     },
     /// A solar-array wing: a boom from the root, then `panel_count` flat panels in a row.
     /// Colliders are named `NAME.boom` and `NAME.panel1` … `NAME.panelN`.
@@ -657,6 +695,10 @@ pub enum PartSpec {
         /// See [`PartSpec::Bus`].
         #[serde(default)]
         allow_initial_overlap: bool,
+        /// Drawn by the viewer as this glTF model instead of the collider shapes (the
+        /// colliders, which the monitor checks, are unchanged).
+        #[serde(default)]
+        model: Option<ModelSpec>,
     },
     /// Docking probe: a truncated cone on a port, its base on the port plane and its tip
     /// pointing out along the port axis. Collider `NAME`.
@@ -674,6 +716,10 @@ pub enum PartSpec {
         /// See [`PartSpec::Bus`].
         #[serde(default)]
         allow_initial_overlap: bool,
+        /// Drawn by the viewer as this glTF model instead of the collider shapes (the
+        /// colliders, which the monitor checks, are unchanged).
+        #[serde(default)]
+        model: Option<ModelSpec>,
     },
     /// Docking receptacle: a concave funnel on a port, open along the port axis, built from
     /// `segments` convex wall pieces plus a back plate. Colliders `NAME.wall1` … and `NAME.back`.
@@ -697,6 +743,10 @@ pub enum PartSpec {
         /// See [`PartSpec::Bus`].
         #[serde(default)]
         allow_initial_overlap: bool,
+        /// Drawn by the viewer as this glTF model instead of the collider shapes (the
+        /// colliders, which the monitor checks, are unchanged).
+        #[serde(default)]
+        model: Option<ModelSpec>,
     },
 }
 
@@ -722,6 +772,16 @@ impl PartSpec {
             | PartSpec::SolarWing { name, .. }
             | PartSpec::DockingCone { name, .. }
             | PartSpec::DockingSlot { name, .. } => name,
+        }
+    }
+    /// The glTF model the viewer draws for the part, if any.
+    pub fn model(&self) -> Option<&ModelSpec> {
+        match self {
+            PartSpec::Bus { model, .. }
+            | PartSpec::Antenna { model, .. }
+            | PartSpec::SolarWing { model, .. }
+            | PartSpec::DockingCone { model, .. }
+            | PartSpec::DockingSlot { model, .. } => model.as_ref(),
         }
     }
     /// Whether the part may overlap other bodies at t = 0.

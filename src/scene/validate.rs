@@ -427,7 +427,50 @@ fn validate_part(pp: &str, b: &BodySpec, part: &PartSpec) -> Check {
             }
         }
     }
+    if let Some(m) = part.model() {
+        validate_model(&format!("{pp}.model"), m)?;
+    }
     Ok(())
+}
+
+/// A part's glTF model: a relative `.gltf`/`.glb` path that exists under the assets directory,
+/// a finite pose and a positive scale.
+fn validate_model(mp: &str, m: &super::ModelSpec) -> Check {
+    let rel = std::path::Path::new(&m.path);
+    let ext = rel.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if !matches!(ext, "gltf" | "glb") {
+        return fail(
+            format!("{mp}.path"),
+            format!("`{}` must name a .gltf or .glb file", m.path),
+        );
+    }
+    if rel.is_absolute()
+        || rel
+            .components()
+            .any(|c| !matches!(c, std::path::Component::Normal(_)))
+    {
+        return fail(
+            format!("{mp}.path"),
+            format!(
+                "`{}` must be a plain relative path under the assets directory",
+                m.path
+            ),
+        );
+    }
+    let full = super::assets_dir().join(rel);
+    if !full.is_file() {
+        return fail(
+            format!("{mp}.path"),
+            format!(
+                "no model file {} (models are read from the repository's assets/, or from \
+                 $RPOD_ASSETS when set)",
+                full.display()
+            ),
+        );
+    }
+    finite3(&format!("{mp}.pos_m"), &m.pos_m)?;
+    validate_attitude(&format!("{mp}.attitude"), &m.attitude)?;
+    positive(&format!("{mp}.scale"), m.scale, "model units per metre")
 }
 
 fn validate_docking(s: &Scene, d: &super::DockingSpec) -> Check {
