@@ -7,14 +7,34 @@
 //! the test assumes); where the spacecraft are is given by the viewer's camera projection of
 //! each body's recorded centre of mass (written beside the PNG), and the test checks that the
 //! recorded centres it projects are the ones in `trajectory.csv` at the shown time. The
-//! overlays and the panel are off, so every non-background pixel is a spacecraft mesh.
+//! overlays and the panel are off, so every non-background pixel is a spacecraft mesh. The
+//! antenna is drawn from its glTF model: the instance has as many meshes as the file's first
+//! scene has mesh primitives, counted here from the file.
+//!
+//! Force arrows: a recorded `collision_course` run replayed at its contact with only the
+//! contacts layer on, seen from behind the chaser. The arrow drawn carries the force `contacts.csv` gives for the row
+//! interval of that time (read here from the file), its length is that force over the printed
+//! scale, and the pixels along its projection are the arrow's orange; with the overlays off the
+//! same pixels are not.
+//!
+//! Constraint surfaces: `xu2019_simulation` live at t = 0 with only the surfaces layer on, and
+//! with the overlays off. The surfaces are semi-transparent over whatever is behind them, so
+//! around each table prism's projected centroid almost every pixel changes, and it moves
+//! toward the surface's colour: the obstacle (magenta) raises red and blue against green, the
+//! keep-out (orange) raises red and green against blue. The alpha blend makes the sign of that
+//! shift certain whatever is behind: Δ(r − g) = α(c_r − c_g) − α(u_r − u_g) > 0 when the
+//! surface's own r − g exceeds the underlying pixel's.
 #![cfg(feature = "viewer")]
 
 use std::path::Path;
 use std::process::Command;
 
 fn record_free_drift(dir: &Path, seconds: f64) {
-    let loaded = rpod::scene::load_scene_file(Path::new("scenes/free_drift.ron"), &[]).unwrap();
+    record("scenes/free_drift.ron", dir, seconds);
+}
+
+fn record(scene: &str, dir: &Path, seconds: f64) {
+    let loaded = rpod::scene::load_scene_file(Path::new(scene), &[]).unwrap();
     let mut sim = rpod::sim::Simulation::new(&loaded).unwrap();
     sim.record_to(dir).unwrap();
     let n = sim.steps_for(seconds);
@@ -59,19 +79,21 @@ fn differs(a: [u8; 3], b: [u8; 3]) -> bool {
 /// Runs `rpod <command...> --screenshot PNG` at 960×540 with overlays off, asserts it succeeded
 /// and the image size, and returns the image and its side file (projected body centres).
 fn screenshot(command: &[&std::ffi::OsStr], png: &Path) -> (Png, serde_json::Value) {
+    screenshot_with(command, png, &["--no-overlays"])
+}
+
+/// As [`screenshot`], with `layers` (e.g. `--layers contacts`) instead of `--no-overlays`.
+fn screenshot_with(
+    command: &[&std::ffi::OsStr],
+    png: &Path,
+    layers: &[&str],
+) -> (Png, serde_json::Value) {
     let out = Command::new(env!("CARGO_BIN_EXE_rpod"))
         .args(command)
         .arg("--screenshot")
         .arg(png)
-        .args([
-            "--frames",
-            "12",
-            "--width",
-            "960",
-            "--height",
-            "540",
-            "--no-overlays",
-        ])
+        .args(["--frames", "12", "--width", "960", "--height", "540"])
+        .args(layers)
         .output()
         .expect("rpod runs");
     assert!(
@@ -124,6 +146,172 @@ fn val_viewer_replay_screenshot_shows_spacecraft() {
     }
 
     check_picture(&img, &side);
+    check_models(&side);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Mesh primitives in the first scene of a glTF file (nodes followed recursively).
+fn gltf_primitives(path: &str) -> u64 {
+    let g: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    fn count(g: &serde_json::Value, node: usize) -> u64 {
+        let n = &g["nodes"][node];
+        let own = n["mesh"].as_u64().map_or(0, |m| {
+            g["meshes"][m as usize]["primitives"]
+                .as_array()
+                .unwrap()
+                .len() as u64
+        });
+        own + n["children"].as_array().map_or(0, |c| {
+            c.iter()
+                .map(|k| count(g, k.as_u64().unwrap() as usize))
+                .sum()
+        })
+    }
+    let scene = g["scene"].as_u64().unwrap_or(0) as usize;
+    g["scenes"][scene]["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|k| count(&g, k.as_u64().unwrap() as usize))
+        .sum()
+}
+
+/// `free_drift`'s antenna is drawn as its glTF dish: one instance, every mesh of the file.
+fn check_models(side: &serde_json::Value) {
+    assert_eq!(side["models_expected"].as_u64(), Some(1), "{side}");
+    let models = side["models"].as_array().unwrap();
+    assert_eq!(models.len(), 1, "the model was not spawned: {side}");
+    assert_eq!(models[0]["part"], "target/antenna");
+    assert_eq!(models[0]["path"], "models/hga_dish.gltf");
+    let want = gltf_primitives("assets/models/hga_dish.gltf");
+    assert!(want >= 2);
+    assert_eq!(models[0]["meshes"].as_u64(), Some(want));
+}
+
+/// The force arrows' orange (sRGB 1.0, 0.45, 0.1) after the renderer's tone mapping: red well
+/// above green, green above blue.
+fn orange(p: [u8; 3]) -> bool {
+    let [r, g, b] = p.map(i32::from);
+    r > 150 && r - g > 50 && g - b > 25
+}
+
+/// Share of the points along the projected segment (from 25 % to 90 % of its length, away
+/// from the contact sphere and the head) with an orange pixel within one pixel.
+fn orange_share(img: &Png, a: [f64; 2], b: [f64; 2]) -> f64 {
+    let n = 40;
+    let hits = (0..n)
+        .filter(|k| {
+            let s = 0.25 + 0.65 * *k as f64 / (n - 1) as f64;
+            let (x, y) = (a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]));
+            (-1..=1).any(|dy| {
+                (-1..=1).any(|dx| {
+                    let (px, py) = (x as i64 + dx, y as i64 + dy);
+                    px >= 0
+                        && py >= 0
+                        && (px as usize) < img.w
+                        && (py as usize) < img.h
+                        && orange(img.px(px as usize, py as usize))
+                })
+            })
+        })
+        .count();
+    hits as f64 / n as f64
+}
+
+#[test]
+fn val_viewer_replay_draws_contact_force_arrows() {
+    assert!(
+        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
+        "no display: run this test under `xvfb-run -a` (see .ci/run)"
+    );
+    let dir = std::env::temp_dir().join(format!("rpod_viewer_arrows_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let run = dir.join("run");
+    record("scenes/collision_course.ron", &run, 40.0);
+    // The first contact (from events.jsonl) and the contacts.csv row that closes the recorded
+    // interval it falls in (the contact lasts 0.02 s, well inside one 0.1 s row interval).
+    let events = std::fs::read_to_string(run.join("events.jsonl")).unwrap();
+    let start: serde_json::Value = events
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .find(|e| e["kind"] == "contact_start")
+        .expect("a contact");
+    let t = start["t_s"].as_f64().unwrap();
+    let (a, b) = (
+        start["a"].as_str().unwrap().to_string(),
+        start["b"].as_str().unwrap().to_string(),
+    );
+    let contacts = std::fs::read_to_string(run.join("contacts.csv")).unwrap();
+    let force = contacts
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(str::to_string).collect::<Vec<_>>())
+        .filter(|f| f[1] == a && f[2] == b)
+        .map(|f| (f[0].parse::<f64>().unwrap(), f[4].parse::<f64>().unwrap()))
+        .find(|(t_row, _)| *t_row >= t)
+        .expect("the contact's row in contacts.csv")
+        .1;
+    assert!(force > 0.0);
+    let at = t.to_string();
+    let png = dir.join("arrows.png");
+    let cmd = [
+        "replay".as_ref(),
+        run.as_os_str(),
+        "--at".as_ref(),
+        at.as_ref(),
+    ];
+    // Seen from behind the chaser (the overview is too far out for a 0.4 m arrow).
+    let (img, side) = screenshot_with(&cmd, &png, &["--layers", "contacts", "--camera", "chaser"]);
+    assert_eq!(side["t_s"].as_f64(), Some(t));
+    let arrows = side["force_arrows"].as_array().unwrap();
+    assert_eq!(arrows.len(), 1, "{side}");
+    let arrow = &arrows[0];
+    assert_eq!(
+        (arrow["a"].as_str(), arrow["b"].as_str()),
+        (Some(&*a), Some(&*b))
+    );
+    let shown = arrow["force_n"].as_f64().unwrap();
+    assert!(
+        (shown - force).abs() <= 1e-12 * force,
+        "{shown} N vs {force} N"
+    );
+    let scale = side["arrow_scale_n_per_m"].as_f64().unwrap();
+    let len = arrow["length_m"].as_f64().unwrap();
+    assert!(
+        (len - force / scale).abs() < 1e-4 * len,
+        "arrow {len} m, force {force} N at {scale} N/m"
+    );
+    let p0: Vec<f64> = arrow["start_px"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let p1: Vec<f64> = arrow["end_px"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let (p0, p1) = ([p0[0], p0[1]], [p1[0], p1[1]]);
+    let px_len = (p1[0] - p0[0]).hypot(p1[1] - p0[1]);
+    assert!(px_len > 15.0, "the arrow is {px_len} px long");
+    let on = orange_share(&img, p0, p1);
+    println!(
+        "arrow {a} → {b}: {force} N at t = {t} s, {len} m ({px_len:.0} px), {:.0} % orange",
+        100.0 * on
+    );
+    assert!(on > 0.8, "only {:.0} % of the arrow is orange", 100.0 * on);
+    // Control: the same picture without overlays has no arrow there.
+    let (plain, side0) = screenshot_with(
+        &cmd,
+        &dir.join("plain.png"),
+        &["--no-overlays", "--camera", "chaser"],
+    );
+    assert!(side0["force_arrows"].as_array().unwrap().is_empty());
+    let off = orange_share(&plain, p0, p1);
+    assert!(off < 0.2, "{:.0} % orange without overlays", 100.0 * off);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -208,5 +396,72 @@ fn val_viewer_live_view_screenshot_shows_spacecraft() {
         }
     }
     check_picture(&img, &side);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Mean colour shift (on − off) in a disc of `r` px about `c`, and the share of pixels changed.
+fn shift(on: &Png, off: &Png, c: [f64; 2], r: f64) -> ([f64; 3], f64) {
+    let (mut sum, mut n, mut changed) = ([0.0; 3], 0usize, 0usize);
+    for y in (c[1] - r).max(0.0) as usize..((c[1] + r) as usize).min(on.h - 1) {
+        for x in (c[0] - r).max(0.0) as usize..((c[0] + r) as usize).min(on.w - 1) {
+            if (x as f64 - c[0]).hypot(y as f64 - c[1]) > r {
+                continue;
+            }
+            let (a, b) = (on.px(x, y), off.px(x, y));
+            for k in 0..3 {
+                sum[k] += f64::from(a[k]) - f64::from(b[k]);
+            }
+            n += 1;
+            changed += usize::from(a != b);
+        }
+    }
+    assert!(n > 0);
+    (sum.map(|v| v / n as f64), changed as f64 / n as f64)
+}
+
+#[test]
+fn val_viewer_draws_constraint_surfaces() {
+    assert!(
+        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
+        "no display: run this test under `xvfb-run -a` (see .ci/run)"
+    );
+    let dir = std::env::temp_dir().join(format!("rpod_viewer_surfaces_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let cmd = ["view".as_ref(), "scenes/xu2019_simulation.ron".as_ref()];
+    let (on, side) = screenshot_with(&cmd, &dir.join("on.png"), &["--layers", "surfaces"]);
+    let (off, _) = screenshot(&cmd, &dir.join("off.png"));
+    assert_eq!(side["layers"]["surfaces"], true);
+    assert_eq!(side["layers"]["contacts"], false);
+    let surfaces = side["surfaces"].as_array().unwrap();
+    assert_eq!(surfaces.len(), 2, "{side}");
+    for sf in surfaces {
+        let legend = sf["legend"].as_str().unwrap();
+        let c = sf["centroid_px"].as_array().expect("centroid in view");
+        let c = [c[0].as_f64().unwrap(), c[1].as_f64().unwrap()];
+        assert!(c[0] > 0.0 && c[0] < on.w as f64 && c[1] > 0.0 && c[1] < on.h as f64);
+        let ([dr, dg, db], changed) = shift(&on, &off, c, 6.0);
+        println!(
+            "{legend}: Δrgb ({dr:.1}, {dg:.1}, {db:.1}), {:.0} % changed",
+            100.0 * changed
+        );
+        assert!(
+            changed > 0.9,
+            "{legend}: only {:.0} % changed",
+            100.0 * changed
+        );
+        if legend.starts_with("Xu2019 obstacle") {
+            assert!(
+                dr - dg > 0.0 && db - dg > 0.0,
+                "{legend}: not toward magenta"
+            );
+        } else {
+            assert!(legend.starts_with("Xu2019 keep-out"), "{legend}");
+            assert!(
+                dr - db > 0.0 && dg - db > 0.0,
+                "{legend}: not toward orange"
+            );
+        }
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

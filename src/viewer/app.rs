@@ -30,6 +30,8 @@ pub struct ViewerOptions {
     pub size_px: (u32, u32),
     /// Draw overlays and the panel.
     pub overlays: bool,
+    /// Only these layers at start (names from [`LAYER_NAMES`]); `None`: all when `overlays`.
+    pub layers: Option<Vec<String>>,
     /// Replay: start at this time, s (default: the end of the recording when taking a
     /// screenshot, else the start).
     pub start_s: Option<f64>,
@@ -48,6 +50,7 @@ impl Default for ViewerOptions {
             frames: None,
             size_px: (1280, 720),
             overlays: true,
+            layers: None,
             start_s: None,
             speed: 1.0,
             play: false,
@@ -58,6 +61,14 @@ impl Default for ViewerOptions {
 
 /// Background colour of the 3-D view.
 pub const BACKGROUND: Color = Color::srgb(0.015, 0.02, 0.045);
+
+/// Colour of the contact-force arrows (orange).
+pub const ARROW_COLOR: Color = Color::srgb(1.0, 0.45, 0.1);
+
+/// The overlay layers, by the names `--layers` takes.
+pub const LAYER_NAMES: [&str; 7] = [
+    "ports", "lvlh", "trails", "closest", "contacts", "surfaces", "panel",
+];
 
 /// Reference-orbit ECI states (position m, velocity m/s), one per recorded row.
 type RvTrack = Vec<(Vector3<f64>, Vector3<f64>)>;
@@ -83,18 +94,76 @@ struct Live {
     achieved: f64,
     /// Accumulated normal impulse of each active contact at the end of the last frame, N·s.
     impulses: BTreeMap<(String, String), f64>,
+    /// Mean normal force of each active contact over the last frame's steps (ΔJ / Δt), N.
+    force_n: BTreeMap<(String, String), f64>,
 }
 
-/// Live contact forces: per active contact, the mean normal force over the last frame's steps
-/// (the monitor's accumulated per-contact normal impulse: ΔJ / Δt), N; and the arrow scale,
-/// N per m, chosen (1, 2 or 5 × 10^k) so that the run's peak contact force so far is drawn
-/// at most `max_len_m` long (it only grows, so arrows stay comparable within a run).
+/// The force-arrow scale, N per m, chosen (1, 2 or 5 × 10^k) so that the peak contact force
+/// is drawn at most `max_len_m` long: live, the run's peak so far (it only grows, so arrows
+/// stay comparable within a run); replay, the peak of `contacts.csv`.
 #[derive(Resource, Default)]
 struct ContactForces {
-    force_n: BTreeMap<(String, String), f64>,
     scale_n_per_m: Option<f64>,
     max_len_m: f64,
 }
+
+impl ContactForces {
+    /// The scale for `peak_n` with arrows at most half the smallest body's radius long
+    /// (clamped to 5 cm–5 m).
+    fn new(geom: &SceneGeom, peak_n: f64) -> Self {
+        let max_len_m = (0.5
+            * geom
+                .bodies
+                .iter()
+                .map(|b| b.radius_m)
+                .fold(f64::INFINITY, f64::min))
+        .clamp(0.05, 5.0);
+        let mut f = Self {
+            scale_n_per_m: None,
+            max_len_m,
+        };
+        f.grow_to(peak_n);
+        f
+    }
+
+    /// Sets the scale for a peak force of `peak_n` (no change for a non-positive peak).
+    fn grow_to(&mut self, peak_n: f64) {
+        if peak_n > 0.0 {
+            self.scale_n_per_m = Some(super::geometry::arrow_scale_n_per_m(peak_n, self.max_len_m));
+        }
+    }
+}
+
+/// Contact points and force arrows: drawn in front of the meshes (an arrow is the force on the
+/// second part, so it starts at the contact and points into that part), 3 px wide.
+#[derive(Default, Reflect, GizmoConfigGroup)]
+struct ContactGizmos;
+
+/// A part drawn as a glTF model (on the model's root entity, a child of the body).
+#[derive(Component, Clone)]
+struct PartModel {
+    /// `body/part`.
+    part: String,
+    /// Path under the assets directory.
+    path: String,
+    /// The file.
+    gltf: Handle<bevy::gltf::Gltf>,
+    /// Its nodes have been spawned.
+    spawned: bool,
+}
+
+/// The glTF models: how many the scene names, those spawned (`body/part`, path, mesh
+/// entities), and the first load failure.
+#[derive(Resource, Default)]
+struct ModelStatus {
+    expected: usize,
+    ready: Vec<(String, String, usize)>,
+    failed: Option<String>,
+}
+
+/// The force arrows drawn this frame: (part a, part b, force N, start and end, world m).
+#[derive(Resource, Default)]
+struct DrawnArrows(Vec<(String, String, f64, Vec3, Vec3)>);
 
 /// Live play/pause and speed.
 #[derive(Resource)]
@@ -129,6 +198,25 @@ struct Layers {
     contacts: bool,
     surfaces: bool,
     panel: bool,
+}
+
+impl Layers {
+    /// The layers shown at start: those `opts.layers` names, else all or none (`overlays`).
+    fn from_options(opts: &ViewerOptions) -> Self {
+        let on = |name: &str| match &opts.layers {
+            Some(list) => list.iter().any(|l| l == name),
+            None => opts.overlays,
+        };
+        Self {
+            ports: on("ports"),
+            lvlh: on("lvlh"),
+            trails: on("trails"),
+            closest: on("closest"),
+            contacts: on("contacts"),
+            surfaces: on("surfaces"),
+            panel: on("panel"),
+        }
+    }
 }
 
 /// Camera presets.
@@ -205,24 +293,13 @@ struct Run {
 
 /// Opens the window on a live simulation of `loaded`.
 pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String> {
-    check_camera(&opts)?;
+    check_options(&opts)?;
     let sim = Simulation::new(loaded).map_err(|e| e.to_string())?;
     let geom = SceneGeom::new(&sim.scene);
     let mut app = base_app(&opts, &sim.scene.name);
     let reference = sim.reference_state();
     let snap = live_snapshot(&sim);
-    // Force arrows: the run's peak force at most half the smallest body's radius (≥ 5 cm).
-    let max_len_m = (0.5
-        * geom
-            .bodies
-            .iter()
-            .map(|b| b.radius_m)
-            .fold(f64::INFINITY, f64::min))
-    .clamp(0.05, 5.0);
-    app.insert_resource(ContactForces {
-        max_len_m,
-        ..default()
-    });
+    app.insert_resource(ContactForces::new(&geom, 0.0));
     app.insert_resource(Corridors::of(&sim.scene))
         .insert_resource(Table::of(&sim.scene))
         .insert_resource(Surfaces::of(&sim.scene));
@@ -244,6 +321,7 @@ pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String>
             owed_s: 0.0,
             achieved: 0.0,
             impulses: BTreeMap::new(),
+            force_n: BTreeMap::new(),
         })
         .add_systems(
             Update,
@@ -254,7 +332,7 @@ pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String>
 
 /// Opens the window on a recorded run (`rpod run` output) of `loaded`.
 pub fn run_replay(loaded: &LoadedScene, rec: Recording, opts: ViewerOptions) -> Result<(), String> {
-    check_camera(&opts)?;
+    check_options(&opts)?;
     let scene = &loaded.scene;
     for b in &scene.bodies {
         if !rec.body_names.contains(&b.name) {
@@ -288,6 +366,7 @@ pub fn run_replay(loaded: &LoadedScene, rec: Recording, opts: ViewerOptions) -> 
     let reference = reference_track(loaded, &rec.times_s)?;
     let geom = SceneGeom::new(scene);
     let mut app = base_app(&opts, &scene.name);
+    app.insert_resource(ContactForces::new(&geom, rec.peak_contact_force_n()));
     let mut snap = rec.sample(timeline.t_s);
     snap.bodies = order.iter().map(|&i| snap.bodies[i]).collect();
     app.insert_resource(Corridors::of(scene))
@@ -314,7 +393,19 @@ pub fn run_replay(loaded: &LoadedScene, rec: Recording, opts: ViewerOptions) -> 
     finish(app)
 }
 
-fn check_camera(opts: &ViewerOptions) -> Result<(), String> {
+/// Refuses an unknown camera preset or layer name before a window opens.
+fn check_options(opts: &ViewerOptions) -> Result<(), String> {
+    if let Some(bad) = opts
+        .layers
+        .iter()
+        .flatten()
+        .find(|l| !LAYER_NAMES.contains(&l.as_str()))
+    {
+        return Err(format!(
+            "--layers: unknown layer `{bad}` (layers: {})",
+            LAYER_NAMES.join(", ")
+        ));
+    }
     match opts.camera.as_str() {
         "overview" | "target" | "chaser" | "port" => Ok(()),
         other => Err(format!(
@@ -356,15 +447,20 @@ fn base_app(opts: &ViewerOptions, title: &str) -> App {
         resolution = resolution.with_scale_factor_override(1.0);
     }
     app.add_plugins((
-        DefaultPlugins.set(WindowPlugin {
-            primary_window: Some(Window {
-                title: format!("rpod — {title}"),
-                resolution,
-                present_mode: bevy::window::PresentMode::AutoNoVsync,
+        DefaultPlugins
+            .set(WindowPlugin {
+                primary_window: Some(Window {
+                    title: format!("rpod — {title}"),
+                    resolution,
+                    present_mode: bevy::window::PresentMode::AutoNoVsync,
+                    ..default()
+                }),
+                ..default()
+            })
+            .set(AssetPlugin {
+                file_path: crate::scene::assets_dir().to_string_lossy().into_owned(),
                 ..default()
             }),
-            ..default()
-        }),
         FrameTimeDiagnosticsPlugin::default(),
     ))
     .insert_resource(ClearColor(BACKGROUND))
@@ -373,15 +469,20 @@ fn base_app(opts: &ViewerOptions, title: &str) -> App {
         brightness: 600.0,
         ..default()
     })
-    .insert_resource(Layers {
-        ports: opts.overlays,
-        lvlh: opts.overlays,
-        trails: opts.overlays,
-        closest: opts.overlays,
-        contacts: opts.overlays,
-        surfaces: opts.overlays,
-        panel: opts.overlays,
-    })
+    .insert_gizmo_config(
+        ContactGizmos,
+        GizmoConfig {
+            depth_bias: -1.0,
+            line: GizmoLineConfig {
+                width: 3.0,
+                ..default()
+            },
+            ..default()
+        },
+    )
+    .insert_resource(Layers::from_options(opts))
+    .insert_resource(ModelStatus::default())
+    .insert_resource(DrawnArrows::default())
     .insert_resource(CameraRig {
         preset: match opts.camera.as_str() {
             "target" => Preset::OrbitTarget,
@@ -417,6 +518,7 @@ fn base_app(opts: &ViewerOptions, title: &str) -> App {
     app.add_systems(
         Update,
         (
+            spawn_models,
             apply_pose,
             view_controls,
             camera_system,
@@ -524,12 +626,39 @@ fn setup(
     layers: Res<Layers>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<StandardMaterial>>,
+    asset_server: Res<AssetServer>,
+    mut model_status: ResMut<ModelStatus>,
 ) {
     for (i, b) in geom.bodies.iter().enumerate() {
         commands
             .spawn((BodyMarker(i), Transform::default(), Visibility::default()))
             .with_children(|c| {
-                for p in &b.parts {
+                // Parts with a glTF model: the model (its first scene) in the body frame.
+                for (part, m) in &b.models {
+                    let pose = nalgebra::Isometry3::from_parts(
+                        nalgebra::Translation3::from(Vector3::from(m.pos_m)),
+                        m.attitude.to_quat(),
+                    );
+                    let mut tf = to_transform(&pose);
+                    tf.scale = Vec3::splat(m.scale as f32);
+                    model_status.expected += 1;
+                    c.spawn((
+                        tf,
+                        Visibility::default(),
+                        Name::new(format!("{}/{part} (model {})", b.name, m.path)),
+                        PartModel {
+                            part: format!("{}/{part}", b.name),
+                            path: m.path.clone(),
+                            gltf: asset_server.load(m.path.clone()),
+                            spawned: false,
+                        },
+                    ));
+                }
+                for p in b
+                    .parts
+                    .iter()
+                    .filter(|p| !b.models.iter().any(|(n, _)| *n == p.part))
+                {
                     let (color, metallic, rough) = part_look(b.role, p.role);
                     c.spawn((
                         Mesh3d(meshes.add(primitive_mesh(&p.shape))),
@@ -647,6 +776,130 @@ fn setup(
         },
         PanelText,
     ));
+}
+
+/// The glTF assets a model is built from.
+#[derive(bevy::ecs::system::SystemParam)]
+struct GltfAssets<'w> {
+    files: Res<'w, Assets<bevy::gltf::Gltf>>,
+    nodes: Res<'w, Assets<bevy::gltf::GltfNode>>,
+    meshes: Res<'w, Assets<bevy::gltf::GltfMesh>>,
+    materials: Res<'w, Assets<bevy::gltf::GltfMaterial>>,
+}
+
+/// The render material of a glTF material (the fields the viewer's PBR pipeline uses).
+fn standard_material(m: &bevy::gltf::GltfMaterial) -> StandardMaterial {
+    StandardMaterial {
+        base_color: m.base_color,
+        base_color_texture: m.base_color_texture.clone(),
+        emissive: m.emissive,
+        emissive_texture: m.emissive_texture.clone(),
+        perceptual_roughness: m.perceptual_roughness,
+        metallic: m.metallic,
+        metallic_roughness_texture: m.metallic_roughness_texture.clone(),
+        reflectance: m.reflectance,
+        normal_map_texture: m.normal_map_texture.clone(),
+        occlusion_texture: m.occlusion_texture.clone(),
+        double_sided: m.double_sided,
+        cull_mode: m.cull_mode,
+        unlit: m.unlit,
+        alpha_mode: m.alpha_mode,
+        ..default()
+    }
+}
+
+/// Spawns a glTF node under `parent` (its transform, then one entity per mesh primitive, then
+/// its children); returns the number of mesh entities.
+fn spawn_gltf_node(
+    commands: &mut Commands,
+    parent: Entity,
+    node: &Handle<bevy::gltf::GltfNode>,
+    assets: &GltfAssets,
+    materials: &mut Assets<StandardMaterial>,
+) -> usize {
+    let Some(n) = assets.nodes.get(node) else {
+        return 0;
+    };
+    let e = commands
+        .spawn((
+            n.transform,
+            Visibility::default(),
+            Name::new(n.name.clone()),
+            ChildOf(parent),
+        ))
+        .id();
+    let mut count = 0;
+    if let Some(mesh) = n.mesh.as_ref().and_then(|h| assets.meshes.get(h)) {
+        for p in &mesh.primitives {
+            let mat = p
+                .material
+                .as_ref()
+                .and_then(|h| assets.materials.get(h))
+                .map(standard_material)
+                .unwrap_or_default();
+            commands.spawn((
+                Mesh3d(p.mesh.clone()),
+                MeshMaterial3d(materials.add(mat)),
+                Transform::default(),
+                Name::new(p.name.clone()),
+                ChildOf(e),
+            ));
+            count += 1;
+        }
+    }
+    for c in &n.children {
+        count += spawn_gltf_node(commands, e, c, assets, materials);
+    }
+    count
+}
+
+/// Builds each model once its file and everything it references have loaded: the file's root
+/// nodes (those no node lists as a child), in file order, under the model's entity. Stops the
+/// viewer with the loader's message when a file fails to load.
+fn spawn_models(
+    mut commands: Commands,
+    mut models: Query<(Entity, &mut PartModel)>,
+    server: Res<AssetServer>,
+    assets: GltfAssets,
+    mut materials: ResMut<Assets<StandardMaterial>>,
+    mut status: ResMut<ModelStatus>,
+    mut exit: MessageWriter<AppExit>,
+) {
+    for (entity, mut m) in &mut models {
+        if m.spawned || status.failed.is_some() {
+            continue;
+        }
+        if let bevy::asset::LoadState::Failed(e) = server.load_state(&m.gltf) {
+            let msg = format!(
+                "model {} of part {} (under {}): {e}",
+                m.path,
+                m.part,
+                crate::scene::assets_dir().display()
+            );
+            eprintln!("error: {msg}");
+            status.failed = Some(msg);
+            exit.write(AppExit::error());
+            return;
+        }
+        if !server.is_loaded_with_dependencies(&m.gltf) {
+            continue;
+        }
+        let Some(file) = assets.files.get(&m.gltf) else {
+            continue;
+        };
+        let children: std::collections::HashSet<_> = file
+            .nodes
+            .iter()
+            .filter_map(|h| assets.nodes.get(h))
+            .flat_map(|n| n.children.iter().map(|c| c.id()))
+            .collect();
+        let mut count = 0;
+        for root in file.nodes.iter().filter(|h| !children.contains(&h.id())) {
+            count += spawn_gltf_node(&mut commands, entity, root, &assets, &mut materials);
+        }
+        m.spawned = true;
+        status.ready.push((m.part.clone(), m.path.clone(), count));
+    }
 }
 
 /// Scrubber bar geometry, logical pixels from the window's left/bottom.
@@ -853,11 +1106,16 @@ fn live_step(
     if n > 0 {
         // Mean normal force of each contact over this frame's steps, from the monitor's
         // accumulated impulse (a contact that restarted within the frame counts from 0).
-        let Live { sim, impulses, .. } = &mut *live;
+        let Live {
+            sim,
+            impulses,
+            force_n,
+            ..
+        } = &mut *live;
         let cs = sim.contacts();
         let span_s = n as f64 * dt;
         let mut now = BTreeMap::new();
-        forces.force_n.clear();
+        force_n.clear();
         for (k, c) in &cs.active {
             let before = impulses.get(k).copied().unwrap_or(0.0);
             let j = if c.impulse_ns >= before {
@@ -865,7 +1123,7 @@ fn live_step(
             } else {
                 c.impulse_ns
             };
-            forces.force_n.insert(k.clone(), j / span_s);
+            force_n.insert(k.clone(), j / span_s);
             now.insert(k.clone(), c.impulse_ns);
         }
         *impulses = now;
@@ -874,10 +1132,9 @@ fn live_step(
             .values()
             .map(|s| s.peak_force_n)
             .fold(0.0, f64::max);
-        let len = forces.max_len_m;
-        forces.scale_n_per_m =
-            (peak > 0.0).then(|| super::geometry::arrow_scale_n_per_m(peak, len));
+        forces.grow_to(peak);
     }
+    cur.snap.contact_force_n = live.force_n.clone();
     if n > 0 {
         let nb = cur.snap.bodies.len();
         trails.0.resize(nb, Vec::new());
@@ -933,6 +1190,8 @@ fn live_snapshot(sim: &Simulation) -> Snapshot {
             .get_resource::<crate::sim::docking::Docking>()
             .map(|d| d.state.name().to_string()),
         contacts: sim.contacts().active.keys().cloned().collect(),
+        // Filled by `live_step` (forces need the impulse at the previous frame).
+        contact_force_n: BTreeMap::new(),
     }
 }
 
@@ -1127,8 +1386,11 @@ fn overlays(
     trails: Res<Trails>,
     surfaces: Res<Surfaces>,
     forces: Option<Res<ContactForces>>,
+    mut arrows: ResMut<DrawnArrows>,
     mut gizmos: Gizmos,
+    mut front: Gizmos<ContactGizmos>,
 ) {
+    arrows.0.clear();
     let bodies = &cur.snap.bodies;
     if layers.surfaces {
         // The table curves the laws keep the chaser's centre of mass out of, at its height.
@@ -1197,27 +1459,30 @@ fn overlays(
         }
     }
     if layers.contacts {
-        // Contact points (on the first part), from the parts' geometry at the drawn poses.
-        // Live: the force arrow (orange), the contact's normal force along the normal from
-        // the first part to the second, at the panel's scale; replay (no per-contact force
-        // is recorded) and force-free contacts: the unit normal (yellow, 0.3 m).
+        // Contact points (on the first part), from the parts' geometry at the drawn poses,
+        // and the force arrow (orange): the contact's normal force (live: over the last
+        // frame's steps; replay: `contacts.csv`'s row interval) along the normal from the
+        // first part to the second, at the panel's scale; a contact without a recorded force:
+        // the unit normal (yellow, 0.3 m).
         for (a, b) in &cur.snap.contacts {
             if let (Some(pa), Some(pb)) = (geom.find_part(a), geom.find_part(b))
                 && let Some((p, n)) = geom.contact(pa, pb, bodies)
             {
                 let p = v3(&p);
                 let c = Color::srgb(1.0, 0.9, 0.1);
-                gizmos.sphere(Isometry3d::from_translation(p), 0.03, c);
+                front.sphere(Isometry3d::from_translation(p), 0.03, c);
                 let force = forces.as_ref().and_then(|f| {
-                    let fn_ = *f.force_n.get(&(a.clone(), b.clone()))?;
-                    Some(fn_ / f.scale_n_per_m?).filter(|l| *l > 0.0)
+                    let fn_ = *cur.snap.contact_force_n.get(&(a.clone(), b.clone()))?;
+                    Some((fn_, fn_ / f.scale_n_per_m?)).filter(|(_, l)| *l > 0.0)
                 });
                 match force {
-                    Some(len_m) => {
-                        gizmos.arrow(p, p + v3(&n) * len_m as f32, Color::srgb(1.0, 0.45, 0.1));
+                    Some((f_n, len_m)) => {
+                        let end = p + v3(&n) * len_m as f32;
+                        front.arrow(p, end, ARROW_COLOR);
+                        arrows.0.push((a.clone(), b.clone(), f_n, p, end));
                     }
                     None => {
-                        gizmos.arrow(p, p + v3(&n) * 0.3, c);
+                        front.arrow(p, p + v3(&n) * 0.3, c);
                     }
                 }
             }
@@ -1355,10 +1620,7 @@ fn panel(
         let _ = writeln!(o, "docking: {d}");
     }
     for (a, b) in &s.contacts {
-        match forces
-            .as_ref()
-            .and_then(|f| f.force_n.get(&(a.clone(), b.clone())))
-        {
+        match s.contact_force_n.get(&(a.clone(), b.clone())) {
             Some(f) => {
                 let _ = writeln!(o, "contact: {a} <-> {b}   normal force {f:.4} N");
             }
@@ -1432,6 +1694,11 @@ fn frames_and_screenshot(
     camera: Query<(&Camera, &Transform), With<Camera3d>>,
     window: Query<&Window, With<PrimaryWindow>>,
     waiting: Res<PipelinesWaiting>,
+    drawn: Res<DrawnArrows>,
+    forces: Option<Res<ContactForces>>,
+    models: Res<ModelStatus>,
+    surfaces: Res<Surfaces>,
+    layers: Res<Layers>,
     mut exit: MessageWriter<AppExit>,
 ) {
     run.frame += 1;
@@ -1455,8 +1722,9 @@ fn frames_and_screenshot(
     }
     if let Some(path) = run.opts.screenshot.clone() {
         // Wait (within reason) until no render pipeline is still compiling.
+        let models_pending = models.ready.len() < models.expected;
         if !run.shot_requested
-            && run.ready_streak < READY_FRAMES
+            && (run.ready_streak < READY_FRAMES || models_pending)
             && run.frame < n + MAX_READY_WAIT_FRAMES
         {
             return;
@@ -1487,12 +1755,60 @@ fn frames_and_screenshot(
                         })
                     })
                     .collect();
+                let px = |p: Vec3| cam.world_to_viewport(&gt, p).ok().map(|p| [p.x, p.y]);
+                let arrows: Vec<_> = drawn
+                    .0
+                    .iter()
+                    .map(|(a, b, f, p0, p1)| {
+                        serde_json::json!({
+                            "a": a,
+                            "b": b,
+                            "force_n": f,
+                            "length_m": (*p1 - *p0).length(),
+                            "start_px": px(*p0),
+                            "end_px": px(*p1),
+                        })
+                    })
+                    .collect();
+                // Each constraint surface's centroid (mean vertex), world, projected.
+                let shown_surfaces: Vec<_> = surfaces
+                    .list
+                    .iter()
+                    .zip(&surfaces.legend)
+                    .filter_map(|(sf, legend)| {
+                        let m = &sf.mesh.positions_m;
+                        let mean = m.iter().fold(Vector3::zeros(), |a, p| a + p) / m.len() as f64;
+                        let origin = match sf.anchor {
+                            super::surfaces::Anchor::World(o) => o,
+                            super::surfaces::Anchor::BodyCom(i) => cur.snap.bodies.get(i)?.0,
+                        };
+                        let c = origin + mean;
+                        Some(serde_json::json!({
+                            "legend": legend,
+                            "rgba": sf.rgba,
+                            "centroid_world_m": [c.x, c.y, c.z],
+                            "centroid_px": px(v3(&c)),
+                        }))
+                    })
+                    .collect();
                 let side = serde_json::json!({
+                    "layers": {
+                        "ports": layers.ports, "lvlh": layers.lvlh, "trails": layers.trails,
+                        "closest": layers.closest, "contacts": layers.contacts,
+                        "surfaces": layers.surfaces, "panel": layers.panel,
+                    },
+                    "surfaces": shown_surfaces,
                     "width_px": w.physical_width(),
                     "height_px": w.physical_height(),
                     "scale_factor": w.scale_factor(),
                     "t_s": cur.snap.t_s,
                     "bodies": bodies,
+                    "force_arrows": arrows,
+                    "models": models.ready.iter().map(|(part, path, n)| serde_json::json!({
+                        "part": part, "path": path, "meshes": n,
+                    })).collect::<Vec<_>>(),
+                    "models_expected": models.expected,
+                    "arrow_scale_n_per_m": forces.as_ref().and_then(|f| f.scale_n_per_m),
                 });
                 let _ = std::fs::write(
                     path.with_extension("json"),
@@ -1536,4 +1852,46 @@ fn frames_and_screenshot(
         }
     }
     exit.write(AppExit::Success);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn invariant_layers_from_options() {
+        let all = Layers::from_options(&ViewerOptions::default());
+        assert!(all.ports && all.lvlh && all.trails && all.closest && all.contacts);
+        assert!(all.surfaces && all.panel);
+        let none = Layers::from_options(&ViewerOptions {
+            overlays: false,
+            ..default()
+        });
+        assert!(!(none.ports || none.lvlh || none.trails || none.closest || none.contacts));
+        assert!(!(none.surfaces || none.panel));
+        // `--layers` picks exactly the named ones, whatever `overlays` says.
+        let some = ViewerOptions {
+            overlays: false,
+            layers: Some(vec!["contacts".into(), "surfaces".into()]),
+            ..default()
+        };
+        let l = Layers::from_options(&some);
+        assert!(l.contacts && l.surfaces);
+        assert!(!(l.ports || l.lvlh || l.trails || l.closest || l.panel));
+        assert!(check_options(&some).is_ok());
+        let bad = ViewerOptions {
+            layers: Some(vec!["contact".into()]),
+            ..default()
+        };
+        let e = check_options(&bad).unwrap_err();
+        assert!(
+            e.contains("unknown layer `contact`") && e.contains("contacts"),
+            "{e}"
+        );
+        let cam = ViewerOptions {
+            camera: "side".into(),
+            ..default()
+        };
+        assert!(check_options(&cam).is_err());
+    }
 }

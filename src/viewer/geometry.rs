@@ -17,6 +17,8 @@ use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
 pub struct PartGeom {
     /// `body/collider` name, as the monitor and the outputs spell it.
     pub full_name: String,
+    /// The scene part it belongs to.
+    pub part: String,
     /// Role (chooses the material).
     pub role: PartRole,
     /// The primitive (body frame via `pose_body`).
@@ -42,6 +44,8 @@ pub struct BodyGeom {
     pub ports: Vec<(String, Vector3<f64>, Vector3<f64>)>,
     /// Radius of a sphere about the body origin that holds every part, m.
     pub radius_m: f64,
+    /// glTF models drawn instead of the colliders of a part: (part name, model).
+    pub models: Vec<(String, crate::scene::ModelSpec)>,
 }
 
 impl BodyGeom {
@@ -56,7 +60,6 @@ impl BodyGeom {
     }
 }
 
-/// The geometry of every body of a scene, scene order.
 /// A part pair prepared for a parry query in part a's frame.
 struct PairQuery {
     shape_a: rp::SharedShape,
@@ -67,6 +70,7 @@ struct PairQuery {
     pose_b_in_a: Pose,
 }
 
+/// The geometry of every body of a scene, scene order.
 #[derive(Resource, Clone)]
 pub struct SceneGeom {
     /// Bodies.
@@ -84,6 +88,7 @@ impl SceneGeom {
                     .into_iter()
                     .map(|pc: PartCollider| PartGeom {
                         full_name: format!("{}/{}", b.name, pc.name),
+                        part: pc.part,
                         role: pc.role,
                         parry: crate::sim::build::primitive_shape(&pc.shape),
                         shape: pc.shape,
@@ -106,6 +111,11 @@ impl SceneGeom {
                     parts,
                     ports,
                     radius_m,
+                    models: b
+                        .parts
+                        .iter()
+                        .filter_map(|p| p.model().map(|m| (p.name().to_string(), m.clone())))
+                        .collect(),
                 }
             })
             .collect();

@@ -1,9 +1,17 @@
-//! A recorded run (`trajectory.csv`, `events.jsonl`, `summary.json`, as written by `rpod run`)
-//! read back for replay, and sampled at any time between rows: positions linearly, attitudes by
-//! slerp, other columns from the row at or before the time.
+//! A recorded run (`trajectory.csv`, `events.jsonl`, `contacts.csv`, `summary.json`, as written
+//! by `rpod run`) read back for replay, and sampled at any time between rows: positions
+//! linearly, attitudes by slerp, other columns from the row at or before the time, contact
+//! forces from the row interval that contains the time.
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+
+/// A part pair (`body/part`, `body/part`), in the monitor's order.
+pub type PartPair = (String, String);
+
+/// `contacts.csv` rows grouped by time: (row time s, [(pair, mean normal force N)]).
+type ContactRows = Vec<(f64, Vec<(PartPair, f64)>)>;
 
 use super::timeline::Marker;
 
@@ -25,7 +33,10 @@ pub struct Snapshot {
     /// Docking state name, if the scene has a mechanism.
     pub docking_state: Option<String>,
     /// Part pairs in contact (`body/part`, `body/part`).
-    pub contacts: Vec<(String, String)>,
+    pub contacts: Vec<PartPair>,
+    /// Mean normal contact force per part pair over the recorded interval (replay: the
+    /// `contacts.csv` row interval containing `t_s`; live: the last frame's steps), N.
+    pub contact_force_n: BTreeMap<PartPair, f64>,
 }
 
 /// Column indices of one body's state in `trajectory.csv`.
@@ -60,6 +71,9 @@ pub struct Recording {
     diag_cols: Vec<(usize, String)>,
     /// Events (`events.jsonl`), in file order.
     pub events: Vec<serde_json::Value>,
+    /// `contacts.csv` rows grouped by time: (row time s, [(pair, mean normal force N)]), in
+    /// time order (empty for a run recorded before `contacts.csv` existed).
+    contact_rows: ContactRows,
 }
 
 fn read(path: &Path) -> Result<String, String> {
@@ -75,6 +89,10 @@ impl Recording {
         let text = read(&dir.join("trajectory.csv"))?;
         let events_text = read(&dir.join("events.jsonl")).unwrap_or_default();
         let mut rec = Self::parse(&text, &events_text)?;
+        let contacts = dir.join("contacts.csv");
+        if contacts.exists() {
+            rec.contact_rows = parse_contacts(&read(&contacts)?)?;
+        }
         rec.dir = dir.to_path_buf();
         rec.scene_file = summary
             .get("scene_file")
@@ -183,7 +201,38 @@ impl Recording {
             guarantee_cols,
             diag_cols,
             events,
+            contact_rows: Vec::new(),
         })
+    }
+
+    /// Attaches `contacts.csv` text (as [`Recording::load`] does from the run directory).
+    pub fn with_contacts(mut self, contacts_csv: &str) -> Result<Self, String> {
+        self.contact_rows = parse_contacts(contacts_csv)?;
+        Ok(self)
+    }
+
+    /// The largest mean normal contact force in `contacts.csv`, N (0 without contacts).
+    pub fn peak_contact_force_n(&self) -> f64 {
+        self.contact_rows
+            .iter()
+            .flat_map(|(_, g)| g.iter().map(|(_, f)| *f))
+            .fold(0.0, f64::max)
+    }
+
+    /// Contact forces at `t` (clamped): those of the `contacts.csv` row that closes the
+    /// trajectory row interval (t_prev, t_row] containing `t`.
+    fn contact_forces_at(&self, t: f64) -> BTreeMap<PartPair, f64> {
+        let r = self.times_s.partition_point(|&x| x < t);
+        let Some(&t_row) = self.times_s.get(r) else {
+            return BTreeMap::new();
+        };
+        match self
+            .contact_rows
+            .binary_search_by(|(tc, _)| tc.total_cmp(&t_row))
+        {
+            Ok(k) => self.contact_rows[k].1.iter().cloned().collect(),
+            Err(_) => BTreeMap::new(),
+        }
     }
 
     /// First and last recorded times, s.
@@ -313,8 +362,43 @@ impl Recording {
                 .map(|(c, n)| (n.clone(), a[*c]))
                 .collect(),
             docking_state,
+            contact_force_n: self.contact_forces_at(t),
         }
     }
+}
+
+/// Parses `contacts.csv` (`t_s`, `a`, `b`, `force_n` and the other columns) into rows grouped
+/// by time.
+fn parse_contacts(text: &str) -> Result<ContactRows, String> {
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+    let col = |n: &str| {
+        header
+            .iter()
+            .position(|h| *h == n)
+            .ok_or_else(|| format!("contacts.csv: no column {n}"))
+    };
+    let (ct, ca, cb, cf) = (col("t_s")?, col("a")?, col("b")?, col("force_n")?);
+    let mut out: ContactRows = Vec::new();
+    for (k, line) in lines.enumerate() {
+        if line.is_empty() {
+            continue;
+        }
+        let cells: Vec<&str> = line.split(',').collect();
+        let bad = || format!("contacts.csv line {}: {line}", k + 2);
+        if cells.len() != header.len() {
+            return Err(bad());
+        }
+        let t: f64 = cells[ct].parse().map_err(|_| bad())?;
+        let f: f64 = cells[cf].parse().map_err(|_| bad())?;
+        let pair = (cells[ca].to_string(), cells[cb].to_string());
+        match out.last_mut() {
+            Some((tl, g)) if *tl == t => g.push((pair, f)),
+            Some((tl, _)) if *tl > t => return Err(format!("{}: decreasing t_s", bad())),
+            _ => out.push((t, vec![(pair, f)])),
+        }
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -368,6 +452,35 @@ mod tests {
         assert_eq!(
             r.sample(0.7).contacts,
             vec![("a/wing.panel1".to_string(), "b/cone".to_string())]
+        );
+    }
+
+    #[test]
+    fn invariant_recording_contact_forces_by_row_interval() {
+        // Rows at 0 and 1 s; contacts.csv gives the mean force over (0, 1] s.
+        let contacts = "t_s,a,b,docking,force_n,impulse_ns,jx_b_ns,jy_b_ns,jz_b_ns,in_contact\n\
+1,a/bus,b/cone,false,20,20,20,0,0,true\n\
+1,a/wing.panel1,b/cone,false,2.5,2.5,0,2.5,0,false\n";
+        let r = Recording::parse(CSV, "")
+            .unwrap()
+            .with_contacts(contacts)
+            .unwrap();
+        assert_eq!(r.peak_contact_force_n(), 20.0);
+        // At the first row no interval has closed yet.
+        assert!(r.sample(0.0).contact_force_n.is_empty());
+        for t in [0.01, 0.5, 1.0, 7.0] {
+            let f = r.sample(t).contact_force_n;
+            assert_eq!(f.len(), 2, "t = {t}");
+            assert_eq!(f[&("a/bus".to_string(), "b/cone".to_string())], 20.0);
+        }
+        let bad = "t_s,a,b,docking,force_n,impulse_ns,jx_b_ns,jy_b_ns,jz_b_ns,in_contact\n\
+1,a/bus,b/cone,false,x,1,1,0,0,true\n";
+        assert!(
+            Recording::parse(CSV, "")
+                .unwrap()
+                .with_contacts(bad)
+                .unwrap_err()
+                .contains("line 2")
         );
     }
 
