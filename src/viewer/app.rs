@@ -686,7 +686,9 @@ fn setup(
                 alpha_mode: AlphaMode::Blend,
                 cull_mode: None,
                 double_sided: true,
-                unlit: false,
+                // Unlit: a flat tint costs the software renderer a fraction of PBR shading
+                // over the many pixels a surface covers.
+                unlit: true,
                 ..default()
             })),
             Transform::from_translation(v3(com)),
@@ -701,17 +703,23 @@ fn setup(
     }
     // The laws' and guarantees' constraint surfaces (semi-transparent; a depth bias keeps a
     // surface that coincides with a collider, such as the Xu 2019 obstacle, in front of it).
+    // Spheres about a body show their inner (far) side only: one layer of tint whether the
+    // camera is outside or inside (a 10 m keep-out sphere fills the picture, and each blended
+    // layer costs the software renderer about 30 ms at 1280×720). The table prisms, which
+    // wrap colliders, are drawn two-sided.
     for s in &surfaces.list {
         use super::surfaces::Anchor;
         let [r, g, b, a] = s.rgba;
+        let sphere = matches!(s.anchor, Anchor::BodyCom(_));
         let mut e = commands.spawn((
             Mesh3d(meshes.add(s.mesh.to_mesh())),
             MeshMaterial3d(materials.add(StandardMaterial {
                 base_color: Color::srgba(r, g, b, a),
                 alpha_mode: AlphaMode::Blend,
-                cull_mode: None,
-                double_sided: true,
+                cull_mode: sphere.then_some(bevy::render::render_resource::Face::Front),
+                double_sided: !sphere,
                 depth_bias: 200.0,
+                unlit: true,
                 ..default()
             })),
             if layers.surfaces {
@@ -738,9 +746,11 @@ fn setup(
                 size[1] as f32,
                 thick.max(0.005) as f32,
             ))),
+            // Unlit: a plane under one directional light shades uniformly anyway, and the
+            // table fills much of the picture (PBR per pixel is what limits llvmpipe).
             MeshMaterial3d(materials.add(StandardMaterial {
-                base_color: Color::srgb(0.22, 0.23, 0.25),
-                perceptual_roughness: 0.3,
+                base_color: Color::srgb(0.16, 0.17, 0.19),
+                unlit: true,
                 ..default()
             })),
             Transform::from_xyz(
@@ -1640,7 +1650,12 @@ fn panel(
         );
     }
     for (n, v) in s.diagnostics.iter().take(12) {
-        let _ = writeln!(o, "{n} = {v:.5}");
+        if v.is_nan() {
+            // Not computed yet (before the first step) or not applicable now.
+            let _ = writeln!(o, "{n} = –");
+        } else {
+            let _ = writeln!(o, "{n} = {v:.5}");
+        }
     }
     if layers.surfaces {
         for l in &surfaces.legend {
