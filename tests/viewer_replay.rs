@@ -15,7 +15,7 @@
 //! contacts layer on, seen from behind the chaser. The arrow drawn carries the force `contacts.csv` gives for the row
 //! interval of that time (read here from the file), its length is that force over the printed
 //! scale, and the pixels along its projection are the arrow's orange; with the overlays off the
-//! same pixels are not.
+//! same pixels are not. A model file that is not glTF stops the viewer with an error naming it.
 //!
 //! Constraint surfaces: `xu2019_simulation` live at t = 0 with only the surfaces layer on, and
 //! with the overlays off. The surfaces are semi-transparent over whatever is behind them, so
@@ -111,14 +111,22 @@ fn screenshot_with(
     (img, side)
 }
 
-#[test]
-fn val_viewer_replay_screenshot_shows_spacecraft() {
+/// Asserts a display is there (CI runs these under `xvfb-run`) and returns a fresh, empty
+/// temporary directory named after `tag` and this process.
+fn display_and_dir(tag: &str) -> std::path::PathBuf {
     assert!(
         std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
         "no display: run this test under `xvfb-run -a` (see .ci/run)"
     );
-    let dir = std::env::temp_dir().join(format!("rpod_viewer_test_{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("{tag}_{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn val_viewer_replay_screenshot_shows_spacecraft() {
+    let dir = display_and_dir("rpod_viewer_test");
     let run = dir.join("run");
     record_free_drift(&run, 20.0);
     let png = dir.join("shot.png");
@@ -221,12 +229,7 @@ fn orange_share(img: &Png, a: [f64; 2], b: [f64; 2]) -> f64 {
 
 #[test]
 fn val_viewer_replay_draws_contact_force_arrows() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "no display: run this test under `xvfb-run -a` (see .ci/run)"
-    );
-    let dir = std::env::temp_dir().join(format!("rpod_viewer_arrows_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = display_and_dir("rpod_viewer_arrows");
     let run = dir.join("run");
     record("scenes/collision_course.ron", &run, 40.0);
     // The first contact (from events.jsonl) and the contacts.csv row that closes the recorded
@@ -376,13 +379,7 @@ fn check_picture(img: &Png, side: &serde_json::Value) {
 
 #[test]
 fn val_viewer_live_view_screenshot_shows_spacecraft() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "no display: run this test under `xvfb-run -a` (see .ci/run)"
-    );
-    let dir = std::env::temp_dir().join(format!("rpod_viewer_live_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = display_and_dir("rpod_viewer_live");
     let png = dir.join("live.png");
     let (img, side) = screenshot(&["view".as_ref(), "scenes/free_drift.ron".as_ref()], &png);
     // Paused at t = 0: the bodies drawn are where the simulation starts them.
@@ -421,13 +418,7 @@ fn shift(on: &Png, off: &Png, c: [f64; 2], r: f64) -> ([f64; 3], f64) {
 
 #[test]
 fn val_viewer_draws_constraint_surfaces() {
-    assert!(
-        std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some(),
-        "no display: run this test under `xvfb-run -a` (see .ci/run)"
-    );
-    let dir = std::env::temp_dir().join(format!("rpod_viewer_surfaces_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = display_and_dir("rpod_viewer_surfaces");
     let cmd = ["view".as_ref(), "scenes/xu2019_simulation.ron".as_ref()];
     let (on, side) = screenshot_with(&cmd, &dir.join("on.png"), &["--layers", "surfaces"]);
     let (off, _) = screenshot(&cmd, &dir.join("off.png"));
@@ -463,5 +454,28 @@ fn val_viewer_draws_constraint_surfaces() {
             );
         }
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A model file that is there but is not glTF: the viewer stops with an error naming the file
+/// and the part (the scene check only sees that the file exists).
+#[test]
+fn regress_viewer_bad_model_file_is_a_clear_error() {
+    let dir = display_and_dir("rpod_viewer_bad_model");
+    std::fs::create_dir_all(dir.join("models")).unwrap();
+    std::fs::write(dir.join("models/hga_dish.gltf"), "this is not glTF\n").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_rpod"))
+        .args(["view", "scenes/free_drift.ron", "--frames", "600"])
+        .args(["--width", "320", "--height", "180", "--no-overlays"])
+        .env("RPOD_ASSETS", &dir)
+        .output()
+        .expect("rpod runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "a broken model was accepted");
+    assert!(
+        err.contains("model models/hga_dish.gltf of part target/antenna"),
+        "stderr: {err}"
+    );
+    assert!(!err.contains("panicked"), "stderr: {err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

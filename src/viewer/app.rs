@@ -880,11 +880,14 @@ fn spawn_models(
             continue;
         }
         if let bevy::asset::LoadState::Failed(e) = server.load_state(&m.gltf) {
+            // The loader's message without the backtrace Bevy appends.
+            let e = e.to_string();
             let msg = format!(
-                "model {} of part {} (under {}): {e}",
+                "model {} of part {} (under {}): {}",
                 m.path,
                 m.part,
-                crate::scene::assets_dir().display()
+                crate::scene::assets_dir().display(),
+                e.lines().next().unwrap_or_default()
             );
             eprintln!("error: {msg}");
             status.failed = Some(msg);
