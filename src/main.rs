@@ -130,6 +130,10 @@ struct WindowArgs {
     /// (out of the chaser's docking port).
     #[arg(long, default_value = "overview")]
     camera: String,
+    /// Render the 3-D view at this fraction of the window size, scaled up (0 < s ≤ 1; e.g.
+    /// 0.5 for a software renderer).
+    #[arg(long, default_value_t = 1.0)]
+    render_scale: f32,
 }
 
 #[cfg(feature = "viewer")]
@@ -141,6 +145,7 @@ impl WindowArgs {
             size_px: (self.width.max(64), self.height.max(64)),
             overlays: !self.no_overlays,
             layers: self.layers,
+            render_scale: self.render_scale,
             start_s,
             speed: self.speed,
             play: self.play,

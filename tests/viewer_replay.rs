@@ -16,6 +16,8 @@
 //! interval of that time (read here from the file), its length is that force over the printed
 //! scale, and the pixels along its projection are the arrow's orange; with the overlays off the
 //! same pixels are not. A model file that is not glTF stops the viewer with an error naming it.
+//! With `--render-scale 0.5` (the 3-D view drawn at half size and stretched to the window),
+//! the spacecraft are still where the camera projects their initial centres.
 //!
 //! Constraint surfaces: `xu2019_simulation` live at t = 0 with only the surfaces layer on, and
 //! with the overlays off. The surfaces are semi-transparent over whatever is behind them, so
@@ -477,5 +479,27 @@ fn regress_viewer_bad_model_file_is_a_clear_error() {
         "stderr: {err}"
     );
     assert!(!err.contains("panicked"), "stderr: {err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn val_viewer_half_render_scale_shows_spacecraft() {
+    let dir = display_and_dir("rpod_viewer_half");
+    let png = dir.join("half.png");
+    let (img, side) = screenshot_with(
+        &["view".as_ref(), "scenes/free_drift.ron".as_ref()],
+        &png,
+        &["--no-overlays", "--render-scale", "0.5"],
+    );
+    assert_eq!(side["t_s"].as_f64().unwrap(), 0.0);
+    let loaded = rpod::scene::load_scene_file(Path::new("scenes/free_drift.ron"), &[]).unwrap();
+    let sim = rpod::sim::Simulation::new(&loaded).unwrap();
+    for b in side["bodies"].as_array().unwrap() {
+        let s = sim.body(b["name"].as_str().unwrap()).unwrap();
+        for k in 0..3 {
+            assert!((b["centre_world_m"][k].as_f64().unwrap() - s.pos_m[k]).abs() < 1e-9);
+        }
+    }
+    check_picture(&img, &side);
     let _ = std::fs::remove_dir_all(&dir);
 }

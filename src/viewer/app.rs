@@ -41,6 +41,9 @@ pub struct ViewerOptions {
     pub play: bool,
     /// Initial camera preset: `overview`, `target`, `chaser` or `port`.
     pub camera: String,
+    /// The 3-D view is rendered at this fraction of the window's size and scaled up (the
+    /// panel stays sharp): below 1 for software renderers, which pay per pixel.
+    pub render_scale: f32,
 }
 
 impl Default for ViewerOptions {
@@ -55,6 +58,7 @@ impl Default for ViewerOptions {
             speed: 1.0,
             play: false,
             camera: "overview".into(),
+            render_scale: 1.0,
         }
     }
 }
@@ -407,7 +411,15 @@ fn check_options(opts: &ViewerOptions) -> Result<(), String> {
         ));
     }
     match opts.camera.as_str() {
-        "overview" | "target" | "chaser" | "port" => Ok(()),
+        "overview" | "target" | "chaser" | "port"
+            if opts.render_scale > 0.0 && opts.render_scale <= 1.0 =>
+        {
+            Ok(())
+        }
+        "overview" | "target" | "chaser" | "port" => Err(format!(
+            "--render-scale must be in (0, 1], got {}",
+            opts.render_scale
+        )),
         other => Err(format!(
             "--camera must be overview, target, chaser or port, got `{other}`"
         )),
@@ -519,6 +531,7 @@ fn base_app(opts: &ViewerOptions, title: &str) -> App {
         Update,
         (
             spawn_models,
+            resize_scaled_view,
             apply_pose,
             view_controls,
             camera_system,
@@ -628,6 +641,8 @@ fn setup(
     mut materials: ResMut<Assets<StandardMaterial>>,
     asset_server: Res<AssetServer>,
     mut model_status: ResMut<ModelStatus>,
+    run: Res<Run>,
+    mut images: ResMut<Assets<Image>>,
 ) {
     for (i, b) in geom.bodies.iter().enumerate() {
         commands
@@ -769,11 +784,43 @@ fn setup(
         Transform::from_xyz(3.0, 5.0, 8.0).looking_at(Vec3::ZERO, Vec3::Z),
     ));
     // No multisampling: the software renderer (llvmpipe) pays for every sample.
-    commands.spawn((
+    let mut cam = commands.spawn((
         Camera3d::default(),
         bevy::render::view::Msaa::Off,
         Transform::from_xyz(0.0, -30.0, 10.0),
     ));
+    // Render scale below 1: the 3-D view goes to an image of that fraction of the window,
+    // which a window camera shows stretched to the full window under the panel.
+    let scale = run.opts.render_scale;
+    if scale < 1.0 {
+        let (w, h) = scaled_px(run.opts.size_px, scale);
+        let image = images.add(Image::new_target_texture(
+            w,
+            h,
+            bevy::render::render_resource::TextureFormat::Rgba8UnormSrgb,
+            None,
+        ));
+        cam.insert(bevy::camera::RenderTarget::Image(image.clone().into()));
+        commands.spawn((
+            Camera2d,
+            Camera {
+                order: 1,
+                ..default()
+            },
+            bevy::render::view::Msaa::Off,
+        ));
+        commands.spawn((
+            ImageNode::new(image.clone()),
+            Node {
+                position_type: PositionType::Absolute,
+                width: Val::Percent(100.0),
+                height: Val::Percent(100.0),
+                ..default()
+            },
+            GlobalZIndex(-1),
+        ));
+        commands.insert_resource(ScaledView(image));
+    }
     commands.spawn((
         Text::new(""),
         TextFont::from_font_size(13.0),
@@ -912,6 +959,45 @@ fn spawn_models(
         }
         m.spawned = true;
         status.ready.push((m.part.clone(), m.path.clone(), count));
+    }
+}
+
+/// The image the 3-D view renders to when `--render-scale` is below 1.
+#[derive(Resource)]
+struct ScaledView(Handle<Image>);
+
+/// Image size for a window of `size_px` at `scale` (at least 16 px a side).
+fn scaled_px(size_px: (u32, u32), scale: f32) -> (u32, u32) {
+    let f = |v: u32| ((v as f32 * scale).round() as u32).max(16);
+    (f(size_px.0), f(size_px.1))
+}
+
+/// Keeps the scaled view's image at the render scale of the window's current size.
+fn resize_scaled_view(
+    view: Option<Res<ScaledView>>,
+    run: Res<Run>,
+    window: Query<&Window, With<PrimaryWindow>>,
+    mut images: ResMut<Assets<Image>>,
+) {
+    let (Some(view), Ok(w)) = (view, window.single()) else {
+        return;
+    };
+    let (iw, ih) = scaled_px(
+        (w.physical_width(), w.physical_height()),
+        run.opts.render_scale,
+    );
+    let Some(img) = images.get(&view.0) else {
+        return;
+    };
+    let size = img.texture_descriptor.size;
+    if (size.width, size.height) != (iw, ih)
+        && let Some(mut img) = images.get_mut(&view.0)
+    {
+        img.resize(bevy::render::render_resource::Extent3d {
+            width: iw,
+            height: ih,
+            depth_or_array_layers: 1,
+        });
     }
 }
 
@@ -1655,7 +1741,7 @@ fn panel(
     for (n, v) in s.diagnostics.iter().take(12) {
         if v.is_nan() {
             // Not computed yet (before the first step) or not applicable now.
-            let _ = writeln!(o, "{n} = –");
+            let _ = writeln!(o, "{n} = n/a");
         } else {
             let _ = writeln!(o, "{n} = {v:.5}");
         }
@@ -1751,20 +1837,22 @@ fn frames_and_screenshot(
             run.shot_requested = true;
             if let (Ok((cam, tf)), Ok(w)) = (camera.single(), window.single()) {
                 let gt = GlobalTransform::from(*tf);
+                // Viewport → window pixels (the scaled view's image is smaller than the window).
+                let k = cam
+                    .logical_viewport_size()
+                    .map_or(1.0, |v| w.physical_width() as f32 / v.x.max(1.0));
+                let project = |p: Vec3| cam.world_to_viewport(&gt, p).ok().map(|v| v * k);
                 let bodies: Vec<_> = geom
                     .bodies
                     .iter()
                     .zip(&cur.snap.bodies)
                     .map(|(b, (p, _))| {
                         let c = v3(p);
-                        let px = cam.world_to_viewport(&gt, c).ok();
+                        let px = project(c);
                         // Projected radius of a 0.5 m sphere about the centre of mass.
                         let right = tf.right().as_vec3();
-                        let r_px = px.and_then(|p0| {
-                            cam.world_to_viewport(&gt, c + right * 0.5)
-                                .ok()
-                                .map(|p1| (p1 - p0).length())
-                        });
+                        let r_px =
+                            px.and_then(|p0| project(c + right * 0.5).map(|p1| (p1 - p0).length()));
                         serde_json::json!({
                             "name": b.name,
                             "centre_world_m": [p.x, p.y, p.z],
@@ -1773,7 +1861,7 @@ fn frames_and_screenshot(
                         })
                     })
                     .collect();
-                let px = |p: Vec3| cam.world_to_viewport(&gt, p).ok().map(|p| [p.x, p.y]);
+                let px = |p: Vec3| project(p).map(|p| [p.x, p.y]);
                 let arrows: Vec<_> = drawn
                     .0
                     .iter()
@@ -1911,5 +1999,20 @@ mod tests {
             ..default()
         };
         assert!(check_options(&cam).is_err());
+        for (scale, ok) in [
+            (0.5, true),
+            (1.0, true),
+            (0.0, false),
+            (1.5, false),
+            (-1.0, false),
+        ] {
+            let o = ViewerOptions {
+                render_scale: scale,
+                ..default()
+            };
+            assert_eq!(check_options(&o).is_ok(), ok, "render scale {scale}");
+        }
+        assert_eq!(scaled_px((1280, 720), 0.5), (640, 360));
+        assert_eq!(scaled_px((100, 20), 0.1), (16, 16));
     }
 }
