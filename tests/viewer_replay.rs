@@ -16,6 +16,11 @@
 //! interval of that time (read here from the file), its length is that force over the printed
 //! scale, and the pixels along its projection are the arrow's orange; with the overlays off the
 //! same pixels are not. A model file that is not glTF stops the viewer with an error naming it.
+//! Port frames, LVLH axes, the Earth direction and the closest-points segment: live at t = 0
+//! (`free_drift` for the axes and the segment, `docking_aligned` for the port frames), overview
+//! camera, with those layers on; along each line's projection (its ends from the side file) at
+//! least 90 % of the sampled points have the line's hue (the lines are drawn in front of the
+//! meshes), and without overlays at least 40 points in 100 fewer do.
 //! With `--render-scale 0.5` (the 3-D view drawn at half size and stretched to the window),
 //! the spacecraft are still where the camera projects their initial centres.
 //!
@@ -501,5 +506,116 @@ fn val_viewer_half_render_scale_shows_spacecraft() {
         }
     }
     check_picture(&img, &side);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Hue (deg), saturation and value of an sRGB colour (components 0–1).
+fn hsv(c: [f64; 3]) -> (f64, f64, f64) {
+    let max = c.iter().cloned().fold(0.0, f64::max);
+    let min = c.iter().cloned().fold(1.0, f64::min);
+    let d = max - min;
+    let h = if d == 0.0 {
+        0.0
+    } else if max == c[0] {
+        60.0 * (((c[1] - c[2]) / d).rem_euclid(6.0))
+    } else if max == c[1] {
+        60.0 * ((c[2] - c[0]) / d + 2.0)
+    } else {
+        60.0 * ((c[0] - c[1]) / d + 4.0)
+    };
+    (h, if max > 0.0 { d / max } else { 0.0 }, max)
+}
+
+/// Share of points along a projected line (40 % to 95 % of its length) with a pixel within
+/// one pixel of the line's hue (±25°, saturated and bright enough to be a line, not shading).
+fn hue_share(img: &Png, a: [f64; 2], b: [f64; 2], srgb: [f64; 3]) -> f64 {
+    let (h0, _, _) = hsv(srgb);
+    let n = 30;
+    let hits = (0..n)
+        .filter(|k| {
+            let s = 0.4 + 0.55 * *k as f64 / (n - 1) as f64;
+            let (x, y) = (a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]));
+            (-1..=1).any(|dy| {
+                (-1..=1).any(|dx| {
+                    let (px, py) = (x as i64 + dx, y as i64 + dy);
+                    if px < 0 || py < 0 || px as usize >= img.w || py as usize >= img.h {
+                        return false;
+                    }
+                    let p = img
+                        .px(px as usize, py as usize)
+                        .map(|v| f64::from(v) / 255.0);
+                    let (h, sat, val) = hsv(p);
+                    let dh = (h - h0).abs();
+                    dh.min(360.0 - dh) < 25.0 && sat > 0.45 && val > 0.35
+                })
+            })
+        })
+        .count();
+    hits as f64 / n as f64
+}
+
+/// Renders `scene` live at t = 0 from `camera` with `layers` and without overlays, checks
+/// every line of the side file that is on screen and at least 20 px long, and returns the
+/// kinds of line checked (`port`, `LVLH`, `Earth`, `closest`).
+fn check_lines(dir: &Path, scene: &str, camera: &str, layers: &str) -> Vec<String> {
+    let cmd = ["view".as_ref(), scene.as_ref()];
+    let (on, side) = screenshot_with(
+        &cmd,
+        &dir.join("on.png"),
+        &["--layers", layers, "--camera", camera],
+    );
+    let (off, _) = screenshot_with(
+        &cmd,
+        &dir.join("off.png"),
+        &["--no-overlays", "--camera", camera],
+    );
+    let mut seen = Vec::new();
+    for l in side["lines"].as_array().unwrap() {
+        let what = l["what"].as_str().unwrap();
+        let (Some(a), Some(b)) = (l["start_px"].as_array(), l["end_px"].as_array()) else {
+            continue; // behind the camera
+        };
+        let a = [a[0].as_f64().unwrap(), a[1].as_f64().unwrap()];
+        let b = [b[0].as_f64().unwrap(), b[1].as_f64().unwrap()];
+        let inside = |p: [f64; 2]| p[0] >= 0.0 && p[1] >= 0.0 && p[0] < 960.0 && p[1] < 540.0;
+        let px_len = (b[0] - a[0]).hypot(b[1] - a[1]);
+        if !(inside(a) && inside(b)) || px_len < 20.0 {
+            continue; // off screen or end-on: nothing to sample
+        }
+        let c: Vec<f64> = l["srgb"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        let c = [c[0], c[1], c[2]];
+        let (s_on, s_off) = (hue_share(&on, a, b, c), hue_share(&off, a, b, c));
+        println!(
+            "{scene} {what}: {px_len:.0} px, {:.0} % of its hue drawn, {:.0} % without overlays",
+            100.0 * s_on,
+            100.0 * s_off
+        );
+        // These lines are drawn in front of the meshes (the LVLH y axis of free_drift runs
+        // inside the +y wing): nearly every sample shows the line, other lines aside.
+        assert!(
+            s_on >= 0.9 && s_on - s_off >= 0.4,
+            "{scene} {what}: {s_on} on, {s_off} off"
+        );
+        seen.push(what.split(' ').next().unwrap().to_string());
+    }
+    seen
+}
+
+#[test]
+fn val_viewer_draws_frames_axes_and_closest_segment() {
+    let dir = display_and_dir("rpod_viewer_lines");
+    // Far out: the LVLH axes, the Earth direction and the 40 m closest-points segment.
+    let seen = check_lines(&dir, "scenes/free_drift.ron", "overview", "lvlh,closest");
+    for k in ["LVLH", "Earth", "closest"] {
+        assert!(seen.iter().any(|s| s == k), "no {k} line checked");
+    }
+    // Close up: the two docking-port frames.
+    let seen = check_lines(&dir, "scenes/docking_aligned.ron", "overview", "ports");
+    assert!(seen.iter().filter(|s| *s == "port").count() >= 2);
     let _ = std::fs::remove_dir_all(&dir);
 }

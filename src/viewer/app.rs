@@ -138,10 +138,12 @@ impl ContactForces {
     }
 }
 
-/// Contact points and force arrows: drawn in front of the meshes (an arrow is the force on the
-/// second part, so it starts at the contact and points into that part), 3 px wide.
+/// Lines drawn in front of the meshes, 3 px wide: contact points and force arrows (an arrow is
+/// the force on the second part, so it starts at the contact and points into that part),
+/// port frames, the LVLH triad and the Earth direction (at the reference origin, usually
+/// inside the target) and the closest-points segment.
 #[derive(Default, Reflect, GizmoConfigGroup)]
-struct ContactGizmos;
+struct FrontGizmos;
 
 /// A part drawn as a glTF model (on the model's root entity, a child of the body).
 #[derive(Component, Clone)]
@@ -168,6 +170,28 @@ struct ModelStatus {
 /// The force arrows drawn this frame: (part a, part b, force N, start and end, world m).
 #[derive(Resource, Default)]
 struct DrawnArrows(Vec<(String, String, f64, Vec3, Vec3)>);
+
+/// Draws a line (or an arrow) and notes it in `lines`.
+fn line(
+    g: &mut Gizmos<FrontGizmos>,
+    lines: &mut DrawnLines,
+    what: String,
+    (a, b): (Vec3, Vec3),
+    c: Color,
+    arrow: bool,
+) {
+    if arrow {
+        g.arrow(a, b, c);
+    } else {
+        g.line(a, b, c);
+    }
+    lines.0.push((what, c, a, b));
+}
+
+/// Other overlay lines drawn this frame, for the screenshot side file: (what, colour, start
+/// and end, world m) — port axes, LVLH axes, the Earth direction, the closest-points segment.
+#[derive(Resource, Default)]
+struct DrawnLines(Vec<(String, Color, Vec3, Vec3)>);
 
 /// Live play/pause and speed.
 #[derive(Resource)]
@@ -482,7 +506,7 @@ fn base_app(opts: &ViewerOptions, title: &str) -> App {
         ..default()
     })
     .insert_gizmo_config(
-        ContactGizmos,
+        FrontGizmos,
         GizmoConfig {
             depth_bias: -1.0,
             line: GizmoLineConfig {
@@ -495,6 +519,7 @@ fn base_app(opts: &ViewerOptions, title: &str) -> App {
     .insert_resource(Layers::from_options(opts))
     .insert_resource(ModelStatus::default())
     .insert_resource(DrawnArrows::default())
+    .insert_resource(DrawnLines::default())
     .insert_resource(CameraRig {
         preset: match opts.camera.as_str() {
             "target" => Preset::OrbitTarget,
@@ -1486,10 +1511,13 @@ fn overlays(
     surfaces: Res<Surfaces>,
     forces: Option<Res<ContactForces>>,
     mut arrows: ResMut<DrawnArrows>,
+    mut lines: ResMut<DrawnLines>,
     mut gizmos: Gizmos,
-    mut front: Gizmos<ContactGizmos>,
+    mut front: Gizmos<FrontGizmos>,
 ) {
     arrows.0.clear();
+    lines.0.clear();
+
     let bodies = &cur.snap.bodies;
     if layers.surfaces {
         // The table curves the laws keep the chaser's centre of mass out of, at its height.
@@ -1516,13 +1544,38 @@ fn overlays(
                 continue;
             };
             let pose = b.body_pose(p, a);
-            for (_, o, ax) in &b.ports {
+            for (name, o, ax) in &b.ports {
                 let origin = v3(&(pose * nalgebra::Point3::from(*o)).coords);
                 let axw = a * ax;
                 let (u, v) = crate::scene::parts::perpendicular_basis(&axw);
-                gizmos.arrow(origin, origin + v3(&axw) * 0.6, Color::srgb(1.0, 0.3, 0.3));
-                gizmos.line(origin, origin + v3(&u) * 0.3, Color::srgb(0.3, 1.0, 0.3));
-                gizmos.line(origin, origin + v3(&v) * 0.3, Color::srgb(0.3, 0.5, 1.0));
+                let what = |k: &str| format!("port {}/{name} {k}", b.name);
+                let end = origin + v3(&axw) * 0.6;
+                line(
+                    &mut front,
+                    &mut lines,
+                    what("axis"),
+                    (origin, end),
+                    Color::srgb(1.0, 0.3, 0.3),
+                    true,
+                );
+                let end = origin + v3(&u) * 0.3;
+                line(
+                    &mut front,
+                    &mut lines,
+                    what("u"),
+                    (origin, end),
+                    Color::srgb(0.3, 1.0, 0.3),
+                    false,
+                );
+                let end = origin + v3(&v) * 0.3;
+                line(
+                    &mut front,
+                    &mut lines,
+                    what("v"),
+                    (origin, end),
+                    Color::srgb(0.3, 0.5, 1.0),
+                    false,
+                );
             }
         }
     }
@@ -1535,11 +1588,40 @@ fn overlays(
         let y = z.cross(&x);
         let len = 4.0;
         let o = Vec3::ZERO;
-        gizmos.arrow(o, v3(&x) * len, Color::srgb(1.0, 0.2, 0.2));
-        gizmos.arrow(o, v3(&y) * len, Color::srgb(0.2, 1.0, 0.2));
-        gizmos.arrow(o, v3(&z) * len, Color::srgb(0.3, 0.4, 1.0));
+        line(
+            &mut front,
+            &mut lines,
+            "LVLH x".into(),
+            (o, v3(&x) * len),
+            Color::srgb(1.0, 0.2, 0.2),
+            true,
+        );
+        line(
+            &mut front,
+            &mut lines,
+            "LVLH y".into(),
+            (o, v3(&y) * len),
+            Color::srgb(0.2, 1.0, 0.2),
+            true,
+        );
+        line(
+            &mut front,
+            &mut lines,
+            "LVLH z".into(),
+            (o, v3(&z) * len),
+            Color::srgb(0.3, 0.4, 1.0),
+            true,
+        );
         // Direction to the Earth's centre.
-        gizmos.arrow(o, -v3(&x) * 2.5 * len, Color::srgb(0.2, 0.9, 1.0));
+        let earth = -v3(&x) * 2.5 * len;
+        line(
+            &mut front,
+            &mut lines,
+            "Earth".into(),
+            (o, earth),
+            Color::srgb(0.2, 0.9, 1.0),
+            true,
+        );
     }
     if layers.trails {
         let colors = [Color::srgb(0.9, 0.7, 0.3), Color::srgb(0.6, 0.8, 1.0)];
@@ -1595,7 +1677,14 @@ fn overlays(
         let color = margin_color(margin, cur.snap.min_distance_m);
         match geom.closest_points(pa, pb, bodies) {
             Some((p1, p2)) => {
-                gizmos.line(v3(&p1), v3(&p2), color);
+                line(
+                    &mut front,
+                    &mut lines,
+                    "closest".into(),
+                    (v3(&p1), v3(&p2)),
+                    color,
+                    false,
+                );
                 gizmos.sphere(Isometry3d::from_translation(v3(&p1)), 0.05, color);
                 gizmos.sphere(Isometry3d::from_translation(v3(&p2)), 0.05, color);
             }
@@ -1799,6 +1888,7 @@ fn frames_and_screenshot(
     window: Query<&Window, With<PrimaryWindow>>,
     waiting: Res<PipelinesWaiting>,
     drawn: Res<DrawnArrows>,
+    drawn_lines: Res<DrawnLines>,
     forces: Option<Res<ContactForces>>,
     models: Res<ModelStatus>,
     surfaces: Res<Surfaces>,
@@ -1910,6 +2000,15 @@ fn frames_and_screenshot(
                     "t_s": cur.snap.t_s,
                     "bodies": bodies,
                     "force_arrows": arrows,
+                    "lines": drawn_lines.0.iter().map(|(what, c, a, b)| {
+                        let c = c.to_srgba();
+                        serde_json::json!({
+                            "what": what,
+                            "srgb": [c.red, c.green, c.blue],
+                            "start_px": px(*a),
+                            "end_px": px(*b),
+                        })
+                    }).collect::<Vec<_>>(),
                     "models": models.ready.iter().map(|(part, path, n)| serde_json::json!({
                         "part": part, "path": path, "meshes": n,
                     })).collect::<Vec<_>>(),
