@@ -316,6 +316,8 @@ struct Run {
     ready_streak: u32,
     /// Wall time of the first counted frame (for the frame rate), s.
     t_first: Option<f64>,
+    /// Simulated time shown at that frame, s.
+    sim_first_s: f64,
     frames_since_first: u32,
 }
 
@@ -542,6 +544,7 @@ fn base_app(opts: &ViewerOptions, title: &str) -> App {
         retries: 0,
         ready_streak: 0,
         t_first: None,
+        sim_first_s: 0.0,
         frames_since_first: 0,
     })
     .add_systems(Startup, setup);
@@ -1905,6 +1908,7 @@ fn frames_and_screenshot(
     // Skip the first frames (pipeline compilation) for the rate.
     if run.frame == 30 {
         run.t_first = Some(now);
+        run.sim_first_s = cur.snap.t_s;
     } else if run.t_first.is_some() {
         run.frames_since_first += 1;
     }
@@ -2053,6 +2057,14 @@ fn frames_and_screenshot(
                 "rendered {} frames; {frames} frames after warm-up in {dt:.2} s = {:.1} frames/s",
                 run.frame,
                 f64::from(frames) / dt
+            );
+            let sim = cur.snap.t_s - run.sim_first_s;
+            println!(
+                "simulated time advanced {sim:.3} s in those {dt:.2} s = {:.2}x real time \
+                 (asked {}x{})",
+                sim / dt,
+                run.opts.speed,
+                if run.opts.play { "" } else { ", paused" }
             );
         }
     }
