@@ -2124,6 +2124,19 @@ mod tests {
             assert_eq!(check_options(&o).is_ok(), ok, "render scale {scale}");
         }
         assert_eq!(scaled_px((1280, 720), 0.5), (640, 360));
+    }
+
+    #[test]
+    fn invariant_margin_colour() {
+        // A 1 m clearance guarantee (threshold = distance − margin = 1 m): violated red, within
+        // its own threshold again amber, clear green; no metre guarantee, white.
+        let red = Color::srgb(1.0, 0.15, 0.15);
+        let amber = Color::srgb(1.0, 0.7, 0.1);
+        let green = Color::srgb(0.2, 1.0, 0.3);
+        assert_eq!(margin_color(-0.2, 0.8), red);
+        assert_eq!(margin_color(0.5, 1.5), amber);
+        assert_eq!(margin_color(1.5, 2.5), green);
+        assert_eq!(margin_color(f64::NAN, 3.0), Color::WHITE);
         assert_eq!(scaled_px((100, 20), 0.1), (16, 16));
     }
 }
