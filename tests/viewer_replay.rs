@@ -387,19 +387,25 @@ fn check_picture(img: &Png, side: &serde_json::Value) {
 #[test]
 fn val_viewer_live_view_screenshot_shows_spacecraft() {
     let dir = display_and_dir("rpod_viewer_live");
-    let png = dir.join("live.png");
-    let (img, side) = screenshot(&["view".as_ref(), "scenes/free_drift.ron".as_ref()], &png);
-    // Paused at t = 0: the bodies drawn are where the simulation starts them.
-    assert_eq!(side["t_s"].as_f64().unwrap(), 0.0);
     let loaded = rpod::scene::load_scene_file(Path::new("scenes/free_drift.ron"), &[]).unwrap();
     let sim = rpod::sim::Simulation::new(&loaded).unwrap();
-    for b in side["bodies"].as_array().unwrap() {
-        let s = sim.body(b["name"].as_str().unwrap()).unwrap();
-        for k in 0..3 {
-            assert!((b["centre_world_m"][k].as_f64().unwrap() - s.pos_m[k]).abs() < 1e-9);
+    // Full size, and the 3-D view drawn at half size and stretched to the window.
+    for (png, extra) in [
+        ("live.png", &["--no-overlays"][..]),
+        ("half.png", &["--no-overlays", "--render-scale", "0.5"][..]),
+    ] {
+        let cmd = ["view".as_ref(), "scenes/free_drift.ron".as_ref()];
+        let (img, side) = screenshot_with(&cmd, &dir.join(png), extra);
+        // Paused at t = 0: the bodies drawn are where the simulation starts them.
+        assert_eq!(side["t_s"].as_f64().unwrap(), 0.0);
+        for b in side["bodies"].as_array().unwrap() {
+            let s = sim.body(b["name"].as_str().unwrap()).unwrap();
+            for k in 0..3 {
+                assert!((b["centre_world_m"][k].as_f64().unwrap() - s.pos_m[k]).abs() < 1e-9);
+            }
         }
+        check_picture(&img, &side);
     }
-    check_picture(&img, &side);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -484,28 +490,6 @@ fn regress_viewer_bad_model_file_is_a_clear_error() {
         "stderr: {err}"
     );
     assert!(!err.contains("panicked"), "stderr: {err}");
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
-#[test]
-fn val_viewer_half_render_scale_shows_spacecraft() {
-    let dir = display_and_dir("rpod_viewer_half");
-    let png = dir.join("half.png");
-    let (img, side) = screenshot_with(
-        &["view".as_ref(), "scenes/free_drift.ron".as_ref()],
-        &png,
-        &["--no-overlays", "--render-scale", "0.5"],
-    );
-    assert_eq!(side["t_s"].as_f64().unwrap(), 0.0);
-    let loaded = rpod::scene::load_scene_file(Path::new("scenes/free_drift.ron"), &[]).unwrap();
-    let sim = rpod::sim::Simulation::new(&loaded).unwrap();
-    for b in side["bodies"].as_array().unwrap() {
-        let s = sim.body(b["name"].as_str().unwrap()).unwrap();
-        for k in 0..3 {
-            assert!((b["centre_world_m"][k].as_f64().unwrap() - s.pos_m[k]).abs() < 1e-9);
-        }
-    }
-    check_picture(&img, &side);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -1591,30 +1591,14 @@ fn overlays(
         let y = z.cross(&x);
         let len = 4.0;
         let o = Vec3::ZERO;
-        line(
-            &mut front,
-            &mut lines,
-            "LVLH x".into(),
-            (o, v3(&x) * len),
-            Color::srgb(1.0, 0.2, 0.2),
-            true,
-        );
-        line(
-            &mut front,
-            &mut lines,
-            "LVLH y".into(),
-            (o, v3(&y) * len),
-            Color::srgb(0.2, 1.0, 0.2),
-            true,
-        );
-        line(
-            &mut front,
-            &mut lines,
-            "LVLH z".into(),
-            (o, v3(&z) * len),
-            Color::srgb(0.3, 0.4, 1.0),
-            true,
-        );
+        for (name, axis, c) in [
+            ("LVLH x", x, Color::srgb(1.0, 0.2, 0.2)),
+            ("LVLH y", y, Color::srgb(0.2, 1.0, 0.2)),
+            ("LVLH z", z, Color::srgb(0.3, 0.4, 1.0)),
+        ] {
+            let end = v3(&axis) * len;
+            line(&mut front, &mut lines, name.into(), (o, end), c, true);
+        }
         // Direction to the Earth's centre.
         let earth = -v3(&x) * 2.5 * len;
         line(
