@@ -211,13 +211,17 @@ fn orange(p: [u8; 3]) -> bool {
     r > 150 && r - g > 50 && g - b > 25
 }
 
-/// Share of the points along the projected segment (from 25 % to 90 % of its length, away
-/// from the contact sphere and the head) with an orange pixel within one pixel.
-fn orange_share(img: &Png, a: [f64; 2], b: [f64; 2]) -> f64 {
-    let n = 40;
+/// Share of `n` points spread from `from` to `to` of the way along the projected segment a → b
+/// with a pixel within one pixel that satisfies `hit`.
+fn share_along(
+    img: &Png,
+    (a, b): ([f64; 2], [f64; 2]),
+    (from, to, n): (f64, f64, usize),
+    hit: impl Fn([u8; 3]) -> bool,
+) -> f64 {
     let hits = (0..n)
         .filter(|k| {
-            let s = 0.25 + 0.65 * *k as f64 / (n - 1) as f64;
+            let s = from + (to - from) * *k as f64 / (n - 1) as f64;
             let (x, y) = (a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]));
             (-1..=1).any(|dy| {
                 (-1..=1).any(|dx| {
@@ -226,12 +230,18 @@ fn orange_share(img: &Png, a: [f64; 2], b: [f64; 2]) -> f64 {
                         && py >= 0
                         && (px as usize) < img.w
                         && (py as usize) < img.h
-                        && orange(img.px(px as usize, py as usize))
+                        && hit(img.px(px as usize, py as usize))
                 })
             })
         })
         .count();
     hits as f64 / n as f64
+}
+
+/// Share of 40 points from 25 % to 90 % of the arrow (away from the contact sphere and the
+/// head) with an orange pixel within one pixel.
+fn orange_share(img: &Png, a: [f64; 2], b: [f64; 2]) -> f64 {
+    share_along(img, (a, b), (0.25, 0.9, 40), orange)
 }
 
 #[test]
@@ -510,32 +520,15 @@ fn hsv(c: [f64; 3]) -> (f64, f64, f64) {
     (h, if max > 0.0 { d / max } else { 0.0 }, max)
 }
 
-/// Share of points along a projected line (40 % to 95 % of its length) with a pixel within
-/// one pixel of the line's hue (±25°, saturated and bright enough to be a line, not shading).
+/// Share of 30 points from 40 % to 95 % of a projected line with a pixel within one pixel of
+/// the line's hue (±25°, saturated and bright enough to be a line, not shading).
 fn hue_share(img: &Png, a: [f64; 2], b: [f64; 2], srgb: [f64; 3]) -> f64 {
     let (h0, _, _) = hsv(srgb);
-    let n = 30;
-    let hits = (0..n)
-        .filter(|k| {
-            let s = 0.4 + 0.55 * *k as f64 / (n - 1) as f64;
-            let (x, y) = (a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]));
-            (-1..=1).any(|dy| {
-                (-1..=1).any(|dx| {
-                    let (px, py) = (x as i64 + dx, y as i64 + dy);
-                    if px < 0 || py < 0 || px as usize >= img.w || py as usize >= img.h {
-                        return false;
-                    }
-                    let p = img
-                        .px(px as usize, py as usize)
-                        .map(|v| f64::from(v) / 255.0);
-                    let (h, sat, val) = hsv(p);
-                    let dh = (h - h0).abs();
-                    dh.min(360.0 - dh) < 25.0 && sat > 0.45 && val > 0.35
-                })
-            })
-        })
-        .count();
-    hits as f64 / n as f64
+    share_along(img, (a, b), (0.4, 0.95, 30), |p| {
+        let (h, sat, val) = hsv(p.map(|v| f64::from(v) / 255.0));
+        let dh = (h - h0).abs();
+        dh.min(360.0 - dh) < 25.0 && sat > 0.45 && val > 0.35
+    })
 }
 
 /// Renders `scene` live at t = 0 from `camera` with `layers` and without overlays, checks

@@ -1551,34 +1551,15 @@ fn overlays(
                 let origin = v3(&(pose * nalgebra::Point3::from(*o)).coords);
                 let axw = a * ax;
                 let (u, v) = crate::scene::parts::perpendicular_basis(&axw);
-                let what = |k: &str| format!("port {}/{name} {k}", b.name);
-                let end = origin + v3(&axw) * 0.6;
-                line(
-                    &mut front,
-                    &mut lines,
-                    what("axis"),
-                    (origin, end),
-                    Color::srgb(1.0, 0.3, 0.3),
-                    true,
-                );
-                let end = origin + v3(&u) * 0.3;
-                line(
-                    &mut front,
-                    &mut lines,
-                    what("u"),
-                    (origin, end),
-                    Color::srgb(0.3, 1.0, 0.3),
-                    false,
-                );
-                let end = origin + v3(&v) * 0.3;
-                line(
-                    &mut front,
-                    &mut lines,
-                    what("v"),
-                    (origin, end),
-                    Color::srgb(0.3, 0.5, 1.0),
-                    false,
-                );
+                for (k, dir, len, c, arrow) in [
+                    ("axis", axw, 0.6, Color::srgb(1.0, 0.3, 0.3), true),
+                    ("u", u, 0.3, Color::srgb(0.3, 1.0, 0.3), false),
+                    ("v", v, 0.3, Color::srgb(0.3, 0.5, 1.0), false),
+                ] {
+                    let what = format!("port {}/{name} {k}", b.name);
+                    let end = origin + v3(&dir) * len;
+                    line(&mut front, &mut lines, what, (origin, end), c, arrow);
+                }
             }
         }
     }
