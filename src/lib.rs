@@ -10,6 +10,7 @@ pub mod actuation;
 #[cfg(feature = "sim")]
 pub mod bench;
 pub mod control;
+pub mod environment;
 pub mod geometry;
 pub mod guarantee;
 pub mod math;

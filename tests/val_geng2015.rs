@@ -22,6 +22,7 @@ use rpod::control::geng2015::{
     BodyStateEci, Geng2015Controller, Geng2015Disturbances, Geng2015Law, Geng2015Obs,
     gravity_gradient_torque_nm, relative_state,
 };
+use rpod::control::geng2015::{Geng2015Loop, observation};
 use rpod::orbit::constants::MU_EARTH_M3_S2;
 use rpod::orbit::kepler::ClassicalElements;
 use rpod::reproduce::geng2015::{
@@ -30,7 +31,6 @@ use rpod::reproduce::geng2015::{
 };
 use rpod::scene::{load_scene_file, load_scene_str};
 use rpod::sim::Simulation;
-use rpod::sim::laws::geng2015::{Geng2015Runtime, observation};
 use std::sync::OnceLock;
 
 fn eci(a_deg: [f64; 3]) -> (Vector3<f64>, Vector3<f64>) {
@@ -87,10 +87,8 @@ fn val_geng2015_table1_initial_states() {
             assert!((ws_body - Vector3::z() * ns).norm() < 1e-11);
             // The ports start 36.6 m apart.
             let rel = relative_state(
-                &sim.app.world().resource::<Geng2015Runtime>().loops[0]
-                    .controller
-                    .params,
-                &observation(0.0, (r0, v0), &s, &t),
+                &sim.law::<Geng2015Loop>(0).unwrap().controller.params,
+                &observation(0.0, (r0, v0), &(&s).into(), &(&t).into()),
             );
             assert!(
                 (rel.rho_m.norm() - 36.55).abs() < 0.1,
@@ -179,10 +177,12 @@ fn val_geng2015_wiring_matches_independent_integration() {
     let mut obs = observation(
         0.0,
         (r0, v0),
-        &sim.body("chaser").unwrap(),
-        &sim.body("target").unwrap(),
+        &(&sim.body("chaser").unwrap()).into(),
+        &(&sim.body("target").unwrap()).into(),
     );
-    let params = sim.app.world().resource::<Geng2015Runtime>().loops[0]
+    let params = sim
+        .law::<Geng2015Loop>(0)
+        .unwrap()
         .controller
         .params
         .clone();
@@ -238,8 +238,8 @@ fn val_geng2015_wiring_matches_independent_integration() {
         let sim_obs = observation(
             sim.t_s(),
             reference,
-            &sim.body("chaser").unwrap(),
-            &sim.body("target").unwrap(),
+            &(&sim.body("chaser").unwrap()).into(),
+            &(&sim.body("target").unwrap()).into(),
         );
         let ref_obs = Geng2015Obs {
             t_s: sim.t_s(),
@@ -262,8 +262,8 @@ fn val_geng2015_wiring_matches_independent_integration() {
         &observation(
             sim.t_s(),
             sim.reference_state().unwrap(),
-            &sim.body("chaser").unwrap(),
-            &sim.body("target").unwrap(),
+            &(&sim.body("chaser").unwrap()).into(),
+            &(&sim.body("target").unwrap()).into(),
         ),
     );
     assert!(end.rho_m.norm() < start - 5.0, "the chaser closed in");
@@ -593,9 +593,7 @@ fn val_geng2015_inertia_scenes() {
                     (d(tb.inertia_kg_m2.matrix()) - jt * kt).norm() < 1e-9,
                     "{tag}"
                 );
-                let p = &sim.app.world().resource::<Geng2015Runtime>().loops[0]
-                    .controller
-                    .params;
+                let p = &sim.law::<Geng2015Loop>(0).unwrap().controller.params;
                 assert_eq!(d(p.chaser_inertia_kg_m2), js);
                 assert_eq!(d(p.target_inertia_kg_m2), jt);
                 let nominal = load_scene_file(&scene_file(law, form, None), &[]).unwrap();

@@ -12,12 +12,12 @@
 //! computed chaser–wing distances in the campaign.
 
 use nalgebra::Vector3;
+use rpod::control::guo2016::Guo2016Instance;
 use rpod::control::guo2016::Guo2016Params;
 use rpod::orbit::constants::MU_EARTH_M3_S2;
 use rpod::reproduce::guo2016 as rep;
 use rpod::scene::load_scene_str;
 use rpod::sim::Simulation;
-use rpod::sim::laws::guo2016::Guo2016Controllers;
 
 fn h_closed_form(r: &Vector3<f64>, a: f64, tan_theta: f64) -> f64 {
     r.x.powi(3) * tan_theta * tan_theta / (2.0 * a - r.x) - r.y * r.y - r.z * r.z
@@ -32,7 +32,7 @@ fn sim_of(file: &str) -> Simulation {
 fn val_guo2016_section5_initial_state() {
     let mut sim = sim_of("scenes/guo2016_corridor.ron");
     sim.step(1);
-    let c = sim.app.world().resource::<Guo2016Controllers>().list[0].clone();
+    let c = sim.law::<Guo2016Instance>(0).unwrap().clone();
     let d = c.diagnostics.unwrap();
     // r1(0) = r0 of the paper, target frame (target at rest at the origin, identity attitude).
     let r0 = Vector3::new(14.9, 17.1, 37.7);
@@ -51,7 +51,12 @@ fn val_guo2016_section5_initial_state() {
     let r_b = Vector3::new(d.x[3], d.x[4], d.x[5]) + Vector3::new(2.0, 0.0, 0.0);
     assert!((r_b.norm() - r0.norm()).abs() < 1e-12);
     // Disturbance torque at t = 0: A cos(0) = [1, 2, 3]·1e-3 N·m, and n = √(μ/a³).
-    assert!((c.disturbance_body_nm - Vector3::new(1e-3, 2e-3, 3e-3)).norm() < 1e-15);
+    let dist = sim
+        .controllers()
+        .disturbance::<rpod::control::guo2016::Guo2016Disturbance>(0)
+        .unwrap()
+        .last_body_nm;
+    assert!((dist - Vector3::new(1e-3, 2e-3, 3e-3)).norm() < 1e-15);
     let n = (MU_EARTH_M3_S2 / 7.178e6f64.powi(3)).sqrt();
     assert!(((c.disturbance_rate_rad_s - n) / n).abs() < 1e-9);
     // Law parameters: the paper's gains, mass and inertia from the chaser body.
@@ -94,9 +99,7 @@ fn trace(sim: &mut Simulation, steps: u64) -> Trace {
     };
     for k in 0..steps {
         sim.step(1);
-        let d = sim.app.world().resource::<Guo2016Controllers>().list[0]
-            .diagnostics
-            .unwrap();
+        let d = sim.law::<Guo2016Instance>(0).unwrap().diagnostics.unwrap();
         if k == 0 {
             t.x0.copy_from_slice(d.x.as_slice());
             t.s0 = Vector3::new(d.s[3], d.s[4], d.s[5]);
@@ -364,7 +367,7 @@ fn val_guo2016_command_reaches_the_chaser_in_world_axes() {
     let s0 = sim.body("chaser").unwrap();
     sim.step(1);
     let s1 = sim.body("chaser").unwrap();
-    let c = sim.app.world().resource::<Guo2016Controllers>().list[0].clone();
+    let c = sim.law::<Guo2016Instance>(0).unwrap().clone();
     let dt = 0.01;
     let p = &c.law.params;
     let dv = s1.vel_m_s - s0.vel_m_s;
@@ -378,7 +381,12 @@ fn val_guo2016_command_reaches_the_chaser_in_world_axes() {
     assert!(want.norm() > 100.0 * grav_bound);
     assert!((dv - want).norm() < grav_bound, "{}", (dv - want).norm());
     let j_inv = p.chaser_inertia_body_kg_m2.try_inverse().unwrap();
-    let wdot = j_inv * (c.command.torque_body_nm + c.disturbance_body_nm);
+    let dist = sim
+        .controllers()
+        .disturbance::<rpod::control::guo2016::Guo2016Disturbance>(0)
+        .unwrap()
+        .last_body_nm;
+    let wdot = j_inv * (c.command.torque_body_nm + dist);
     let want_w = s0.att * wdot * dt;
     let err = (s1.omega_rad_s - want_w).norm();
     let gyro =

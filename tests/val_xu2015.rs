@@ -171,10 +171,8 @@ fn val_xu2015_thrust_never_above_limit() {
             let a_c = (s1.vel_m_s - s0.vel_m_s) / dt - (ag0 + ag1) * 0.5;
             let f_tof = dcm_eci_from_tof_state(&r0, &v0).transpose() * a_c * m_c;
             let cmd = sim
-                .app
-                .world()
-                .resource::<rpod::sim::laws::xu2015::Xu2015Loops>()
-                .0[0]
+                .law::<rpod::control::xu2015::Xu2015Loop>(0)
+                .unwrap()
                 .thrust_tof_n;
             worst = worst.max(f_tof.amax());
             dev_max = dev_max.max((f_tof - cmd).amax());

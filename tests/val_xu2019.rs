@@ -17,13 +17,13 @@
 
 use nalgebra::{Vector2, Vector3};
 use rpod::actuation::thrusters::{G0_M_S2, ThrusterParams};
+use rpod::control::xu2019::Xu2019Instance;
 use rpod::control::xu2019::{Xu2019Controller, Xu2019Observation, Xu2019Params};
 use rpod::reproduce::xu2019::{
     EXPERIMENT_SCENE, GOAL_ANGLE_TOL_DEG, GOAL_POS_TOL_M, SIMULATION_SCENE, claims, compute,
 };
 use rpod::scene::load_scene_str;
 use rpod::sim::Simulation;
-use rpod::sim::laws::xu2019::{Xu2019Controllers, yaw_rad};
 
 fn sim(text: &str) -> Simulation {
     let loaded = load_scene_str(text, "xu2019.ron", &[]).unwrap();
@@ -56,7 +56,7 @@ fn val_xu2019_ideal_case_matches_independent_integration() {
     let c = s.body("chaser").unwrap();
     let (ep, ea) = (
         (c.pos_m.xy() - Vector2::new(x[0], x[1])).norm(),
-        (yaw_rad(&c) - x[2]).abs(),
+        (c.yaw_rad() - x[2]).abs(),
     );
     eprintln!("ideal vs independent after 5 s: |Δp| {ep:.2e} m, |Δθ| {ea:.2e} rad");
     assert!(ep < 1e-9 && ea < 1e-9, "{ep} m, {ea} rad");
@@ -72,12 +72,12 @@ fn val_xu2019_vision_latency_and_noise() {
     let mut s = sim(&text);
     let mut truth: Vec<(f64, Vector3<f64>)> = Vec::new();
     let c = s.body("chaser").unwrap();
-    truth.push((0.0, Vector3::new(c.pos_m.x, c.pos_m.y, yaw_rad(&c))));
+    truth.push((0.0, Vector3::new(c.pos_m.x, c.pos_m.y, c.yaw_rad())));
     let mut checked = 0;
     for _ in 0..1000 {
         s.step(1);
         let t = s.t_s();
-        let obs = s.app.world().resource::<Xu2019Controllers>().list[0].observation;
+        let obs = s.law::<Xu2019Instance>(0).unwrap().observation;
         if let Some(o) = obs {
             // The sensor ran at the start of the step (t − dt): the exposure is the latest
             // k·0.04 s ≤ t − dt − 0.04 s.
@@ -96,7 +96,7 @@ fn val_xu2019_vision_latency_and_noise() {
             checked += 1;
         }
         let c = s.body("chaser").unwrap();
-        truth.push((t, Vector3::new(c.pos_m.x, c.pos_m.y, yaw_rad(&c))));
+        truth.push((t, Vector3::new(c.pos_m.x, c.pos_m.y, c.yaw_rad())));
     }
     assert!(checked > 900);
     // Noise: residuals against the truth at the exposure instants.
@@ -109,7 +109,7 @@ fn val_xu2019_vision_latency_and_noise() {
         let c = s.body("chaser").unwrap();
         let p = c.pos_m.xy();
         s.step(1);
-        let o = s.app.world().resource::<Xu2019Controllers>().list[0].observation;
+        let o = s.law::<Xu2019Instance>(0).unwrap().observation;
         if let Some(o) = o
             && o.t_s != last_t
         {
@@ -140,7 +140,7 @@ fn val_xu2019_thruster_wrench_and_gas() {
         // The nozzle forces are body-fixed, rotated by the attitude at the step start.
         let att = s.body("chaser").unwrap().att;
         s.step(1);
-        let c = s.app.world().resource::<Xu2019Controllers>().list[0].clone();
+        let c = s.law::<Xu2019Instance>(0).unwrap().clone();
         let fb = att.inverse() * Vector3::new(c.applied.x, c.applied.y, 0.0);
         for f in [fb.x, fb.y] {
             assert!(

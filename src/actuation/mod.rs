@@ -1,4 +1,8 @@
-//! Actuation: saturation, thruster layouts and allocation, PWPF modulation.
+//! Actuation: saturation, thruster layouts and allocation, PWPF modulation; [`actuator`] is
+//! what every controller's command passes through.
 
+pub use actuator::{Actuator, ActuatorSpec};
+
+pub mod actuator;
 pub mod pwpf;
 pub mod thrusters;

@@ -1197,3 +1197,286 @@ mod scene_spec_tests {
         assert_eq!(bad.validate().unwrap_err().0, "sigma_d_time_constant_s");
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// The law in the simulation: the scene entry `Guo2016((...))`, the controller the generic host
+// runs, the corridor guarantee and the paper's disturbance torque.
+// ---------------------------------------------------------------------------------------------
+
+/// Diagnostics columns written per controller (prefix `guo2016.`, or `guo2016_<i>.` for the
+/// i-th controller after the first): corridor function `h_m2` and `h_dot_m2_s`, `inside`
+/// (1/0), `beta`, `s_norm` (|S|, mixed units as in eq 32), `r_e_m` (|r_e|), `sigma_e` (|σ_e|),
+/// `omega_e_rad_s` (|ω_e|), `corridor_margin_m` (signed distance to the wall) and the command
+/// in chaser body axes.
+pub const COLUMNS: [&str; 15] = [
+    "h_m2",
+    "h_dot_m2_s",
+    "inside",
+    "beta",
+    "s_norm",
+    "r_e_m",
+    "sigma_e",
+    "omega_e_rad_s",
+    "corridor_margin_m",
+    "force_body_x_n",
+    "force_body_y_n",
+    "force_body_z_n",
+    "torque_body_x_nm",
+    "torque_body_y_nm",
+    "torque_body_z_nm",
+];
+
+/// One installed controller (what the generic host runs every step).
+///
+/// The observation is built from the f64 truth of the chaser and the target (relative
+/// position and velocity in the world frame, both attitudes, body rates in body axes) and the
+/// differential gravity `g(r_c) − g(r_t)` of the scene's gravity field (with J2 when the scene
+/// enables it, so the law compensates the differential J2 instead of treating it as a
+/// disturbance; at 40 m it is ~1e-8 m/s²). The law returns force and torque in chaser body
+/// axes, held over the step.
+#[derive(Debug, Clone)]
+pub struct Guo2016Instance {
+    /// The law (parameters from the scene, mass and inertia from the chaser body).
+    pub law: Guo2016,
+    /// Chaser body index (scene order).
+    pub chaser: usize,
+    /// Target body index.
+    pub target: usize,
+    /// Disturbance torque amplitudes, chaser body axes, N·m (applied by [`Guo2016Disturbance`]).
+    pub disturbance_amplitude_nm: Vector3<f64>,
+    /// Disturbance angular frequency, rad/s.
+    pub disturbance_rate_rad_s: f64,
+    /// Last observation handed to the law.
+    pub observation: Option<Guo2016Observation>,
+    /// Last command (chaser body axes).
+    pub command: Guo2016Command,
+    /// Last diagnostics.
+    pub diagnostics: Option<Guo2016Diagnostics>,
+    /// Signed distance of the chaser centre of mass to the corridor wall at the last control
+    /// step, m (positive inside).
+    pub corridor_margin_m: f64,
+    prefix: String,
+    corridor_guarantee: String,
+}
+
+/// The paper's disturbance torque `d_τ = A cos(n t)` on the chaser (body axes).
+#[derive(Debug, Clone)]
+pub struct Guo2016Disturbance {
+    /// Chaser body index.
+    pub chaser: usize,
+    /// Amplitudes, chaser body axes, N·m.
+    pub amplitude_nm: Vector3<f64>,
+    /// Angular frequency, rad/s.
+    pub rate_rad_s: f64,
+    /// The torque applied at the last step, chaser body axes, N·m.
+    pub last_body_nm: Vector3<f64>,
+}
+
+impl crate::control::registry::Disturbance for Guo2016Disturbance {
+    fn wrenches(
+        &mut self,
+        ctx: &crate::control::registry::DisturbanceContext,
+    ) -> Vec<crate::control::registry::BodyWrench> {
+        let d = self.amplitude_nm * (self.rate_rad_s * ctx.t_s).cos();
+        self.last_body_nm = d;
+        vec![crate::control::registry::BodyWrench {
+            body: self.chaser,
+            force_n: None,
+            torque_nm: Some(ctx.bodies[self.chaser].att * d),
+        }]
+    }
+}
+
+/// "The chaser's centre of mass stays inside the corridor": margin = signed distance of the
+/// chaser centre of mass to the cissoid wall (target body frame), m.
+#[derive(Debug, Clone)]
+pub struct CorridorGuarantee {
+    /// Name.
+    pub name: String,
+    /// Chaser body index.
+    pub chaser: usize,
+    /// Target body index.
+    pub target: usize,
+    /// The corridor.
+    pub corridor: Cissoid,
+}
+
+impl CorridorGuarantee {
+    /// Chaser centre of mass in target body axes, m.
+    pub fn r1_target_m(&self, view: &crate::guarantee::MonitorView) -> Vector3<f64> {
+        let c = &view.bodies[self.chaser];
+        let t = &view.bodies[self.target];
+        t.att.inverse() * (c.pos_m - t.pos_m)
+    }
+}
+
+impl crate::guarantee::Guarantee for CorridorGuarantee {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn margin(&self, view: &crate::guarantee::MonitorView) -> f64 {
+        self.corridor.signed_distance_m(&self.r1_target_m(view))
+    }
+}
+
+/// Mean motion of the osculating two-body orbit through `(r, v)`, rad/s (0 if not bound).
+fn mean_motion_rad_s(r: &Vector3<f64>, v: &Vector3<f64>) -> f64 {
+    use crate::orbit::constants::MU_EARTH_M3_S2;
+    let inv_a = 2.0 / r.norm() - v.norm_squared() / MU_EARTH_M3_S2;
+    if inv_a > 0.0 {
+        (MU_EARTH_M3_S2 * inv_a * inv_a * inv_a).sqrt()
+    } else {
+        0.0
+    }
+}
+
+impl crate::control::registry::LawSpec for SceneSpec {
+    fn build(
+        &self,
+        ctx: &mut crate::control::registry::BuildContext,
+    ) -> Result<crate::control::registry::Built, crate::control::registry::BuildError> {
+        use crate::control::registry::{BuildError, Built, Slot};
+        let chaser = ctx.body("0.chaser", &self.chaser)?;
+        let target = ctx.body("0.target", &self.target)?;
+        if chaser == target {
+            return Err(BuildError::at(
+                "0.target",
+                "the target must be another body than the chaser",
+            ));
+        }
+        self.validate()
+            .map_err(|(field, msg)| BuildError::at(format!("0.{field}"), msg))?;
+        let body = &ctx.scene.bodies[chaser];
+        let params = self.params(body.mass_kg, body.inertia_kg_m2.matrix());
+        let n = match self.disturbance_rate_rad_s {
+            Some(n) => n,
+            None => ctx
+                .env
+                .reference()
+                .map(|(r, v)| mean_motion_rad_s(&r, &v))
+                .unwrap_or(0.0),
+        };
+        let k = {
+            let count = ctx.shared::<usize>("Guo2016");
+            *count += 1;
+            *count - 1
+        };
+        let prefix = if k == 0 {
+            "guo2016".to_string()
+        } else {
+            format!("guo2016_{k}")
+        };
+        let amplitude = Vector3::from(*self.disturbance_torque_amplitude_nm);
+        Ok(Built {
+            slots: vec![Slot {
+                kind: "Guo2016".into(),
+                body: chaser,
+                target: Some(target),
+                period_steps: 1,
+                sensor: None,
+                actuator: crate::actuation::ActuatorSpec::Ideal,
+                ports: None,
+                law: Box::new(Guo2016Instance {
+                    law: Guo2016::new(params),
+                    chaser,
+                    target,
+                    disturbance_amplitude_nm: amplitude,
+                    disturbance_rate_rad_s: n,
+                    observation: None,
+                    command: Guo2016Command {
+                        force_body_n: Vector3::zeros(),
+                        torque_body_nm: Vector3::zeros(),
+                    },
+                    diagnostics: None,
+                    corridor_margin_m: f64::NAN,
+                    prefix,
+                    corridor_guarantee: self.corridor_guarantee.clone(),
+                }),
+            }],
+            disturbances: vec![Box::new(Guo2016Disturbance {
+                chaser,
+                amplitude_nm: amplitude,
+                rate_rad_s: n,
+                last_body_nm: Vector3::zeros(),
+            })],
+        })
+    }
+}
+
+impl crate::control::interface::Controller for Guo2016Instance {
+    fn command(
+        &mut self,
+        obs: &crate::control::interface::Observation,
+    ) -> crate::control::interface::Command {
+        let (sc, st) = (&obs.bodies[self.chaser], &obs.bodies[self.target]);
+        let o = Guo2016Observation {
+            t_s: obs.t_s,
+            q_chaser_body_to_world: sc.att,
+            q_target_body_to_world: st.att,
+            rate_chaser_body_rad_s: sc.rate_body_rad_s,
+            rate_target_body_rad_s: st.rate_body_rad_s,
+            pos_rel_world_m: sc.pos_m - st.pos_m,
+            vel_rel_world_m_s: sc.vel_m_s - st.vel_m_s,
+            grav_diff_world_m_s2: sc.gravity_m_s2 - st.gravity_m_s2,
+        };
+        let (cmd, d) = self.law.control(&o);
+        self.corridor_margin_m = self.law.params.corridor().signed_distance_m(&d.r1_target_m);
+        self.observation = Some(o);
+        self.command = cmd;
+        self.diagnostics = Some(d);
+        crate::control::interface::Command::in_frame(
+            crate::control::interface::Frame::Body,
+            cmd.force_body_n,
+            cmd.torque_body_nm,
+        )
+    }
+
+    fn columns(&self) -> Vec<String> {
+        COLUMNS
+            .iter()
+            .map(|c| format!("{}.{c}", self.prefix))
+            .collect()
+    }
+
+    fn diagnostics(
+        &mut self,
+        _at: crate::control::interface::DiagnosticsAt,
+        _obs: &crate::control::interface::Observation,
+        _act: &crate::control::interface::ActuationReport,
+        out: &mut [f64],
+    ) {
+        let Some(d) = &self.diagnostics else {
+            return;
+        };
+        let cmd = &self.command;
+        let r_e = Vector3::new(d.x[3], d.x[4], d.x[5]).norm();
+        let sigma_e = Vector3::new(d.x[0], d.x[1], d.x[2]).norm();
+        let values = [
+            d.h_m2,
+            d.h_dot_m2_s,
+            if d.inside { 1.0 } else { 0.0 },
+            d.beta,
+            d.s.norm(),
+            r_e,
+            sigma_e,
+            d.omega_e_body_rad_s.norm(),
+            self.corridor_margin_m,
+            cmd.force_body_n.x,
+            cmd.force_body_n.y,
+            cmd.force_body_n.z,
+            cmd.torque_body_nm.x,
+            cmd.torque_body_nm.y,
+            cmd.torque_body_nm.z,
+        ];
+        out.copy_from_slice(&values);
+    }
+
+    fn guarantees(&mut self) -> Vec<Box<dyn crate::guarantee::Guarantee>> {
+        vec![Box::new(CorridorGuarantee {
+            name: self.corridor_guarantee.clone(),
+            chaser: self.chaser,
+            target: self.target,
+            corridor: self.law.params.corridor(),
+        })]
+    }
+}

@@ -829,48 +829,7 @@ pub fn thrust_authority_margin_m_s2(
         .map(|f| a_max - f.abs() / mass_target_kg)
 }
 
-/// Seeded standard-normal generator (SplitMix64 → Box–Muller), deterministic across runs and
-/// platforms; used for the measurement noise.
-#[derive(Debug, Clone)]
-pub struct GaussianNoise {
-    state: u64,
-    spare: Option<f64>,
-}
-
-impl GaussianNoise {
-    /// A generator seeded with `seed`.
-    pub fn new(seed: u64) -> Self {
-        Self {
-            state: seed,
-            spare: None,
-        }
-    }
-
-    fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform on (0, 1].
-    fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 1.0) / (1u64 << 53) as f64
-    }
-
-    /// One N(0, 1) sample.
-    pub fn standard_normal(&mut self) -> f64 {
-        if let Some(s) = self.spare.take() {
-            return s;
-        }
-        let (u1, u2) = (self.uniform(), self.uniform());
-        let r = (-2.0 * u1.ln()).sqrt();
-        let (s, c) = (std::f64::consts::TAU * u2).sin_cos();
-        self.spare = Some(r * s);
-        r * c
-    }
-}
+pub use crate::math::rng::GaussianNoise;
 
 #[cfg(test)]
 mod scene_tests {
@@ -1321,5 +1280,451 @@ mod tests {
             );
             assert!(s.max_err_axis_m.x > 1.0, "x error {}", s.max_err_axis_m.x);
         }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The law in the simulation: the scene entry `Xu2015((...))`, the controller the generic host
+// runs, the target's manoeuvre and the thrust-authority guarantees.
+//
+// # Frames (the choice the paper leaves open)
+// The world frame is inertial with its origin on the reference orbit, which the scene makes the
+// target's *unforced* orbit. The controller works in the **target orbital frame (tof) of the
+// reference orbit**, built every step from the reference state (r, v) by
+// [`dcm_eci_from_tof_state`]: z = −r̂, y = −ĥ, x = y × z — the paper's model (its relative
+// dynamics use R, ḟ, f̈ of the target's Keplerian orbit and treat the manoeuvre as a
+// disturbance). The manoeuvring target's own osculating frame differs from it by the tilt its
+// manoeuvre velocity (≈ 0.6 m/s against ≈ 3.5 km/s) and its ≈ 190 m drift give the orbit:
+// 2.9e−4 rad after 300 s (measured by `rpod reproduce xu2015`), i.e. 9e−4 m on the 3 m
+// stand-off of the bundled scenes.
+//
+// # What runs each step (dt = scene `dt_s`, h = the law's `sample_period_s`, h/dt integer)
+// The host calls the controller every step: ξ = Cᵀ (r_chaser − r_target) − aim_offset (f64
+// truth, centres of mass); at every multiple of h a measurement ξ + N(0, σ²) is taken (seeded
+// noise) and the law runs once ([`Accm::update`] / [`Pd::update`]); between samples its tof
+// command is held (zero-order hold over h, as in the paper) and returned in world axes with
+// this step's C. The target's manoeuvre F_t(t + dt/2) ([`Xu2015Maneuver`]) is applied at its
+// mid-step value (midpoint rule: the held force then carries the step's impulse to O(dt³)).
+// Over a step the tof turns by ḟ dt ≤ 1.6e−4 rad at perigee, a thrust-direction error below
+// 4e−4 N.
+//
+// # Outputs
+// Columns (prefix `xu2015.`; `xu2015_N.` for the N-th controller after the first):
+// `xi_tof_{x,y,z}_m` (true ξ at the row's time), `meas_tof_{x,y,z}_m` (last measurement),
+// `ref_tof_{x,y,z}_m` (reference at that sample), `thrust_tof_{x,y,z}_n` (the command held over
+// the step that ends at the row's time; the t = 0 row has no measurement yet: NaN),
+// `target_force_tof_{x,y,z}_n`, and for ACCM the identified `alpha1_{x,y,z}`, `alpha2_{x,y,z}`,
+// `gamma_{x,y,z}` (dimensionless) and `shift_{x,y,z}_m`. The per-sample history is kept in
+// [`Xu2015Loop::history`] for tests and `rpod reproduce`.
+// ---------------------------------------------------------------------------------------------
+
+/// The running controller.
+#[derive(Debug, Clone)]
+pub enum LawState {
+    /// Adaptive characteristic-model controller.
+    Accm(Box<Accm>),
+    /// PD baseline.
+    Pd(Box<Pd>),
+}
+
+/// What one control sample saw and did.
+#[derive(Debug, Clone, Copy)]
+pub struct Xu2015Sample {
+    /// Sample time, s.
+    pub t_s: f64,
+    /// True controlled relative position ξ, tof, m.
+    pub xi_tof_m: Vector3<f64>,
+    /// Measured ξ (truth + noise), tof, m.
+    pub meas_tof_m: Vector3<f64>,
+    /// Reference ξ_r, tof, m.
+    pub reference_tof_m: Vector3<f64>,
+    /// Commanded (saturated, then held over h) thrust, tof, N.
+    pub thrust_tof_n: Vector3<f64>,
+    /// Target maneuver force at the sample time, tof, N.
+    pub target_force_tof_n: Vector3<f64>,
+    /// ACCM estimates after this sample (None for PD).
+    pub estimates: Option<[AccmAxisEstimate; 3]>,
+}
+
+/// One xu2015 controller of the scene and its sensor.
+#[derive(Debug, Clone)]
+pub struct Xu2015Loop {
+    /// Column prefix (`xu2015` or `xu2015_N`).
+    pub prefix: String,
+    /// The scene's spec.
+    pub spec: SceneSpec,
+    /// Chaser body index (scene order).
+    pub chaser: usize,
+    /// Target body index.
+    pub target: usize,
+    /// The law.
+    pub law: LawState,
+    /// Simulation steps per control sample (h / dt).
+    pub steps_per_sample: u64,
+    /// tof → world DCM at the current step.
+    pub dcm_world_from_tof: Matrix3<f64>,
+    /// True ξ at the current step, tof, m.
+    pub xi_tof_m: Vector3<f64>,
+    /// Last measurement, tof, m.
+    pub meas_tof_m: Vector3<f64>,
+    /// Held command, tof, N.
+    pub thrust_tof_n: Vector3<f64>,
+    /// One entry per control sample.
+    pub history: Vec<Xu2015Sample>,
+    noise: GaussianNoise,
+    mass_chaser_kg: f64,
+    mass_target_kg: f64,
+}
+
+/// The target's manoeuvre F_t(t + dt/2), tof of the reference orbit at the step's start.
+#[derive(Debug, Clone)]
+pub struct Xu2015Maneuver {
+    /// Target body index.
+    pub target: usize,
+    /// The manoeuvre.
+    pub maneuver: ManeuverSpec,
+}
+
+impl crate::control::registry::Disturbance for Xu2015Maneuver {
+    fn wrenches(
+        &mut self,
+        ctx: &crate::control::registry::DisturbanceContext,
+    ) -> Vec<crate::control::registry::BodyWrench> {
+        let Some((r, v)) = ctx.env.reference() else {
+            return Vec::new();
+        };
+        let c = dcm_eci_from_tof_state(&r, &v);
+        let f_t = self.maneuver.force_tof_n(ctx.t_s + 0.5 * ctx.dt_s);
+        vec![crate::control::registry::BodyWrench {
+            body: self.target,
+            force_n: Some(c * f_t),
+            torque_nm: None,
+        }]
+    }
+}
+
+/// `thrust_authority_{axis}`: F_max/m_c − |F_t,axis(t)|/m_t, m/s²: the chaser's per-axis
+/// acceleration authority against the target's maneuver acceleration at that time (masses from
+/// the scene). A negative margin means no control law can keep the relative position constant
+/// on that axis at that instant.
+#[derive(Debug, Clone)]
+pub struct ThrustAuthority {
+    /// Guarantee name.
+    pub name: String,
+    /// Axis of the tof (0 = x, 1 = y, 2 = z).
+    pub axis: usize,
+    /// Per-axis thrust limit, N.
+    pub thrust_max_n: f64,
+    /// Chaser mass, kg.
+    pub mass_chaser_kg: f64,
+    /// Target mass, kg.
+    pub mass_target_kg: f64,
+    /// The target's maneuver.
+    pub maneuver: ManeuverSpec,
+}
+
+impl crate::guarantee::Guarantee for ThrustAuthority {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn unit(&self) -> &str {
+        "m_s2"
+    }
+    fn margin(&self, view: &crate::guarantee::MonitorView) -> f64 {
+        thrust_authority_margin_m_s2(
+            self.thrust_max_n,
+            self.mass_chaser_kg,
+            &self.maneuver,
+            self.mass_target_kg,
+            view.t_s,
+        )[self.axis]
+    }
+}
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// Instances of the law so far in the scene being built.
+#[derive(Default)]
+struct Xu2015Count(usize);
+
+impl crate::control::registry::LawSpec for SceneSpec {
+    fn build(
+        &self,
+        ctx: &mut crate::control::registry::BuildContext,
+    ) -> Result<crate::control::registry::Built, crate::control::registry::BuildError> {
+        use crate::control::registry::{BuildError, Built, Slot};
+        let spec = self;
+        // The spec sits inside the `Xu2015(( … ))` newtype: its fields are at `0.field`.
+        let chaser = ctx.body("0.body", &spec.body)?;
+        let target = ctx.body("0.target", &spec.target)?;
+        if chaser == target {
+            return Err(BuildError::at(
+                "0.target",
+                "the target must be another body than the chaser",
+            ));
+        }
+        if !matches!(
+            ctx.scene.environment,
+            crate::scene::Environment::Orbit { .. }
+        ) {
+            return Err(BuildError::at_root(
+                "environment",
+                "the xu2015 controller needs an `Orbit` environment (it works in the reference \
+                 orbit's target orbital frame)",
+            ));
+        }
+        spec.validate()
+            .map_err(|(f, m)| BuildError::at(format!("0.{f}"), m))?;
+        let dt = ctx.dt_s();
+        let h = spec.sample_period_s();
+        let ratio = h / dt;
+        let n = ratio.round();
+        if !(1.0..=1e12).contains(&n) || (ratio - n).abs() > 1e-9 * ratio {
+            return Err(BuildError::at(
+                format!("0.{}", spec.sample_period_field()),
+                format!(
+                    "the sample period must be a whole multiple of the scene step dt_s = {dt} s, \
+                     got {h} s"
+                ),
+            ));
+        }
+        let law = match spec.law {
+            Xu2015Law::Accm => LawState::Accm(Box::new(Accm::new((*spec.accm).clone()))),
+            Xu2015Law::Pd => LawState::Pd(Box::new(Pd::new((*spec.pd).clone()))),
+        };
+        let idx = {
+            let c = ctx.shared::<Xu2015Count>("Xu2015");
+            c.0 += 1;
+            c.0 - 1
+        };
+        let prefix = if idx == 0 {
+            "xu2015".to_string()
+        } else {
+            format!("xu2015_{idx}")
+        };
+        Ok(Built {
+            slots: vec![Slot {
+                kind: "Xu2015".into(),
+                body: chaser,
+                target: Some(target),
+                period_steps: 1,
+                sensor: None,
+                actuator: crate::actuation::ActuatorSpec::Ideal,
+                ports: None,
+                law: Box::new(Xu2015Loop {
+                    prefix,
+                    spec: spec.clone(),
+                    chaser,
+                    target,
+                    law,
+                    steps_per_sample: n as u64,
+                    dcm_world_from_tof: Matrix3::identity(),
+                    xi_tof_m: Vector3::zeros(),
+                    meas_tof_m: Vector3::zeros(),
+                    thrust_tof_n: Vector3::zeros(),
+                    history: Vec::new(),
+                    noise: GaussianNoise::new(spec.sensor.seed),
+                    mass_chaser_kg: ctx.scene.bodies[chaser].mass_kg,
+                    mass_target_kg: ctx.scene.bodies[target].mass_kg,
+                }),
+            }],
+            disturbances: vec![Box::new(Xu2015Maneuver {
+                target,
+                maneuver: spec.target_maneuver.clone(),
+            })],
+        })
+    }
+}
+
+impl Xu2015Loop {
+    /// Index of this controller among the scene's xu2015 controllers (from its prefix).
+    fn index(&self) -> usize {
+        self.prefix
+            .strip_prefix("xu2015_")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0)
+    }
+
+    /// ξ from the observation's truth, tof, m, and the tof → world DCM.
+    fn xi(&self, obs: &crate::control::interface::Observation) -> (Matrix3<f64>, Vector3<f64>) {
+        let (r, v) = obs.env.reference().unwrap_or_default();
+        let c = dcm_eci_from_tof_state(&r, &v);
+        let (sc, st) = (&obs.bodies[self.chaser], &obs.bodies[self.target]);
+        let xi = c.transpose() * (sc.pos_m - st.pos_m) - Vector3::from(self.spec.aim_offset_tof_m);
+        (c, xi)
+    }
+}
+
+impl crate::control::interface::Controller for Xu2015Loop {
+    fn command(
+        &mut self,
+        obs: &crate::control::interface::Observation,
+    ) -> crate::control::interface::Command {
+        let (c, xi) = self.xi(obs);
+        self.dcm_world_from_tof = c;
+        self.xi_tof_m = xi;
+        if obs.step.is_multiple_of(self.steps_per_sample) {
+            let sigma = self.spec.sensor.noise_sigma_m;
+            let noise = if sigma > 0.0 {
+                Vector3::from_fn(|_, _| sigma * self.noise.standard_normal())
+            } else {
+                Vector3::zeros()
+            };
+            self.meas_tof_m = xi + noise;
+            let t = obs.t_s;
+            let o = Xu2015Observation {
+                t_s: t,
+                pos_tof_m: self.meas_tof_m,
+            };
+            let (u, reference, estimates) = match &mut self.law {
+                LawState::Accm(a) => {
+                    let u = a.update(&o).force_tof_n;
+                    (u, a.reference_tof_m(t), Some(a.estimates()))
+                }
+                LawState::Pd(p) => {
+                    let u = p.update(&o).force_tof_n;
+                    (u, p.reference_tof_m(t), None)
+                }
+            };
+            self.thrust_tof_n = u;
+            self.history.push(Xu2015Sample {
+                t_s: t,
+                xi_tof_m: xi,
+                meas_tof_m: self.meas_tof_m,
+                reference_tof_m: reference.unwrap_or(self.meas_tof_m),
+                thrust_tof_n: u,
+                target_force_tof_n: self.spec.target_maneuver.force_tof_n(t),
+                estimates,
+            });
+        }
+        crate::control::interface::Command::in_frame(
+            crate::control::interface::Frame::World,
+            c * self.thrust_tof_n,
+            Vector3::zeros(),
+        )
+    }
+
+    fn columns(&self) -> Vec<String> {
+        let prefix = &self.prefix;
+        let mut names: Vec<String> = Vec::new();
+        for q in ["xi_tof", "meas_tof", "ref_tof"] {
+            for a in AXES {
+                names.push(format!("{prefix}.{q}_{a}_m"));
+            }
+        }
+        for q in ["thrust_tof", "target_force_tof"] {
+            for a in AXES {
+                names.push(format!("{prefix}.{q}_{a}_n"));
+            }
+        }
+        if self.spec.law == Xu2015Law::Accm {
+            for q in ["alpha1", "alpha2", "gamma"] {
+                for a in AXES {
+                    names.push(format!("{prefix}.{q}_{a}"));
+                }
+            }
+            for a in AXES {
+                names.push(format!("{prefix}.shift_{a}_m"));
+            }
+        }
+        names
+    }
+
+    fn diagnostics_at(&self) -> &'static [crate::control::interface::DiagnosticsAt] {
+        use crate::control::interface::DiagnosticsAt;
+        &[
+            DiagnosticsAt::Start,
+            DiagnosticsAt::Actuated,
+            DiagnosticsAt::PostStep,
+        ]
+    }
+
+    fn diagnostics(
+        &mut self,
+        at: crate::control::interface::DiagnosticsAt,
+        obs: &crate::control::interface::Observation,
+        _act: &crate::control::interface::ActuationReport,
+        out: &mut [f64],
+    ) {
+        use crate::control::interface::DiagnosticsAt;
+        match at {
+            // The t = 0 row is written before the first step: the true ξ, zero thrust, the
+            // maneuver at t = 0 and the initial estimates (no measurement or reference exists
+            // yet: NaN).
+            DiagnosticsAt::Start => {
+                let (_, xi0) = self.xi(obs);
+                let mut vals: Vec<f64> = xi0.iter().copied().collect();
+                vals.extend([f64::NAN; 6]);
+                vals.extend([0.0; 3]);
+                vals.extend(self.spec.target_maneuver.force_tof_n(0.0).iter());
+                if self.spec.law == Xu2015Law::Accm {
+                    for j in 0..3 {
+                        vals.extend([self.spec.accm.theta0[j]; 3]);
+                    }
+                    vals.extend([0.0; 3]);
+                }
+                out.copy_from_slice(&vals);
+            }
+            DiagnosticsAt::Actuated => {
+                let f_t = self
+                    .spec
+                    .target_maneuver
+                    .force_tof_n(obs.t_s + 0.5 * obs.dt_s);
+                let reference = self
+                    .history
+                    .last()
+                    .map_or(self.xi_tof_m, |s| s.reference_tof_m);
+                let mut vals: Vec<f64> = Vec::with_capacity(out.len());
+                for v in [
+                    self.xi_tof_m,
+                    self.meas_tof_m,
+                    reference,
+                    self.thrust_tof_n,
+                    f_t,
+                ] {
+                    vals.extend(v.iter());
+                }
+                if let LawState::Accm(a) = &self.law {
+                    let e = a.estimates();
+                    vals.extend(e.iter().map(|x| x.alpha1));
+                    vals.extend(e.iter().map(|x| x.alpha2));
+                    vals.extend(e.iter().map(|x| x.gamma));
+                    vals.extend(e.iter().map(|x| x.shift_m));
+                }
+                out.copy_from_slice(&vals);
+            }
+            // The ξ columns at the end of the step (the row's time), after the physics.
+            DiagnosticsAt::PostStep => {
+                let (_, xi) = self.xi(obs);
+                out[..3].copy_from_slice(xi.as_slice());
+            }
+        }
+    }
+
+    fn guarantees(&mut self) -> Vec<Box<dyn crate::guarantee::Guarantee>> {
+        if !self.spec.thrust_authority_guarantee {
+            return Vec::new();
+        }
+        let idx = self.index();
+        let maneuver = self.spec.target_maneuver.clone();
+        let thrust_max_n = self.spec.thrust_max_n();
+        AXES.iter()
+            .enumerate()
+            .map(|(axis, a)| {
+                let name = if idx == 0 {
+                    format!("thrust_authority_{a}")
+                } else {
+                    format!("thrust_authority_{idx}_{a}")
+                };
+                Box::new(ThrustAuthority {
+                    name,
+                    axis,
+                    thrust_max_n,
+                    mass_chaser_kg: self.mass_chaser_kg,
+                    mass_target_kg: self.mass_target_kg,
+                    maneuver: maneuver.clone(),
+                }) as Box<dyn crate::guarantee::Guarantee>
+            })
+            .collect()
     }
 }

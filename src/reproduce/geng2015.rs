@@ -17,10 +17,10 @@
 use crate::control::geng2015::{
     BoundEnvelope, Geng2015Law, convergence_time_bound_s, disturbance_bounds, relative_state,
 };
+use crate::control::geng2015::{Geng2015Loop, observation};
 use crate::report::Claim;
 use crate::scene::load_scene_file;
 use crate::sim::Simulation;
-use crate::sim::laws::geng2015::{Geng2015Runtime, observation};
 use nalgebra::Vector6;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -168,15 +168,15 @@ pub fn run_case(
     let mut sim = Simulation::new(&loaded).map_err(|e| e.to_string())?;
     let duration = duration_s.unwrap_or(loaded.scene.duration_s);
     let (law, period, chaser, target, params) = {
-        let rt = sim.app.world().resource::<Geng2015Runtime>();
-        let lp = rt
-            .loops
-            .first()
+        let slot = sim
+            .controllers()
+            .slot_of::<Geng2015Loop>(0)
             .ok_or("the scene has no geng2015 controller")?;
+        let lp = sim.law::<Geng2015Loop>(0).expect("the slot's law");
         let names = &sim.scene.bodies;
         (
             lp.controller.law,
-            lp.period_steps,
+            slot.period_steps,
             names[lp.chaser].name.clone(),
             names[lp.target].name.clone(),
             lp.controller.params.clone(),
@@ -196,7 +196,10 @@ pub fn run_case(
         };
         rate_max.0 = rate_max.0.max(sc.omega_rad_s.norm());
         rate_max.1 = rate_max.1.max(st.omega_rad_s.norm());
-        let rel = relative_state(&params, &observation(t, reference, &sc, &st));
+        let rel = relative_state(
+            &params,
+            &observation(t, reference, &(&sc).into(), &(&st).into()),
+        );
         let (r, v) = (rel.rho_m, rel.rho_dot_m_s);
         let (a, w) = (rel.q_r.imag() * 2.0 * deg, rel.omega_r_rad_s * deg);
         se.t.push(t);
@@ -210,8 +213,11 @@ pub fn run_case(
             break;
         }
         sim.step(period);
-        let rt = sim.app.world().resource::<Geng2015Runtime>();
-        let d = rt.loops[0].controller.diagnostics();
+        let d = sim
+            .law::<Geng2015Loop>(0)
+            .expect("a geng2015 controller")
+            .controller
+            .diagnostics();
         se.u.push(d.u);
         se.s.push(d.s);
         se.s_dot.push(d.s_dot);

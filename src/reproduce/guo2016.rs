@@ -14,11 +14,9 @@
 //! [`compute`] runs everything and returns the numbers; [`run`] also writes `REPORT.md`, the
 //! plots and `claims.json`. Tests use [`run_case`] with shortened horizons.
 
-use crate::control::ControllerSpec;
-use crate::control::guo2016::SceneSpec;
+use crate::control::guo2016::{Guo2016Instance, SceneSpec};
 use crate::geometry::cissoid::Cissoid;
 use crate::scene::{AttitudeSpec, LoadedScene, PartRole, load_scene_str};
-use crate::sim::laws::guo2016::Guo2016Controllers;
 use crate::sim::monitor::shape_distance;
 use crate::sim::{BodyState, Part, Roster, SimBody, Simulation};
 use bevy_rapier3d::rapier::prelude as rp;
@@ -58,10 +56,11 @@ pub fn load_bundled(file: &str) -> Result<LoadedScene, String> {
 
 /// The scene's (first) Guo2016 controller entry, for changes made before a run.
 pub fn spec_mut(loaded: &mut LoadedScene) -> Option<&mut SceneSpec> {
-    loaded.scene.controllers.iter_mut().find_map(|c| match c {
-        ControllerSpec::Guo2016(s) => Some(s),
-        _ => None,
-    })
+    loaded
+        .scene
+        .controllers
+        .iter_mut()
+        .find_map(|c| c.spec_mut::<SceneSpec>())
 }
 
 /// One recorded sample of a run.
@@ -188,7 +187,9 @@ pub fn run_case(
     let mut sim = Simulation::new(loaded).map_err(|e| e.to_string())?;
     let steps = sim.steps_for(duration_s);
     let (chaser, target) = {
-        let c = &sim.app.world().resource::<Guo2016Controllers>().list[0];
+        let c = sim
+            .law::<Guo2016Instance>(0)
+            .ok_or("no Guo2016 controller")?;
         (c.chaser, c.target)
     };
     let mut run = CaseRun {
@@ -232,7 +233,7 @@ pub fn run_case(
         sim.step(1);
         // The control step just taken ran at t = (k) dt; read what it saw and commanded.
         let w = sim.app.world();
-        let c = &w.resource::<Guo2016Controllers>().list[0];
+        let c = sim.law::<Guo2016Instance>(0).expect("a Guo2016 controller");
         let d = c.diagnostics.expect("the law ran");
         let t = k as f64 * dt;
         if !d.inside && run.first_exit_s.is_none() {
@@ -293,10 +294,7 @@ fn spec_name(loaded: &LoadedScene) -> String {
         .scene
         .controllers
         .iter()
-        .find_map(|c| match c {
-            ControllerSpec::Guo2016(s) => Some(s.corridor_guarantee.clone()),
-            _ => None,
-        })
+        .find_map(|c| c.spec::<SceneSpec>().map(|s| s.corridor_guarantee.clone()))
         .unwrap_or_default()
 }
 
@@ -451,10 +449,7 @@ pub fn spec_of(l: &LoadedScene) -> SceneSpec {
     l.scene
         .controllers
         .iter()
-        .find_map(|c| match c {
-            ControllerSpec::Guo2016(s) => Some(s.clone()),
-            _ => None,
-        })
+        .find_map(|c| c.spec::<SceneSpec>().cloned())
         .expect("a Guo2016 controller")
 }
 

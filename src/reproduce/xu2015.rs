@@ -12,11 +12,11 @@ use crate::control::xu2015::{
     Accm, AccmParams, ManeuverSpec, Pd, PdParams, Xu2015Law, Xu2015Observation,
     dcm_eci_from_tof_state,
 };
+use crate::control::xu2015::{Xu2015Loop, Xu2015Sample};
 use crate::orbit::elliptic::{EllipticOrbit, RelStateTof, rk4_step_relative};
 use crate::report::{Claim, Dash, Figure, LineStyle, Plot, write_atomic, write_claims_json};
 use crate::scene::{SceneError, load_scene_str};
 use crate::sim::Simulation;
-use crate::sim::laws::xu2015::{Xu2015Loops, Xu2015Sample};
 use nalgebra::Vector3;
 use std::path::Path;
 
@@ -184,7 +184,7 @@ pub fn run_loaded(
     }
     let n = sim.steps_for(loaded.scene.duration_s);
     let (per, target_name) = {
-        let l = &sim.app.world().resource::<Xu2015Loops>().0[0];
+        let l = sim.law::<Xu2015Loop>(0).ok_or("no xu2015 controller")?;
         (l.steps_per_sample, l.spec.target.clone())
     };
     let mut distance_m = Vec::new();
@@ -201,7 +201,10 @@ pub fn run_loaded(
         sim.step(1);
         done += 1;
     }
-    let lp = sim.app.world().resource::<Xu2015Loops>().0[0].clone();
+    let lp = sim
+        .law::<Xu2015Loop>(0)
+        .ok_or("no xu2015 controller")?
+        .clone();
     let (r_ref, v_ref) = sim.reference_state().ok_or("the scene has no orbit")?;
     let tgt = sim.body(&target_name).ok_or("no target body")?;
     let c_ref = dcm_eci_from_tof_state(&r_ref, &v_ref);

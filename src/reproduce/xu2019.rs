@@ -11,13 +11,13 @@
 //! Writes `REPORT.md`, `path.png`, `states.png`, `distances.png`, `valves.png`, `claims.json`
 //! and each case's `trajectory.csv`, `events.jsonl`, `summary.json` under `OUT/<case>/`.
 
+use crate::control::xu2019::Xu2019Instance;
 use crate::control::xu2019::{Xu2019Controller, Xu2019Params};
 use crate::geometry::superquadric::RadialForm;
 use crate::report::{Claim, Color, Dash, Figure, LineStyle, Plot, ReportBuilder};
 use crate::scene::load_scene_str;
 use crate::sim::Simulation;
 use crate::sim::docking::{DockState, Docking};
-use crate::sim::laws::xu2019::{Xu2019Controllers, yaw_rad};
 use nalgebra::{Vector2, Vector3};
 use std::path::Path;
 
@@ -198,7 +198,7 @@ pub fn run_case_with(
     let mut sample = |sim: &Simulation, run: &mut CaseRun, open_mean: f64| {
         let c = sim.body("chaser").expect("chaser");
         let p = c.pos_m.xy();
-        let th = yaw_rad(&c);
+        let th = c.yaw_rad();
         let th = match last_theta {
             None => th,
             Some(prev) => {
@@ -229,16 +229,16 @@ pub fn run_case_with(
             .map_or(f64::NAN, |q| q.distance_m);
         run.geometry_obstacle_m.push(d);
         run.open_nozzles.push(open_mean);
-        let ctl = sim.app.world().resource::<Xu2019Controllers>();
-        run.gas_kg.push(ctl.list[0].gas_used_kg);
+        let ctl = sim.law::<Xu2019Instance>(0).expect("an Xu2019 controller");
+        run.gas_kg.push(ctl.gas_used_kg);
     };
     sample(&sim, &mut run, 0.0);
     for _ in 0..n_samples {
         open_acc = 0.0;
         for _ in 0..per_sample {
             sim.step(1);
-            let ctl = sim.app.world().resource::<Xu2019Controllers>();
-            open_acc += ctl.list[0].valves.iter().filter(|v| **v).count() as f64;
+            let ctl = sim.law::<Xu2019Instance>(0).expect("an Xu2019 controller");
+            open_acc += ctl.valves.iter().filter(|v| **v).count() as f64;
             if run.magnet_on_s.is_none() {
                 let d = sim.app.world().resource::<Docking>();
                 if d.magnet_on {
@@ -249,15 +249,19 @@ pub fn run_case_with(
         sample(&sim, &mut run, open_acc / per_sample as f64);
     }
     let _ = open_acc;
-    let ctl = sim.app.world().resource::<Xu2019Controllers>().list[0].clone();
-    run.valve_openings = ctl.valve_openings;
-    run.valve_open_s = ctl.valve_open_s;
+    let act = &sim
+        .controllers()
+        .slot_of::<Xu2019Instance>(0)
+        .expect("an Xu2019 controller")
+        .actuator;
+    run.valve_openings = act.valve_openings;
+    run.valve_open_s = act.valve_open_s;
     let d = sim.app.world().resource::<Docking>().clone();
     run.dock_state = d.state.name().to_string();
     run.dock_reason = d.reason.clone();
     run.t_latch_s = d.t_latch_s;
     let c = sim.body("chaser").expect("chaser");
-    let e = law.pose_error(Vector3::new(c.pos_m.x, c.pos_m.y, yaw_rad(&c)));
+    let e = law.pose_error(Vector3::new(c.pos_m.x, c.pos_m.y, c.yaw_rad()));
     run.final_pos_err_m = e.xy().norm();
     run.final_angle_err_deg = e.z.abs().to_degrees();
     run.first_at_goal_s = run

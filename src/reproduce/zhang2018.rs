@@ -15,7 +15,7 @@
 use crate::orbit::l2::{L2Centre, L2State};
 use crate::scene::load_scene_file;
 use crate::sim::Simulation;
-use crate::sim::laws::zhang2018::L2Frame;
+use crate::sim::environment::L2Frame;
 use crate::sim::output::Diagnostics;
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};

@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 pub type V3 = [f64; 3];
 
 /// A complete scene.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     /// Scene name, written to the outputs.

@@ -7,10 +7,9 @@ use super::{
     StepBudget, Wrench, conv,
 };
 use crate::guarantee::{KeepOutSphere, MinDistance};
-use crate::orbit::constants::MU_EARTH_M3_S2;
 use crate::scene::parts::{PartCollider, Primitive, expand_body};
 use crate::scene::{
-    BodySpec, Environment, GuaranteeSpec, InitFrame, LoadedScene, OrbitSpec, Scene, SceneError,
+    BodySpec, Environment, GuaranteeSpec, InitFrame, LoadedScene, Scene, SceneError,
 };
 use bevy::prelude::*;
 use bevy_rapier3d::rapier::prelude as rp;
@@ -106,47 +105,7 @@ impl Simulation {
         pw.gravity = rp::Vector::ZERO;
         pw.integration_parameters.dt = (dt / f64::from(scene.physics_substeps)) as f32;
 
-        let reference = match &scene.environment {
-            Environment::Orbit {
-                reference,
-                j2,
-                gravity_gradient,
-            } => {
-                let (r, v) = match reference {
-                    OrbitSpec::Elements {
-                        a_m,
-                        e,
-                        i_deg,
-                        raan_deg,
-                        argp_deg,
-                        true_anomaly_deg,
-                    } => crate::orbit::kepler::ClassicalElements {
-                        a_m: *a_m,
-                        e: *e,
-                        i_rad: i_deg.to_radians(),
-                        raan_rad: raan_deg.to_radians(),
-                        argp_rad: argp_deg.to_radians(),
-                        true_anomaly_rad: true_anomaly_deg.to_radians(),
-                    }
-                    .to_state(MU_EARTH_M3_S2),
-                    OrbitSpec::State { r_eci_m, v_eci_m_s } => {
-                        (Vector3::from(*r_eci_m), Vector3::from(*v_eci_m_s))
-                    }
-                };
-                let env = OrbitEnv {
-                    reference: crate::orbit::integrate::ReferenceOrbit::from_state(r, v, *j2),
-                    j2: *j2,
-                    gravity_gradient: *gravity_gradient,
-                };
-                app.insert_resource(super::Gravity(Box::new(env.clone())));
-                app.insert_resource(env);
-                Some((r, v))
-            }
-            Environment::FreeSpace | Environment::AirBearing(_) => None,
-            Environment::SunEarthL2(spec) => {
-                super::laws::zhang2018::install_environment(&mut app, spec, dt)
-            }
-        };
+        let reference = super::environment::install(&mut app, &scene.environment, dt);
 
         let mut roster = Roster::default();
         let mut contacts = ContactState::default();
@@ -351,9 +310,10 @@ impl Simulation {
             contact_impulse_at_row: Default::default(),
         });
         super::add_pipeline(&mut app);
+        super::environment::add_systems(&mut app, &scene.environment);
         super::docking::install(&mut app, loaded)?;
         super::airbearing::install(&mut app, loaded)?;
-        super::laws::install(&mut app, loaded)?;
+        super::controllers::install(&mut app, loaded)?;
         app.finish();
         app.cleanup();
         // The monitor's view of t = 0.
@@ -424,6 +384,33 @@ impl Simulation {
             .world()
             .get_resource::<OrbitEnv>()
             .map(|e| e.reference.state())
+    }
+
+    /// The controller host: every controller's slot (law, held command, sensor, actuator) and
+    /// the scenario's disturbances.
+    pub fn controllers(&self) -> &super::controllers::ControllerHost {
+        self.app
+            .world()
+            .resource::<super::controllers::ControllerHost>()
+    }
+
+    /// The `k`-th controller (0-based, installation order) whose law is a `T`, e.g.
+    /// `sim.law::<rpod::control::guo2016::Guo2016Instance>(0)`.
+    pub fn law<T: 'static>(&self, k: usize) -> Option<&T> {
+        self.controllers().law::<T>(k)
+    }
+
+    /// Hosts one more controller (a user's law, a Python callable) on the built simulation.
+    /// Call it before [`Simulation::record_to`] (the header names its columns). Returns the
+    /// slot's index.
+    pub fn add_controller(
+        &mut self,
+        slot: crate::control::registry::Slot,
+    ) -> Result<usize, String> {
+        if self.app.world().resource::<Recorder>().files.is_some() {
+            return Err("controllers must be added before recording starts".into());
+        }
+        super::controllers::host_slot(self.app.world_mut(), slot)
     }
 
     /// The monitor's results.

@@ -25,8 +25,9 @@
 
 pub mod airbearing;
 pub mod build;
+pub mod controllers;
 pub mod docking;
-pub mod laws;
+pub mod environment;
 pub mod monitor;
 pub mod output;
 
@@ -102,15 +103,7 @@ pub struct OrbitEnv {
     pub gravity_gradient: bool,
 }
 
-/// A gravity field acting on every body's centre of mass, in the world frame. The physics
-/// step evaluates it twice per step (velocity Verlet), so it must be a function of position
-/// (and of the field's own time, advanced by [`GravityField::advance`]) only.
-pub trait GravityField: Send + Sync {
-    /// Acceleration at a world position, m/s², at the field's current time.
-    fn accel_m_s2(&self, pos_world_m: &Vector3<f64>) -> Vector3<f64>;
-    /// Moves the field's time on by `dt_s` (e.g. propagates a reference orbit).
-    fn advance(&mut self, dt_s: f64);
-}
+pub use crate::environment::GravityField;
 
 /// The scene's gravity field, if any (orbit scenes: [`OrbitEnv`]'s differential gravity).
 #[derive(Resource)]
@@ -159,7 +152,20 @@ pub struct BodyState {
     pub omega_rad_s: Vector3<f64>,
 }
 
+impl From<&BodyState> for crate::control::interface::BodyObs {
+    /// The truth as a controller sees it, without gravity (zero).
+    fn from(s: &BodyState) -> Self {
+        Self::new(s.pos_m, s.vel_m_s, s.att, s.omega_rad_s, Vector3::zeros())
+    }
+}
+
 impl BodyState {
+    /// Yaw about the world z axis: the angle of the body x axis from world x, rad (on an
+    /// air-bearing table, the lab frame's θ).
+    pub fn yaw_rad(&self) -> f64 {
+        crate::control::sensor::yaw_of(&self.att)
+    }
+
     /// Pose of the body frame origin in the world.
     pub fn body_pose(&self, com_body_m: &Vector3<f64>) -> Isometry3<f64> {
         let origin = self.pos_m - self.att * com_body_m;

@@ -616,7 +616,7 @@ impl Corridors {
     fn of(scene: &crate::scene::Scene) -> Self {
         let mut v = Vec::new();
         for c in &scene.controllers {
-            if let crate::control::ControllerSpec::Guo2016(g) = c
+            if let Some(g) = c.spec::<crate::control::guo2016::SceneSpec>()
                 && let Some(i) = scene.bodies.iter().position(|b| b.name == g.target)
                 && g.corridor_a_m > 0.0
             {
@@ -643,11 +643,9 @@ impl Surfaces {
     fn of(scene: &crate::scene::Scene) -> Self {
         let list = super::surfaces::scene_surfaces(scene);
         let legend = list.iter().map(|s| s.legend(scene)).collect();
-        let curve_body = scene.controllers.iter().find_map(|c| match c {
-            crate::control::ControllerSpec::Xu2019(x) => {
-                scene.bodies.iter().position(|b| b.name == x.chaser)
-            }
-            _ => None,
+        let curve_body = scene.controllers.iter().find_map(|c| {
+            let x = c.spec::<crate::control::xu2019::SceneSpec>()?;
+            scene.bodies.iter().position(|b| b.name == x.chaser)
         });
         Self {
             list,

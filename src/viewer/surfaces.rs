@@ -12,7 +12,6 @@
 //!   centre of mass (the law's capture guarantee is `|r_a − r_b| ≥ l` for every pair).
 //! - Every `KeepOutSphere` guarantee: the sphere of `radius_m` about `around`'s centre of mass.
 
-use crate::control::ControllerSpec;
 use crate::geometry::heart::HeartParams;
 use crate::geometry::superquadric::SuperquadricParams;
 use crate::scene::{Environment, GuaranteeSpec, Scene};
@@ -210,56 +209,52 @@ pub fn scene_surfaces(scene: &Scene) -> Vec<Surface> {
     let mut out = Vec::new();
     let index = |name: &str| scene.bodies.iter().position(|b| b.name == name);
     for c in &scene.controllers {
-        match c {
-            ControllerSpec::Xu2019(spec)
-                if matches!(scene.environment, Environment::AirBearing(_)) =>
+        if let Some(spec) = c.spec::<crate::control::xu2019::SceneSpec>()
+            && matches!(scene.environment, Environment::AirBearing(_))
+        {
+            let params = spec.params();
+            // Prism height: twice the chaser's centre-of-mass height (its plane mid-way).
+            let z1 = index(&spec.chaser)
+                .map(|i| 2.0 * scene.bodies[i].initial.pos_m[2])
+                .filter(|z| *z > 0.0)
+                .unwrap_or(0.3);
+            let sq = params.obstacle;
+            let curve = sq.outline_lab_m(OUTLINE_POINTS);
+            out.push(table_prism(
+                SurfaceKind::Superquadric(sq.clone()),
+                sq.centre(),
+                curve,
+                z1,
+                [1.0, 0.3, 0.75, 0.22],
+            ));
+            let h = params.heart;
+            let curve = h.outline_lab_m(OUTLINE_POINTS);
+            out.push(table_prism(
+                SurfaceKind::Heart(h.clone()),
+                h.centre(),
+                curve,
+                z1,
+                [1.0, 0.55, 0.15, 0.2],
+            ));
+        } else if let Some(spec) = c.spec::<crate::control::zhang2018::SceneSpec>() {
+            // One capture radius per scene (the law checks it): one sphere per body.
+            if out
+                .iter()
+                .any(|s: &Surface| matches!(s.kind, SurfaceKind::Capture { .. }))
             {
-                let params = spec.params();
-                // Prism height: twice the chaser's centre-of-mass height (its plane mid-way).
-                let z1 = index(&spec.chaser)
-                    .map(|i| 2.0 * scene.bodies[i].initial.pos_m[2])
-                    .filter(|z| *z > 0.0)
-                    .unwrap_or(0.3);
-                let sq = params.obstacle;
-                let curve = sq.outline_lab_m(OUTLINE_POINTS);
-                out.push(table_prism(
-                    SurfaceKind::Superquadric(sq.clone()),
-                    sq.centre(),
-                    curve,
-                    z1,
-                    [1.0, 0.3, 0.75, 0.22],
-                ));
-                let h = params.heart;
-                let curve = h.outline_lab_m(OUTLINE_POINTS);
-                out.push(table_prism(
-                    SurfaceKind::Heart(h.clone()),
-                    h.centre(),
-                    curve,
-                    z1,
-                    [1.0, 0.55, 0.15, 0.2],
-                ));
+                continue;
             }
-            ControllerSpec::Zhang2018(spec) => {
-                // One capture radius per scene (the law checks it): one sphere per body.
-                if out
-                    .iter()
-                    .any(|s: &Surface| matches!(s.kind, SurfaceKind::Capture { .. }))
-                {
-                    continue;
-                }
-                for i in 0..scene.bodies.len() {
-                    out.push(Surface {
-                        kind: SurfaceKind::Capture {
-                            radius_m: spec.capture_radius_m,
-                        },
-                        anchor: Anchor::BodyCom(i),
-                        mesh: sphere(spec.capture_radius_m, SPHERE_RINGS, SPHERE_SEGMENTS),
-                        curve_lab_m: Vec::new(),
-                        rgba: [1.0, 0.2, 0.2, 0.12],
-                    });
-                }
+            for i in 0..scene.bodies.len() {
+                out.push(Surface {
+                    kind: SurfaceKind::Capture {
+                        radius_m: spec.capture_radius_m,
+                    },
+                    anchor: Anchor::BodyCom(i),
+                    mesh: sphere(spec.capture_radius_m, SPHERE_RINGS, SPHERE_SEGMENTS),
+                    curve_lab_m: Vec::new(),
+                    rgba: [1.0, 0.2, 0.2, 0.12],
+                });
             }
-            _ => {}
         }
     }
     for g in &scene.guarantees {
@@ -333,7 +328,7 @@ mod tests {
     fn invariant_viewer_xu2019_prisms_on_the_laws_boundaries() {
         let scene = load("xu2019_simulation.ron");
         let surfaces = scene_surfaces(&scene);
-        let ControllerSpec::Xu2019(spec) = &scene.controllers[0] else {
+        let Some(spec) = scene.controllers[0].spec::<crate::control::xu2019::SceneSpec>() else {
             panic!("xu2019 scene has an Xu2019 controller");
         };
         let law = spec.params();
@@ -409,7 +404,7 @@ mod tests {
     fn invariant_viewer_capture_and_keep_out_spheres() {
         // Zhang 2018: a sphere of radius l about every body.
         let scene = load("zhang2018_pair.ron");
-        let ControllerSpec::Zhang2018(spec) = &scene.controllers[0] else {
+        let Some(spec) = scene.controllers[0].spec::<crate::control::zhang2018::SceneSpec>() else {
             panic!("zhang2018 scene has a Zhang2018 controller");
         };
         let l = spec.capture_radius_m;

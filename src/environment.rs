@@ -1,0 +1,76 @@
+//! The environment layer, Bevy-free: gravity fields acting on the bodies' centres of mass and
+//! what a controller may know about the environment it flies in.
+//!
+//! The Bevy layer (`sim::environment`) turns a scene's `environment` into one of these fields
+//! and steps it; the controller host hands every law an [`EnvObs`] with the same numbers.
+
+use crate::orbit::l2::L2Centre;
+use nalgebra::Vector3;
+
+/// A gravity field acting on every body's centre of mass, in the world frame. The physics step
+/// evaluates it twice per step (velocity Verlet), so it must be a function of position (and of
+/// the field's own time, advanced by [`GravityField::advance`]) only.
+pub trait GravityField: Send + Sync {
+    /// Acceleration at a world position, m/s², at the field's current time.
+    fn accel_m_s2(&self, pos_world_m: &Vector3<f64>) -> Vector3<f64>;
+    /// Moves the field's time on by `dt_s` (e.g. propagates a reference orbit).
+    fn advance(&mut self, dt_s: f64);
+}
+
+/// The gravity field of a `SunEarthL2` scene (Zhang et al. 2018): differential Sun + Earth–Moon
+/// barycentre gravity about a thrust-free formation centre (see [`crate::orbit::l2`]). The world
+/// frame is non-rotating, its axes those of the Sun–EMB rotating frame at t = 0, its origin on
+/// the centre.
+pub struct L2Gravity(pub L2Centre);
+
+impl GravityField for L2Gravity {
+    fn accel_m_s2(&self, pos_world_m: &Vector3<f64>) -> Vector3<f64> {
+        self.0.differential_accel_world_m_s2(pos_world_m)
+    }
+    /// Advances one scene step (the centre steps by its own `dt_s`, the scene's step).
+    fn advance(&mut self, dt_s: f64) {
+        debug_assert!((dt_s - self.0.dt_s).abs() <= 1e-12 * dt_s);
+        self.0.advance();
+    }
+}
+
+/// What a controller knows of the environment at one instant (f64).
+#[derive(Debug, Clone, Copy)]
+pub enum EnvObs<'a> {
+    /// Force-free space, inertial world frame.
+    FreeSpace,
+    /// Earth orbit: the world frame's origin rides on the reference orbit (the target's
+    /// unforced orbit), its axes parallel to the Earth-centred inertial frame.
+    Orbit {
+        /// Reference orbit position, ECI, m.
+        r_ref_eci_m: Vector3<f64>,
+        /// Reference orbit velocity, ECI, m/s.
+        v_ref_eci_m_s: Vector3<f64>,
+        /// Whether the scene's gravity includes J2.
+        j2: bool,
+    },
+    /// Near the Sun–Earth L2 point: the world origin is the formation centre.
+    SunEarthL2 {
+        /// The formation centre at the current step (frame conversions to the rotating frame).
+        centre: &'a L2Centre,
+    },
+    /// An air-bearing table: the lab frame (x, y in the table top, z up).
+    AirBearing {
+        /// Gravity in the lab frame, m/s².
+        gravity_lab_m_s2: Vector3<f64>,
+    },
+}
+
+impl EnvObs<'_> {
+    /// The reference orbit's ECI state (r, v), in orbit scenes.
+    pub fn reference(&self) -> Option<(Vector3<f64>, Vector3<f64>)> {
+        match self {
+            EnvObs::Orbit {
+                r_ref_eci_m,
+                v_ref_eci_m_s,
+                ..
+            } => Some((*r_ref_eci_m, *v_ref_eci_m_s)),
+            _ => None,
+        }
+    }
+}

@@ -1,0 +1,93 @@
+//! The environment layer of the Bevy app: a scene's `environment` becomes its gravity field
+//! ([`super::Gravity`]) and the resources the Environment stage and the controllers read.
+//!
+//! - `Orbit`: [`OrbitEnv`] (the f64 reference orbit, two-body + J2) and its differential gravity.
+//! - `SunEarthL2`: [`crate::environment::L2Gravity`] about the formation centre, and
+//!   [`L2Frame`], a copy of the centre advanced on the same steps (bit-identical) for frame
+//!   conversions (controllers, reports), brought to the current step in the Sense stage.
+//! - `FreeSpace`: nothing. `AirBearing`: see [`super::airbearing`].
+
+use super::{Clock, Gravity, OrbitEnv, SimStep, Stage};
+use crate::environment::L2Gravity;
+use crate::orbit::constants::MU_EARTH_M3_S2;
+use crate::orbit::l2::L2Centre;
+use crate::scene::{Environment, OrbitSpec};
+use bevy::prelude::*;
+use nalgebra::Vector3;
+
+/// The formation centre of a `SunEarthL2` scene as the controllers see it (advanced on the
+/// same steps as the gravity field's copy, in the Sense stage).
+#[derive(Resource, Debug, Clone)]
+pub struct L2Frame(pub L2Centre);
+
+/// Sense: brings the [`L2Frame`] to the current step.
+pub fn sync_l2_frame(clock: Res<Clock>, mut frame: ResMut<L2Frame>) {
+    while frame.0.steps < clock.step {
+        frame.0.advance();
+    }
+}
+
+/// The reference orbit's ECI state at t = 0 of an orbit spec.
+pub fn reference_state(reference: &OrbitSpec) -> (Vector3<f64>, Vector3<f64>) {
+    match reference {
+        OrbitSpec::Elements {
+            a_m,
+            e,
+            i_deg,
+            raan_deg,
+            argp_deg,
+            true_anomaly_deg,
+        } => crate::orbit::kepler::ClassicalElements {
+            a_m: *a_m,
+            e: *e,
+            i_rad: i_deg.to_radians(),
+            raan_rad: raan_deg.to_radians(),
+            argp_rad: argp_deg.to_radians(),
+            true_anomaly_rad: true_anomaly_deg.to_radians(),
+        }
+        .to_state(MU_EARTH_M3_S2),
+        OrbitSpec::State { r_eci_m, v_eci_m_s } => {
+            (Vector3::from(*r_eci_m), Vector3::from(*v_eci_m_s))
+        }
+    }
+}
+
+/// Inserts the scene environment's gravity field and resources. Returns the reference orbit's
+/// ECI state at t = 0 (orbit scenes: Hill-frame initial states are written relative to it).
+pub fn install(
+    app: &mut App,
+    environment: &Environment,
+    dt_s: f64,
+) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    match environment {
+        Environment::Orbit {
+            reference,
+            j2,
+            gravity_gradient,
+        } => {
+            let (r, v) = reference_state(reference);
+            let env = OrbitEnv {
+                reference: crate::orbit::integrate::ReferenceOrbit::from_state(r, v, *j2),
+                j2: *j2,
+                gravity_gradient: *gravity_gradient,
+            };
+            app.insert_resource(Gravity(Box::new(env.clone())));
+            app.insert_resource(env);
+            Some((r, v))
+        }
+        Environment::FreeSpace | Environment::AirBearing(_) => None,
+        Environment::SunEarthL2(spec) => {
+            let centre = L2Centre::new(spec, dt_s);
+            app.insert_resource(Gravity(Box::new(L2Gravity(centre.clone()))));
+            app.insert_resource(L2Frame(centre));
+            None
+        }
+    }
+}
+
+/// The environment's systems (added after the pipeline's schedule exists).
+pub fn add_systems(app: &mut App, environment: &Environment) {
+    if let Environment::SunEarthL2(_) = environment {
+        app.add_systems(SimStep, sync_l2_frame.in_set(Stage::Sense));
+    }
+}
