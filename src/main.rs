@@ -448,6 +448,24 @@ fn run(
                     g["worst_margin_t_s"].as_f64().unwrap_or(f64::NAN)
                 );
             }
+            if let Some(d) = summary["docking"].as_object() {
+                out!(
+                    "docking: {}{}",
+                    d.get("state").and_then(|s| s.as_str()).unwrap_or("?"),
+                    d.get("t_latch_s")
+                        .and_then(|t| t.as_f64())
+                        .map_or(String::new(), |t| format!(", latched at t = {t:.2} s"))
+                );
+            }
+            for c in summary["controllers"].as_array().into_iter().flatten() {
+                out!(
+                    "controller {} on {}: {} calls, delta-v {:.4} m/s",
+                    c["kind"].as_str().unwrap_or(""),
+                    c["body"].as_str().unwrap_or(""),
+                    c["calls"],
+                    c["delta_v_m_s"].as_f64().unwrap_or(f64::NAN)
+                );
+            }
             out!(
                 "wrote {}/{{trajectory.csv, events.jsonl, contacts.csv, summary.json}}",
                 out.display()

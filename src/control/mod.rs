@@ -8,6 +8,7 @@
 //! - One file per paper law ([`guo2016`], [`xu2015`], [`geng2015`], [`xu2019`],
 //!   [`zhang2018`]): the law, its scene entry, its controller and guarantees.
 
+pub mod generic;
 pub mod geng2015;
 pub mod guo2016;
 pub mod interface;

@@ -484,13 +484,29 @@ static REGISTRY: LazyLock<RwLock<BTreeMap<String, Entry>>> = LazyLock::new(|| {
 
 /// The laws this crate registers: one line per law.
 fn builtin() -> Vec<(&'static str, Entry)> {
-    use crate::control::{geng2015, guo2016, xu2015, xu2019, zhang2018};
+    use crate::control::{generic, geng2015, guo2016, xu2015, xu2019, zhang2018};
     vec![
         ("Guo2016", Entry::Spec(de_spec::<guo2016::SceneSpec>)),
         ("Geng2015", Entry::Spec(de_spec::<geng2015::SceneSpec>)),
         ("Xu2015", Entry::Spec(de_spec::<xu2015::SceneSpec>)),
         ("Zhang2018", Entry::Spec(de_spec::<zhang2018::SceneSpec>)),
         ("Xu2019", Entry::Spec(de_spec::<xu2019::SceneSpec>)),
+        (
+            "HillPd",
+            Entry::Law(de_params::<generic::hill::HillPdParams>),
+        ),
+        (
+            "Glideslope",
+            Entry::Law(de_params::<generic::glideslope::GlideslopeParams>),
+        ),
+        (
+            "Attitude",
+            Entry::Law(de_params::<generic::attitude::AttitudeParams>),
+        ),
+        (
+            "Sequencer",
+            Entry::Law(de_params::<generic::sequencer::SequencerParams>),
+        ),
     ]
 }
 
@@ -740,6 +756,60 @@ impl<'de> DeserializeSeed<'de> for Identifier {
             }
         }
         d.deserialize_identifier(V)
+    }
+}
+
+/// A law registered with [`register_law`] written by its parameters only, `Name((…))` —
+/// how a [`crate::control::generic::sequencer`] phase names the laws it flies (they share the
+/// sequencer entry's body, target, period, sensor and actuator).
+pub struct LawParamsSpec {
+    /// The registered name.
+    pub kind: String,
+    /// The parameters.
+    pub params: Box<dyn LawParams>,
+}
+
+impl Clone for LawParamsSpec {
+    fn clone(&self) -> Self {
+        Self {
+            kind: self.kind.clone(),
+            params: self.params.clone_box(),
+        }
+    }
+}
+
+impl fmt::Debug for LawParamsSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}({:?})", self.kind, self.params)
+    }
+}
+
+impl<'de> Deserialize<'de> for LawParamsSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = LawParamsSpec;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a law by its parameters, e.g. `HillPd((hold_m: …, gains: …))`")
+            }
+            fn visit_enum<A: EnumAccess<'de>>(self, data: A) -> Result<LawParamsSpec, A::Error> {
+                let (kind, variant) = data.variant_seed(Identifier)?;
+                match lookup(&kind) {
+                    Some(Entry::Law(f)) => Ok(LawParamsSpec {
+                        kind,
+                        params: variant.newtype_variant_seed(ErasedSeed(f))?,
+                    }),
+                    Some(Entry::Spec(_)) => Err(de::Error::custom(format!(
+                        "`{kind}` reads a whole controller entry and cannot be named by its parameters here"
+                    ))),
+                    None => Err(de::Error::custom(format!(
+                        "unknown law `{kind}`; registered: {}",
+                        registered().join(", ")
+                    ))),
+                }
+            }
+        }
+        d.deserialize_enum("Law", &[], V)
     }
 }
 

@@ -839,15 +839,37 @@ pub enum GuaranteeSpec {
         /// Sphere radius, m.
         radius_m: f64,
     },
+    /// Full-geometry approach cone: while `body`'s centre of mass is between `to_range_m` and
+    /// `from_range_m` from the port `port` of `around`, every point of every part of `body`
+    /// stays inside the cone with its apex at the port, its axis the port's outward axis and
+    /// half-angle `half_angle_deg` (margin = the clearance to the cone's wall, m; `inf` outside
+    /// the range band; see [`crate::geometry::approach_cone`]).
+    ApproachCone {
+        /// Guarantee name.
+        name: String,
+        /// The body that approaches.
+        body: String,
+        /// The body with the port.
+        around: String,
+        /// The port (its origin is the apex).
+        port: String,
+        /// Half-angle, deg (0 < α < 90).
+        half_angle_deg: f64,
+        /// The cone applies from this range (centre of mass to apex) inwards, m.
+        from_range_m: f64,
+        /// … down to this range, m (default 0).
+        #[serde(default)]
+        to_range_m: f64,
+    },
 }
 
 impl GuaranteeSpec {
     /// The guarantee's name.
     pub fn name(&self) -> &str {
         match self {
-            GuaranteeSpec::MinDistance { name, .. } | GuaranteeSpec::KeepOutSphere { name, .. } => {
-                name
-            }
+            GuaranteeSpec::MinDistance { name, .. }
+            | GuaranteeSpec::KeepOutSphere { name, .. }
+            | GuaranteeSpec::ApproachCone { name, .. } => name,
         }
     }
 }

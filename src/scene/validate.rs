@@ -174,6 +174,54 @@ pub fn validate(s: &Scene) -> Check {
                 }
                 positive(&format!("{p}.radius_m"), *radius_m, "metres")?;
             }
+            GuaranteeSpec::ApproachCone {
+                body,
+                around,
+                port,
+                half_angle_deg,
+                from_range_m,
+                to_range_m,
+                ..
+            } => {
+                for (f, n) in [("body", body), ("around", around)] {
+                    if !body_exists(n) {
+                        return fail(format!("{p}.{f}"), format!("no body named `{n}`"));
+                    }
+                }
+                if body == around {
+                    return fail(
+                        format!("{p}.around"),
+                        "must name a different body than `body`",
+                    );
+                }
+                let has_port = s
+                    .bodies
+                    .iter()
+                    .find(|b| &b.name == around)
+                    .is_some_and(|b| b.ports.iter().any(|q| &q.name == port));
+                if !has_port {
+                    return fail(
+                        format!("{p}.port"),
+                        format!("body `{around}` has no port `{port}`"),
+                    );
+                }
+                if !(half_angle_deg.is_finite() && *half_angle_deg > 0.0 && *half_angle_deg < 90.0)
+                {
+                    return fail(
+                        format!("{p}.half_angle_deg"),
+                        format!("must be an angle in (0, 90) deg, got {half_angle_deg}"),
+                    );
+                }
+                positive(&format!("{p}.from_range_m"), *from_range_m, "metres")?;
+                if !(to_range_m.is_finite() && *to_range_m >= 0.0 && to_range_m < from_range_m) {
+                    return fail(
+                        format!("{p}.to_range_m"),
+                        format!(
+                            "must be ≥ 0 m and below from_range_m ({from_range_m} m), got {to_range_m}"
+                        ),
+                    );
+                }
+            }
         }
     }
     Ok(())

@@ -267,6 +267,35 @@ impl Simulation {
                     around: idx(around),
                     radius_m: *radius_m,
                 })),
+                GuaranteeSpec::ApproachCone {
+                    name,
+                    body,
+                    around,
+                    port,
+                    half_angle_deg,
+                    from_range_m,
+                    to_range_m,
+                } => {
+                    let (b, a) = (idx(body), idx(around));
+                    let (port_m, axis) =
+                        crate::scene::parts::port_frame(&scene.bodies[a], port).expect("validated");
+                    guarantees.register(Box::new(crate::geometry::approach_cone::ApproachCone {
+                        name: name.clone(),
+                        body: b,
+                        body_com_m: Vector3::from(scene.bodies[b].com_m),
+                        points: all_parts[b]
+                            .iter()
+                            .flat_map(crate::geometry::approach_cone::support_points)
+                            .collect(),
+                        around: a,
+                        around_com_m: Vector3::from(scene.bodies[a].com_m),
+                        port_m,
+                        axis,
+                        half_angle_rad: half_angle_deg.to_radians(),
+                        from_range_m: *from_range_m,
+                        to_range_m: *to_range_m,
+                    }))
+                }
             }
         }
 
@@ -516,6 +545,7 @@ impl Simulation {
             "final_states": finals,
             "monitor": {"exact_queries": mon.exact_queries, "pruned_pairs": mon.pruned_pairs},
             "docking": w.get_resource::<super::docking::Docking>().map(super::docking::summary),
+            "controllers": w.resource::<super::controllers::ControllerHost>().summary(),
         })
     }
 

@@ -106,6 +106,28 @@ impl ControllerHost {
             .filter(|s| s.law.as_any().is::<T>())
             .nth(k)
     }
+    /// Per controller: kind, body, target, period, calls, the velocity increment its actuator
+    /// applied (∫|F|/m dt, m/s) and the propellant it used (thrusters, kg) — for `summary.json`.
+    pub fn summary(&self) -> serde_json::Value {
+        let name = |i: usize| self.info.get(i).map(|b| b.name.clone());
+        serde_json::Value::Array(
+            self.slots
+                .iter()
+                .map(|s| {
+                    serde_json::json!({
+                        "kind": s.kind,
+                        "body": name(s.body),
+                        "target": s.target.and_then(name),
+                        "period_steps": s.period_steps,
+                        "calls": s.calls,
+                        "delta_v_m_s": s.actuator.delta_v_m_s,
+                        "propellant_used_kg": s.actuator.propellant_used_kg,
+                    })
+                })
+                .collect(),
+        )
+    }
+
     /// The `k`-th disturbance of type `T`.
     pub fn disturbance<T: 'static>(&self, k: usize) -> Option<&T> {
         self.disturbances

@@ -129,8 +129,23 @@ impl OutputFiles {
     }
 }
 
-/// The CSV header for the current roster, guarantees and diagnostics.
-pub fn header(roster: &Roster, g: &Guarantees, diag: &Diagnostics) -> String {
+/// Columns of the reference orbit's ECI state (orbit scenes), after every other column.
+const REF_COLS: [&str; 6] = ["rx_m", "ry_m", "rz_m", "vx_m_s", "vy_m_s", "vz_m_s"];
+
+/// Columns of a body's state in the reference orbit's rotating Hill frame (orbit scenes).
+const HILL_COLS: [&str; 6] = [
+    "hill_x_m",
+    "hill_y_m",
+    "hill_z_m",
+    "hill_vx_m_s",
+    "hill_vy_m_s",
+    "hill_vz_m_s",
+];
+
+/// The CSV header for the current roster, guarantees and diagnostics. `orbit`: the scene is in
+/// orbit (then the reference orbit's ECI state `ref.*` and each body's Hill-frame state
+/// `NAME.hill_*` end the row).
+pub fn header(roster: &Roster, g: &Guarantees, diag: &Diagnostics, orbit: bool) -> String {
     let mut cols = vec!["t_s".to_string()];
     for name in &roster.names {
         for c in STATE_COLS {
@@ -153,10 +168,33 @@ pub fn header(roster: &Roster, g: &Guarantees, diag: &Diagnostics) -> String {
         cols.push(format!("guarantee.{}.margin_{}", s.name, s.unit));
     }
     cols.extend(diag.names.iter().cloned());
+    if orbit {
+        cols.extend(REF_COLS.iter().map(|c| format!("ref.{c}")));
+        for name in &roster.names {
+            cols.extend(HILL_COLS.iter().map(|c| format!("{name}.{c}")));
+        }
+    }
     cols.join(",")
 }
 
+/// The reference orbit's ECI state and every body's state relative to it in its rotating
+/// Hill frame (x radial out, y along-track, z orbit normal; velocity seen in the rotating
+/// frame, ρ̇_H = C (ρ̇ − ω × ρ) with ω = r × v / |r|²), for the row.
+fn orbit_values(orbit: &super::OrbitEnv, states: &[(&SimBody, &BodyState)]) -> Vec<f64> {
+    use crate::orbit::lvlh::{LocalFrame, LocalFrameKind};
+    let (r, v) = orbit.reference.state();
+    let f = LocalFrame::new(LocalFrameKind::Hill, &r, &v);
+    let mut out = Vec::with_capacity(6 + 6 * states.len());
+    out.extend(r.iter().chain(v.iter()));
+    for (_, s) in states {
+        let (p, q) = f.to_local(&s.pos_m, &s.vel_m_s);
+        out.extend(p.iter().chain(q.iter()));
+    }
+    out
+}
+
 /// Writes one row to `w`.
+#[allow(clippy::too_many_arguments)]
 fn write_row(
     w: &mut impl Write,
     t_s: f64,
@@ -164,6 +202,7 @@ fn write_row(
     mon: &MonitorState,
     g: &Guarantees,
     diag: &Diagnostics,
+    orbit: Option<&super::OrbitEnv>,
 ) -> std::io::Result<()> {
     write!(w, "{t_s}")?;
     for (_, s) in states {
@@ -207,6 +246,11 @@ fn write_row(
     }
     for v in &diag.values {
         write!(w, ",{v}")?;
+    }
+    if let Some(o) = orbit {
+        for v in orbit_values(o, states) {
+            write!(w, ",{v}")?;
+        }
     }
     writeln!(w)
 }
@@ -270,6 +314,7 @@ fn write_step(
     diag: &Diagnostics,
     log: &mut EventLog,
     cs: &ContactState,
+    orbit: Option<&super::OrbitEnv>,
 ) {
     let pending: Vec<super::Event> = std::mem::take(&mut log.pending);
     if let Some(files) = rec.files.as_mut() {
@@ -286,7 +331,7 @@ fn write_step(
         return;
     }
     if let Some(files) = rec.files.as_mut()
-        && let Err(err) = write_row(&mut files.traj, t, states, mon, g, diag)
+        && let Err(err) = write_row(&mut files.traj, t, states, mon, g, diag, orbit)
     {
         rec.error.get_or_insert(err.to_string());
     }
@@ -324,6 +369,7 @@ pub fn record(
     mut log: ResMut<EventLog>,
     mut rec: ResMut<Recorder>,
     cs: Res<ContactState>,
+    orbit: Option<Res<super::OrbitEnv>>,
 ) {
     let rec = &mut *rec;
     let due = clock.step.is_multiple_of(u64::from(rec.every)) || rec.force_row;
@@ -358,6 +404,7 @@ pub fn record(
         &diag,
         &mut log,
         &cs,
+        orbit.as_deref(),
     );
 }
 
@@ -367,6 +414,7 @@ pub fn write_header(world: &mut World) {
         world.resource::<Roster>(),
         world.resource::<Guarantees>(),
         world.resource::<Diagnostics>(),
+        world.contains_resource::<super::OrbitEnv>(),
     );
     let mut rec = world.resource_mut::<Recorder>();
     if let Some(files) = rec.files.as_mut()
