@@ -616,21 +616,21 @@ impl ControllerSpec {
     /// `SceneSpec`), if it is one.
     pub fn spec<S: 'static>(&self) -> Option<&S> {
         match &self.body {
-            ControllerBody::Spec(s) => s.as_any().downcast_ref::<S>(),
+            ControllerBody::Spec(s) => (**s).as_any().downcast_ref::<S>(),
             ControllerBody::Law(_) => None,
         }
     }
     /// The entry as the spec type `S`, mutably (to change a loaded scene before a run).
     pub fn spec_mut<S: 'static>(&mut self) -> Option<&mut S> {
         match &mut self.body {
-            ControllerBody::Spec(s) => s.as_any_mut().downcast_mut::<S>(),
+            ControllerBody::Spec(s) => (**s).as_any_mut().downcast_mut::<S>(),
             ControllerBody::Law(_) => None,
         }
     }
     /// The parameters as `P` of a [`register_law`] law, if they are.
     pub fn params<P: 'static>(&self) -> Option<&P> {
         match &self.body {
-            ControllerBody::Law(l) => l.params.as_any().downcast_ref::<P>(),
+            ControllerBody::Law(l) => (*l.params).as_any().downcast_ref::<P>(),
             ControllerBody::Spec(_) => None,
         }
     }

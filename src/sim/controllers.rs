@@ -96,14 +96,14 @@ impl ControllerHost {
     pub fn law<T: 'static>(&self, k: usize) -> Option<&T> {
         self.slots
             .iter()
-            .filter_map(|s| s.law.as_any().downcast_ref::<T>())
+            .filter_map(|s| (*s.law).as_any().downcast_ref::<T>())
             .nth(k)
     }
     /// The `k`-th slot whose law is a `T`.
     pub fn slot_of<T: 'static>(&self, k: usize) -> Option<&HostedSlot> {
         self.slots
             .iter()
-            .filter(|s| s.law.as_any().is::<T>())
+            .filter(|s| (*s.law).as_any().is::<T>())
             .nth(k)
     }
     /// Per controller: kind, body, target, period, calls, the velocity increment its actuator
@@ -132,7 +132,7 @@ impl ControllerHost {
     pub fn disturbance<T: 'static>(&self, k: usize) -> Option<&T> {
         self.disturbances
             .iter()
-            .filter_map(|d| d.as_any().downcast_ref::<T>())
+            .filter_map(|d| (**d).as_any().downcast_ref::<T>())
             .nth(k)
     }
 }
