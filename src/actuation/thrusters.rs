@@ -4,7 +4,7 @@
 //! The paper states: nozzles 1-1, 2-1, 3-1, 4-1 control position; pairs 1-2 & 3-2 and
 //! 2-2 & 4-2, firing together, control attitude; one nozzle gives ≈ 0.05 N; "the two lateral
 //! nozzles give a torque of ≈ 0.009 N·m". Fig. 10 itself is not in the extracted text, so the
-//! geometry below is **[derived]**, chosen to match those statements:
+//! geometry below is **\[derived\]**, chosen to match those statements:
 //!
 //! Body frame: origin at the centre of mass, x_b forward, y_b left, z_b up (lab z). Four
 //! stations at distance `l` on the body axes; station i carries translation nozzle i-1 (thrust
@@ -51,7 +51,7 @@ pub struct Nozzle {
     pub dir_body: Vector2<f64>,
 }
 
-/// Thruster layout and valve constants (§3.1; lever arm and I_sp [derived], see module doc).
+/// Thruster layout and valve constants (§3.1; lever arm and I_sp \[derived\], see module doc).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ThrusterParams {

@@ -376,7 +376,7 @@ pub struct BoundaryValue {
 
 /// Eq (12) evaluated at the state's own line of sight s5 (as the paper does along its scenario
 /// for Fig. 2): A = V_xp − V_xe + a0_xp − a0_xe, B likewise in y, Q = √(A²+B²),
-/// a = atan2(A, B). Equals [`hamiltonian_star`] with γ = [`gamma_on_boundary`](s5).
+/// a = atan2(A, B). Equals [`hamiltonian_star`] with γ = [`gamma_on_boundary`] (s5).
 pub fn boundary_value(params: &Zhang2018Params, x: &GameState, role: PursuerRole) -> BoundaryValue {
     let (p, e) = (p_state(x), e_state(x));
     let d0 = params.drift.accel_rot_m_s2(&p) - params.drift.accel_rot_m_s2(&e);

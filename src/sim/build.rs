@@ -415,6 +415,41 @@ impl Simulation {
             .map(|e| e.reference.state())
     }
 
+    /// Loads, validates and builds a scene file (`overrides`: `--set`-style `path=value`).
+    pub fn from_file(path: impl AsRef<Path>, overrides: &[String]) -> Result<Self, SceneError> {
+        let loaded = crate::scene::load_scene_file(path.as_ref(), overrides)?;
+        Self::new(&loaded)
+    }
+
+    /// Advances the simulation by `duration_s` of simulated time (rounded to whole steps).
+    pub fn run_for(&mut self, duration_s: f64) {
+        let n = self.steps_for(duration_s);
+        self.step(n);
+    }
+
+    /// A guarantee's running status by name (held, worst margin and when, first violation).
+    pub fn guarantee(&self, name: &str) -> Option<&crate::guarantee::GuaranteeStatus> {
+        self.guarantees().status.iter().find(|s| s.name == name)
+    }
+
+    /// The docking mechanism's state (`FREE`, …, `LATCHED`), if the scene has one.
+    pub fn docking_state(&self) -> Option<&'static str> {
+        self.app
+            .world()
+            .get_resource::<super::docking::Docking>()
+            .map(|d| d.state.name())
+    }
+
+    /// The smallest clearance so far between parts that are not both docking parts, over every
+    /// body pair, m (0 when they touched).
+    pub fn min_clearance_non_docking_m(&self) -> f64 {
+        self.monitor()
+            .min_clearance_per_pair
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// The controller host: every controller's slot (law, held command, sensor, actuator) and
     /// the scenario's disturbances.
     pub fn controllers(&self) -> &super::controllers::ControllerHost {
