@@ -53,6 +53,10 @@ pub enum EnvObs<'a> {
     SunEarthL2 {
         /// The formation centre at the current step (frame conversions to the rotating frame).
         centre: &'a L2Centre,
+        /// Every body's planar state in the rotating frame, `centre.world_to_rot` of its world
+        /// state, scene order (computed once per step by the controller host; empty where it
+        /// is not).
+        states_rot: &'a [crate::orbit::l2::L2State],
     },
     /// An air-bearing table: the lab frame (x, y in the table top, z up).
     AirBearing {

@@ -1923,35 +1923,32 @@ impl crate::control::registry::Disturbance for Geng2015Disturbance {
     fn wrenches(
         &mut self,
         ctx: &crate::control::registry::DisturbanceContext,
-    ) -> Vec<crate::control::registry::BodyWrench> {
+        out: &mut Vec<crate::control::registry::BodyWrench>,
+    ) {
         let dist = &self.set;
-        [(self.chaser, true), (self.target, false)]
-            .into_iter()
-            .map(|(idx, is_chaser)| {
-                let a = accel_disturbance_m_s2(
-                    if is_chaser {
-                        dist.chaser_form
-                    } else {
-                        dist.target_form
-                    },
-                    &if is_chaser {
-                        dist.chaser_accel0_m_s2
-                    } else {
-                        dist.target_accel0_m_s2
-                    },
-                    dist.k_d_per_s,
-                    ctx.t_s,
-                );
-                let tq =
-                    torque_disturbance_nm(dist.torque_scale_nm, dist.omega_orbit_rad_s, ctx.t_s);
-                let s = &ctx.bodies[idx];
-                crate::control::registry::BodyWrench {
-                    body: idx,
-                    force_n: Some(s.att * (a * ctx.info[idx].mass_kg)),
-                    torque_nm: Some(s.att * tq),
-                }
-            })
-            .collect()
+        for (idx, is_chaser) in [(self.chaser, true), (self.target, false)] {
+            let a = accel_disturbance_m_s2(
+                if is_chaser {
+                    dist.chaser_form
+                } else {
+                    dist.target_form
+                },
+                &if is_chaser {
+                    dist.chaser_accel0_m_s2
+                } else {
+                    dist.target_accel0_m_s2
+                },
+                dist.k_d_per_s,
+                ctx.t_s,
+            );
+            let tq = torque_disturbance_nm(dist.torque_scale_nm, dist.omega_orbit_rad_s, ctx.t_s);
+            let s = &ctx.bodies[idx];
+            out.push(crate::control::registry::BodyWrench {
+                body: idx,
+                force_n: Some(s.att * (a * ctx.info[idx].mass_kg)),
+                torque_nm: Some(s.att * tq),
+            });
+        }
     }
 }
 
@@ -2180,6 +2177,10 @@ impl crate::control::registry::LawSpec for SceneSpec {
 }
 
 impl crate::control::interface::Controller for Geng2015Loop {
+    fn needs(&self) -> crate::control::interface::Needs {
+        crate::control::interface::Needs::NONE
+    }
+
     fn command(
         &mut self,
         obs: &crate::control::interface::Observation,

@@ -1276,14 +1276,15 @@ impl crate::control::registry::Disturbance for Guo2016Disturbance {
     fn wrenches(
         &mut self,
         ctx: &crate::control::registry::DisturbanceContext,
-    ) -> Vec<crate::control::registry::BodyWrench> {
+        out: &mut Vec<crate::control::registry::BodyWrench>,
+    ) {
         let d = self.amplitude_nm * (self.rate_rad_s * ctx.t_s).cos();
         self.last_body_nm = d;
-        vec![crate::control::registry::BodyWrench {
+        out.push(crate::control::registry::BodyWrench {
             body: self.chaser,
             force_n: None,
             torque_nm: Some(ctx.bodies[self.chaser].att * d),
-        }]
+        });
     }
 }
 
@@ -1404,6 +1405,14 @@ impl crate::control::registry::LawSpec for SceneSpec {
 }
 
 impl crate::control::interface::Controller for Guo2016Instance {
+    fn needs(&self) -> crate::control::interface::Needs {
+        crate::control::interface::Needs {
+            relative: false,
+            ports: false,
+            gravity: true,
+        }
+    }
+
     fn command(
         &mut self,
         obs: &crate::control::interface::Observation,

@@ -257,12 +257,12 @@ pub struct Observation<'a> {
     /// The environment.
     pub env: EnvObs<'a>,
     /// The controlled body relative to the target (when the slot names one).
-    pub relative: Option<RelativeObs>,
+    pub relative: Option<&'a RelativeObs>,
     /// Both docking ports (when the slot names them, or the scene's docking mechanism joins the
     /// controlled body and its target).
-    pub ports: Option<PortsObs>,
+    pub ports: Option<&'a PortsObs>,
     /// The slot's sensor output (None without a sensor or before the first delivery).
-    pub measured: Option<Measurement>,
+    pub measured: Option<&'a Measurement>,
     /// The docking mechanism.
     pub docking: Option<DockingObs>,
     /// Every guarantee's margin at the end of the previous step.
@@ -419,6 +419,42 @@ impl<T: Any> AsAny for T {
     }
 }
 
+/// What a law reads beyond every body's truth, the environment, the docking state, the
+/// guarantees and its sensor: the host computes only what some law needs (a speed hint; the
+/// default, [`Needs::ALL`], is always correct).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Needs {
+    /// [`Observation::relative`] (the Hill and target-body relative states).
+    pub relative: bool,
+    /// [`Observation::ports`].
+    pub ports: bool,
+    /// [`BodyObs::gravity_m_s2`] (zero when not needed).
+    pub gravity: bool,
+}
+
+impl Needs {
+    /// Everything.
+    pub const ALL: Needs = Needs {
+        relative: true,
+        ports: true,
+        gravity: true,
+    };
+    /// Nothing beyond the always-present fields.
+    pub const NONE: Needs = Needs {
+        relative: false,
+        ports: false,
+        gravity: false,
+    };
+    /// Either's needs.
+    pub fn union(self, o: Needs) -> Needs {
+        Needs {
+            relative: self.relative || o.relative,
+            ports: self.ports || o.ports,
+            gravity: self.gravity || o.gravity,
+        }
+    }
+}
+
 /// A control law. Only [`Controller::command`] is required.
 ///
 /// ```
@@ -470,6 +506,11 @@ pub trait Controller: AsAny + Send + Sync {
     /// Events raised since the last call (drained after every [`Controller::command`]).
     fn take_events(&mut self) -> Vec<ControllerEvent> {
         Vec::new()
+    }
+
+    /// What the law reads (see [`Needs`]; default: everything).
+    fn needs(&self) -> Needs {
+        Needs::ALL
     }
 
     /// The tracking error of a translation law at its last call: (|position error| m,

@@ -86,8 +86,8 @@ impl fmt::Display for BuildError {
 /// manoeuvre): world-frame forces and torques on bodies, every step, in the Actuate stage after
 /// the controllers' commands.
 pub trait Disturbance: AsAny + Send + Sync {
-    /// The wrenches of this step.
-    fn wrenches(&mut self, ctx: &DisturbanceContext) -> Vec<BodyWrench>;
+    /// Appends the wrenches of this step to `out` (added in that order).
+    fn wrenches(&mut self, ctx: &DisturbanceContext, out: &mut Vec<BodyWrench>);
 }
 
 /// What a disturbance may read.

@@ -1389,17 +1389,18 @@ impl crate::control::registry::Disturbance for Xu2015Maneuver {
     fn wrenches(
         &mut self,
         ctx: &crate::control::registry::DisturbanceContext,
-    ) -> Vec<crate::control::registry::BodyWrench> {
+        out: &mut Vec<crate::control::registry::BodyWrench>,
+    ) {
         let Some((r, v)) = ctx.env.reference() else {
-            return Vec::new();
+            return;
         };
         let c = dcm_eci_from_tof_state(&r, &v);
         let f_t = self.maneuver.force_tof_n(ctx.t_s + 0.5 * ctx.dt_s);
-        vec![crate::control::registry::BodyWrench {
+        out.push(crate::control::registry::BodyWrench {
             body: self.target,
             force_n: Some(c * f_t),
             torque_nm: None,
-        }]
+        });
     }
 }
 
@@ -1556,6 +1557,10 @@ impl Xu2015Loop {
 }
 
 impl crate::control::interface::Controller for Xu2015Loop {
+    fn needs(&self) -> crate::control::interface::Needs {
+        crate::control::interface::Needs::NONE
+    }
+
     fn command(
         &mut self,
         obs: &crate::control::interface::Observation,
@@ -1674,24 +1679,27 @@ impl crate::control::interface::Controller for Xu2015Loop {
                     .history
                     .last()
                     .map_or(self.xi_tof_m, |s| s.reference_tof_m);
-                let mut vals: Vec<f64> = Vec::with_capacity(out.len());
-                for v in [
+                for (k, v) in [
                     self.xi_tof_m,
                     self.meas_tof_m,
                     reference,
                     self.thrust_tof_n,
                     f_t,
-                ] {
-                    vals.extend(v.iter());
+                ]
+                .iter()
+                .enumerate()
+                {
+                    out[3 * k..3 * k + 3].copy_from_slice(v.as_slice());
                 }
                 if let LawState::Accm(a) = &self.law {
                     let e = a.estimates();
-                    vals.extend(e.iter().map(|x| x.alpha1));
-                    vals.extend(e.iter().map(|x| x.alpha2));
-                    vals.extend(e.iter().map(|x| x.gamma));
-                    vals.extend(e.iter().map(|x| x.shift_m));
+                    for j in 0..3 {
+                        out[15 + j] = e[j].alpha1;
+                        out[18 + j] = e[j].alpha2;
+                        out[21 + j] = e[j].gamma;
+                        out[24 + j] = e[j].shift_m;
+                    }
                 }
-                out.copy_from_slice(&vals);
             }
             // The ξ columns at the end of the step (the row's time), after the physics.
             DiagnosticsAt::PostStep => {

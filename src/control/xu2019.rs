@@ -1288,6 +1288,10 @@ impl crate::control::registry::LawSpec for SceneSpec {
 }
 
 impl crate::control::interface::Controller for Xu2019Instance {
+    fn needs(&self) -> crate::control::interface::Needs {
+        crate::control::interface::Needs::NONE
+    }
+
     fn command(
         &mut self,
         obs: &crate::control::interface::Observation,

@@ -1650,26 +1650,36 @@ impl crate::control::registry::LawSpec for SceneSpec {
 }
 
 impl crate::control::interface::Controller for LawState {
+    fn needs(&self) -> crate::control::interface::Needs {
+        crate::control::interface::Needs::NONE
+    }
+
     fn command(
         &mut self,
         obs: &crate::control::interface::Observation,
     ) -> crate::control::interface::Command {
         use crate::control::interface::{Command, Frame};
-        let crate::environment::EnvObs::SunEarthL2 { centre } = obs.env else {
+        let crate::environment::EnvObs::SunEarthL2 { centre, states_rot } = obs.env else {
             return Command::zero();
         };
         let t = obs.t_s;
-        let states: Vec<L2State> = obs
-            .bodies
-            .iter()
-            .map(|s| centre.world_to_rot(&s.pos_m, &s.vel_m_s))
-            .collect();
+        let computed: Vec<L2State>;
+        let states: &[L2State] = if states_rot.len() == obs.bodies.len() {
+            states_rot
+        } else {
+            computed = obs
+                .bodies
+                .iter()
+                .map(|s| centre.world_to_rot(&s.pos_m, &s.vel_m_s))
+                .collect();
+            &computed
+        };
         let planned = self.plan.dir_at(t);
         let mut barrier = f64::INFINITY;
         let mut chosen: Option<(f64, Option<f64>)> = None;
         let mut nearest: Option<(f64, usize)> = None;
         for (j, ctl) in &mut self.threats {
-            let x = game_state(&states, *j, self.body);
+            let x = game_state(states, *j, self.body);
             let sep = rel_pos_m(&x).norm();
             if nearest.is_none_or(|(d, _)| sep < d) {
                 nearest = Some((sep, *j));
@@ -1690,7 +1700,7 @@ impl crate::control::interface::Controller for LawState {
         let h = nearest.map_or(f64::NAN, |(_, j)| {
             boundary_value(
                 &self.params,
-                &game_state(&states, j, self.body),
+                &game_state(states, j, self.body),
                 PursuerRole::PaperCooperative,
             )
             .h

@@ -474,7 +474,9 @@ impl Simulation {
         if self.app.world().resource::<Recorder>().files.is_some() {
             return Err("controllers must be added before recording starts".into());
         }
-        super::controllers::host_slot(self.app.world_mut(), slot)
+        let k = super::controllers::host_slot(self.app.world_mut(), slot)?;
+        super::controllers::ensure_systems(&mut self.app);
+        Ok(k)
     }
 
     /// The monitor's results.

@@ -13,7 +13,9 @@
 //!   the film carries the rest). Then the scenario's disturbances. Then each law's diagnostics
 //!   ([`DiagnosticsAt::Actuated`]).
 //! - **Monitor** ([`host_post_step`]): diagnostics after the physics
-//!   ([`DiagnosticsAt::PostStep`]) for the laws that ask for them.
+//!   ([`DiagnosticsAt::PostStep`]) for the laws that ask for them (added only then).
+//!
+//! A scene without controllers or disturbances gets none of these systems.
 //!
 //! Entries of the scene's `controllers` list are built in scene order by [`install`]; more
 //! can be added to a built [`crate::sim::Simulation`] with `add_controller` before recording
@@ -24,9 +26,9 @@ use super::{BodyState, Clock, EventLog, Guarantees, OrbitEnv, Roster, Wrench};
 use crate::actuation::Actuator;
 use crate::actuation::actuator::CommandFrames;
 use crate::control::interface::{
-    ActuationReport, BodyInfo, BodyObs, Command, Controller, DiagnosticsAt, DockingObs,
-    GuaranteeObs, MeasuredFrame, Measurement, Observation, PortsObs, port_pose, ports_obs,
-    relative_obs,
+    ActuationReport, BodyInfo, BodyObs, Command, Controller, DiagnosticsAt, DockingObs, Frame,
+    GuaranteeObs, MeasuredFrame, Measurement, Needs, Observation, PortsObs, RelativeObs, port_pose,
+    ports_obs, relative_obs,
 };
 use crate::control::registry::{BuildContext, BuildError, Disturbance, DisturbanceContext, Slot};
 use crate::control::sensor::{Sensor, SensorTruth};
@@ -66,10 +68,14 @@ pub struct HostedSlot {
     pub calls: u64,
     /// The latest delivered measurement.
     pub measured: Option<Measurement>,
-    /// Diagnostics column indices.
-    cols: Vec<usize>,
-    /// Scratch for the law's diagnostics.
-    buf: Vec<f64>,
+    /// What the law reads.
+    pub needs: Needs,
+    /// The relative state and ports of the current truth (what `needs` asks for).
+    derived: (Option<RelativeObs>, Option<PortsObs>),
+    /// First diagnostics column (the slot's columns are contiguous).
+    first_col: usize,
+    /// Number of diagnostics columns.
+    n_cols: usize,
     /// When the law wants diagnostics.
     at: &'static [DiagnosticsAt],
     /// A command frame was missing (reported once).
@@ -88,7 +94,16 @@ pub struct ControllerHost {
     /// Bodies' truth at the start of the current step (refreshed in Sense).
     pub truth: Vec<BodyObs>,
     guarantees: Vec<GuaranteeObs>,
+    env_now: EnvSnapshot,
+    docking_now: Option<DockingObs>,
+    wrench_buf: Vec<crate::control::registry::BodyWrench>,
     planar: bool,
+    /// Some law reads the gravity at the bodies.
+    gravity: bool,
+    /// The host's systems are in the schedule (added with the first controller or disturbance).
+    systems_added: bool,
+    /// The post-step diagnostics system is in the schedule.
+    post_added: bool,
 }
 
 impl ControllerHost {
@@ -137,10 +152,74 @@ impl ControllerHost {
     }
 }
 
+/// An owned copy of the environment as the controllers see it (taken at the start of each
+/// step, so that the Control and Actuate systems need not look the resources up again).
+#[derive(Debug, Clone, Default)]
+pub enum EnvSnapshot {
+    /// Force-free space.
+    #[default]
+    FreeSpace,
+    /// Orbit: the reference state and the J2 flag.
+    Orbit {
+        /// Reference position, ECI, m.
+        r: Vector3<f64>,
+        /// Reference velocity, ECI, m/s.
+        v: Vector3<f64>,
+        /// J2 on.
+        j2: bool,
+    },
+    /// Sun–Earth L2: the formation centre.
+    SunEarthL2(crate::orbit::l2::L2Centre, Vec<crate::orbit::l2::L2State>),
+    /// Air-bearing table: lab gravity.
+    AirBearing(Vector3<f64>),
+}
+
+impl EnvSnapshot {
+    /// The view a controller gets.
+    pub fn obs(&self) -> EnvObs<'_> {
+        match self {
+            EnvSnapshot::FreeSpace => EnvObs::FreeSpace,
+            EnvSnapshot::Orbit { r, v, j2 } => EnvObs::Orbit {
+                r_ref_eci_m: *r,
+                v_ref_eci_m_s: *v,
+                j2: *j2,
+            },
+            EnvSnapshot::SunEarthL2(c, s) => EnvObs::SunEarthL2 {
+                centre: c,
+                states_rot: s,
+            },
+            EnvSnapshot::AirBearing(g) => EnvObs::AirBearing {
+                gravity_lab_m_s2: *g,
+            },
+        }
+    }
+    fn of(e: &EnvObs) -> Self {
+        match e {
+            EnvObs::FreeSpace => EnvSnapshot::FreeSpace,
+            EnvObs::Orbit {
+                r_ref_eci_m,
+                v_ref_eci_m_s,
+                j2,
+            } => EnvSnapshot::Orbit {
+                r: *r_ref_eci_m,
+                v: *v_ref_eci_m_s,
+                j2: *j2,
+            },
+            EnvObs::SunEarthL2 { centre, .. } => {
+                EnvSnapshot::SunEarthL2((*centre).clone(), Vec::new())
+            }
+            EnvObs::AirBearing { gravity_lab_m_s2 } => EnvSnapshot::AirBearing(*gravity_lab_m_s2),
+        }
+    }
+}
+
 /// The environment as controllers see it, from the app's resources.
 pub fn env_of_world(world: &World) -> EnvObs<'_> {
     if let Some(f) = world.get_resource::<super::environment::L2Frame>() {
-        return EnvObs::SunEarthL2 { centre: &f.0 };
+        return EnvObs::SunEarthL2 {
+            centre: &f.0,
+            states_rot: &[],
+        };
     }
     env_from(
         world.get_resource::<OrbitEnv>(),
@@ -181,7 +260,10 @@ pub struct EnvRefs<'w> {
 impl EnvRefs<'_> {
     fn env(&self) -> EnvObs<'_> {
         if let Some(f) = &self.l2 {
-            return EnvObs::SunEarthL2 { centre: &f.0 };
+            return EnvObs::SunEarthL2 {
+                centre: &f.0,
+                states_rot: &[],
+            };
         }
         env_from(self.orbit.as_deref(), self.airbearing.as_deref())
     }
@@ -225,7 +307,7 @@ pub fn body_info(scene: &crate::scene::Scene) -> Vec<BodyInfo> {
         .collect()
 }
 
-/// Refreshes `truth` from the bodies' f64 states.
+/// Refreshes `truth` from the bodies' f64 states (the gravity only if some law reads it).
 fn refresh_truth(
     truth: &mut Vec<BodyObs>,
     roster: &Roster,
@@ -240,10 +322,49 @@ fn refresh_truth(
     }
 }
 
+/// The relative state and ports a slot needs, from `truth`.
+fn derive(
+    slot: &HostedSlot,
+    info: &[BodyInfo],
+    truth: &[BodyObs],
+    env: &EnvObs,
+) -> (Option<RelativeObs>, Option<PortsObs>) {
+    let Some(t) = slot.target else {
+        return (None, None);
+    };
+    let relative = slot
+        .needs
+        .relative
+        .then(|| relative_obs(&truth[slot.body], &truth[t], env.reference()));
+    let ports = match slot.ports {
+        Some((pc, pt)) if slot.needs.ports => Some(ports_of(info, truth, slot.body, t, &pc, &pt)),
+        _ => None,
+    };
+    (relative, ports)
+}
+
+/// Refreshes every slot's derived observation fields.
+fn refresh_derived(host: &mut ControllerHost, env: &EnvObs) {
+    for k in 0..host.slots.len() {
+        let d = derive(&host.slots[k], &host.info, &host.truth, env);
+        host.slots[k].derived = d;
+    }
+}
+
+/// What an observation borrows from a slot (its own fields, so the slot's law can be borrowed
+/// mutably beside it).
+#[derive(Clone, Copy)]
+struct SlotView<'a> {
+    body: usize,
+    target: Option<usize>,
+    derived: &'a (Option<RelativeObs>, Option<PortsObs>),
+    measured: &'a Option<Measurement>,
+}
+
 /// The observation of one slot.
 #[allow(clippy::too_many_arguments)]
 fn observation<'a>(
-    slot: &HostedSlot,
+    slot: SlotView<'a>,
     clock: &Clock,
     info: &'a [BodyInfo],
     truth: &'a [BodyObs],
@@ -251,13 +372,6 @@ fn observation<'a>(
     docking: Option<DockingObs>,
     guarantees: &'a [GuaranteeObs],
 ) -> Observation<'a> {
-    let relative = slot
-        .target
-        .map(|t| relative_obs(&truth[slot.body], &truth[t], env.reference()));
-    let ports = match (slot.ports, slot.target) {
-        (Some((pc, pt)), Some(t)) => Some(ports_of(info, truth, slot.body, t, &pc, &pt)),
-        _ => None,
-    };
     Observation {
         t_s: clock.t_s(),
         step: clock.step,
@@ -267,12 +381,24 @@ fn observation<'a>(
         info,
         bodies: truth,
         env,
-        relative,
-        ports,
-        measured: slot.measured,
+        relative: slot.derived.0.as_ref(),
+        ports: slot.derived.1.as_ref(),
+        measured: slot.measured.as_ref(),
         docking,
         guarantees,
     }
+}
+
+/// A [`SlotView`] of a slot by field borrows (so that `slot.law` stays free to borrow).
+macro_rules! view {
+    ($s:expr) => {
+        SlotView {
+            body: $s.body,
+            target: $s.target,
+            derived: &$s.derived,
+            measured: &$s.measured,
+        }
+    };
 }
 
 fn ports_of(
@@ -357,8 +483,19 @@ pub fn host_sense(
         return;
     }
     let host = &mut *host;
-    refresh_truth(&mut host.truth, &roster, &states, refs.gravity.as_deref());
+    let gravity = refs.gravity.as_deref().filter(|_| host.gravity);
+    refresh_truth(&mut host.truth, &roster, &states, gravity);
     let env = refs.env();
+    host.env_now = EnvSnapshot::of(&env);
+    if let EnvSnapshot::SunEarthL2(c, rot) = &mut host.env_now {
+        rot.extend(
+            host.truth
+                .iter()
+                .map(|b| c.world_to_rot(&b.pos_m, &b.vel_m_s)),
+        );
+    }
+    host.docking_now = refs.docking();
+    refresh_derived(host, &env);
     let t = clock.t_s();
     for k in 0..host.slots.len() {
         let Some(frame) = host.slots[k].sensor.as_ref().map(|s| s.spec.frame) else {
@@ -375,7 +512,6 @@ pub fn host_sense(
 /// Control: each law at its period; the command is held.
 pub fn host_control(
     clock: Res<Clock>,
-    refs: EnvRefs,
     guarantees: Res<Guarantees>,
     mut host: ResMut<ControllerHost>,
     mut log: ResMut<EventLog>,
@@ -398,15 +534,15 @@ pub fn host_control(
     for (g, s) in host.guarantees.iter_mut().zip(&guarantees.status) {
         g.margin = s.last_margin;
     }
-    let env = refs.env();
-    let docking = refs.docking();
+    let env = host.env_now.obs();
+    let docking = host.docking_now;
     let t = clock.t_s();
     for slot in host.slots.iter_mut() {
         if !clock.step.is_multiple_of(slot.period_steps) {
             continue;
         }
         let obs = observation(
-            slot,
+            view!(slot),
             &clock,
             &host.info,
             &host.truth,
@@ -423,11 +559,9 @@ pub fn host_control(
 }
 
 /// Actuate: held commands through the actuators into the wrenches; disturbances; diagnostics.
-#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 pub fn host_actuate(
     clock: Res<Clock>,
     roster: Res<Roster>,
-    refs: EnvRefs,
     mut wrenches: Query<&mut Wrench>,
     mut host: ResMut<ControllerHost>,
     mut diag: ResMut<Diagnostics>,
@@ -436,34 +570,47 @@ pub fn host_actuate(
     if host.slots.is_empty() && host.disturbances.is_empty() {
         return;
     }
-    let host = &mut *host;
-    let env = refs.env();
-    let reference_hill = env.reference().map(|(r, v)| {
-        LocalFrame::new(LocalFrameKind::Hill, &r, &v)
-            .dcm_frame_from_eci
-            .transpose()
-    });
+    let ControllerHost {
+        slots,
+        disturbances,
+        info,
+        truth,
+        guarantees,
+        env_now,
+        docking_now,
+        planar,
+        wrench_buf,
+        ..
+    } = &mut *host;
+    let env = env_now.obs();
     let dt = clock.dt_s;
-    for slot in host.slots.iter_mut() {
-        let own = &host.truth[slot.body];
-        let hill = match slot.target {
-            Some(t) => env.reference().map(|(r, v)| {
-                LocalFrame::new(
-                    LocalFrameKind::Hill,
-                    &(r + host.truth[t].pos_m),
-                    &(v + host.truth[t].vel_m_s),
-                )
-                .dcm_frame_from_eci
-                .transpose()
-            }),
-            None => reference_hill,
+    for slot in slots.iter_mut() {
+        let own = &truth[slot.body];
+        let uses_hill =
+            slot.held.force_frame == Frame::Hill || slot.held.torque_frame == Frame::Hill;
+        let hill = if uses_hill {
+            slot.derived
+                .0
+                .and_then(|r| r.dcm_world_from_hill)
+                .or_else(|| {
+                    env.reference().map(|(r, v)| {
+                        let (p, q) = slot
+                            .target
+                            .map_or((r, v), |t| (r + truth[t].pos_m, v + truth[t].vel_m_s));
+                        LocalFrame::new(LocalFrameKind::Hill, &p, &q)
+                            .dcm_frame_from_eci
+                            .transpose()
+                    })
+                })
+        } else {
+            None
         };
         let frames = CommandFrames {
             body: own.att,
             hill,
-            target_body: slot.target.map(|t| host.truth[t].att),
+            target_body: slot.target.map(|t| truth[t].att),
         };
-        let mass = host.info[slot.body].mass_kg;
+        let mass = info[slot.body].mass_kg;
         match slot.actuator.step(&slot.held, &frames, mass, dt) {
             Some(r) => slot.report = r,
             None => {
@@ -473,7 +620,7 @@ pub fn host_actuate(
                     log.push(
                         clock.t_s(),
                         "controller_frame_unavailable",
-                        serde_json::json!({"body": host.info[slot.body].name, "kind": slot.kind,
+                        serde_json::json!({"body": info[slot.body].name, "kind": slot.kind,
                             "reason": "the command's frame does not exist in this scene (Hill needs an orbit, TargetBody a target): nothing applied"}),
                     );
                 }
@@ -482,7 +629,7 @@ pub fn host_actuate(
         }
         if let Ok(mut w) = wrenches.get_mut(roster.bodies[slot.body]) {
             let (f, t) = (slot.report.force_world_n, slot.report.torque_world_nm);
-            if host.planar {
+            if *planar {
                 w.force_n.x += f.x;
                 w.force_n.y += f.y;
                 w.torque_nm.z += t.z;
@@ -492,17 +639,19 @@ pub fn host_actuate(
             }
         }
     }
-    if !host.disturbances.is_empty() {
+    if !disturbances.is_empty() {
         let ctx = DisturbanceContext {
             t_s: clock.t_s(),
             dt_s: dt,
             step: clock.step,
-            info: &host.info,
-            bodies: &host.truth,
+            info,
+            bodies: truth,
             env,
         };
-        for d in host.disturbances.iter_mut() {
-            for bw in d.wrenches(&ctx) {
+        for d in disturbances.iter_mut() {
+            wrench_buf.clear();
+            d.wrenches(&ctx, wrench_buf);
+            for bw in wrench_buf.iter() {
                 if let Ok(mut w) = wrenches.get_mut(roster.bodies[bw.body]) {
                     if let Some(f) = bw.force_n {
                         w.force_n += f;
@@ -514,46 +663,40 @@ pub fn host_actuate(
             }
         }
     }
-    let docking = refs.docking();
     write_diagnostics(
-        host,
+        slots,
+        info,
+        truth,
+        guarantees,
         DiagnosticsAt::Actuated,
         &clock,
         env,
-        docking,
+        *docking_now,
         &mut diag,
     );
 }
 
-/// Writes the diagnostics of every slot that wants them at `at`.
+/// Writes the diagnostics of every slot that wants them at `at`, straight into its columns
+/// (a slot's columns are contiguous: `host_slot` registers them together).
+#[allow(clippy::too_many_arguments)]
 fn write_diagnostics(
-    host: &mut ControllerHost,
+    slots: &mut [HostedSlot],
+    info: &[BodyInfo],
+    truth: &[BodyObs],
+    guarantees: &[GuaranteeObs],
     at: DiagnosticsAt,
     clock: &Clock,
     env: EnvObs,
     docking: Option<DockingObs>,
     diag: &mut Diagnostics,
 ) {
-    for slot in host.slots.iter_mut() {
-        if slot.cols.is_empty() || !slot.at.contains(&at) {
+    for slot in slots.iter_mut() {
+        if slot.n_cols == 0 || !slot.at.contains(&at) {
             continue;
         }
-        let obs = observation(
-            slot,
-            clock,
-            &host.info,
-            &host.truth,
-            env,
-            docking,
-            &host.guarantees,
-        );
-        for (b, c) in slot.buf.iter_mut().zip(&slot.cols) {
-            *b = diag.values[*c];
-        }
-        slot.law.diagnostics(at, &obs, &slot.report, &mut slot.buf);
-        for (b, c) in slot.buf.iter().zip(&slot.cols) {
-            diag.values[*c] = *b;
-        }
+        let obs = observation(view!(slot), clock, info, truth, env, docking, guarantees);
+        let out = &mut diag.values[slot.first_col..slot.first_col + slot.n_cols];
+        slot.law.diagnostics(at, &obs, &slot.report, out);
     }
 }
 
@@ -569,20 +712,24 @@ pub fn host_post_step(
     if !host
         .slots
         .iter()
-        .any(|s| !s.cols.is_empty() && s.at.contains(&DiagnosticsAt::PostStep))
+        .any(|s| s.n_cols > 0 && s.at.contains(&DiagnosticsAt::PostStep))
     {
         return;
     }
     let host = &mut *host;
-    refresh_truth(&mut host.truth, &roster, &states, refs.gravity.as_deref());
+    let gravity = refs.gravity.as_deref().filter(|_| host.gravity);
+    refresh_truth(&mut host.truth, &roster, &states, gravity);
     let env = refs.env();
-    let docking = refs.docking();
+    refresh_derived(host, &env);
     write_diagnostics(
-        host,
+        &mut host.slots,
+        &host.info,
+        &host.truth,
+        &host.guarantees,
         DiagnosticsAt::PostStep,
         &clock,
         env,
-        docking,
+        refs.docking(),
         &mut diag,
     );
 }
@@ -640,6 +787,7 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
         }
     }
     let at = law.diagnostics_at();
+    let needs = law.needs();
     let mut slot = HostedSlot {
         kind,
         body,
@@ -653,13 +801,19 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
         report: ActuationReport::default(),
         calls: 0,
         measured: None,
-        buf: vec![f64::NAN; cols.len()],
-        cols,
+        needs,
+        derived: (None, None),
+        first_col: cols.first().copied().unwrap_or(0),
+        n_cols: cols.len(),
         at,
         frame_warned: false,
     };
+    debug_assert!(
+        cols.windows(2).all(|w| w[1] == w[0] + 1),
+        "contiguous columns"
+    );
     // The t = 0 row: diagnostics of the initial state.
-    if !slot.cols.is_empty() && slot.at.contains(&DiagnosticsAt::Start) {
+    if slot.n_cols > 0 && slot.at.contains(&DiagnosticsAt::Start) {
         world.resource_scope(|world, mut host: Mut<ControllerHost>| {
             let clock = world.resource::<Clock>().clone();
             let roster = world.resource::<Roster>().clone();
@@ -672,17 +826,26 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
             }
             let env = env_of_world(world);
             let guarantees: Vec<GuaranteeObs> = Vec::new();
-            let obs = observation(&slot, &clock, &host.info, &truth, env, None, &guarantees);
+            slot.derived = derive(&slot, &host.info, &truth, &env);
+            let obs = observation(
+                view!(slot),
+                &clock,
+                &host.info,
+                &truth,
+                env,
+                None,
+                &guarantees,
+            );
+            let mut buf = vec![f64::NAN; slot.n_cols];
             slot.law
-                .diagnostics(DiagnosticsAt::Start, &obs, &slot.report, &mut slot.buf);
+                .diagnostics(DiagnosticsAt::Start, &obs, &slot.report, &mut buf);
             let mut diag = world.resource_mut::<Diagnostics>();
-            for (b, c) in slot.buf.iter().zip(&slot.cols) {
-                diag.values[*c] = *b;
-            }
+            diag.values[slot.first_col..slot.first_col + slot.n_cols].copy_from_slice(&buf);
             host.truth = truth;
         });
     }
     let mut host = world.resource_mut::<ControllerHost>();
+    host.gravity |= slot.needs.gravity;
     host.slots.push(slot);
     Ok(host.slots.len() - 1)
 }
@@ -698,7 +861,6 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         planar,
         ..Default::default()
     });
-    add_systems(app);
     let world = app.world_mut();
     let initial: Vec<BodyObs> = {
         let roster = world.resource::<Roster>().clone();
@@ -739,7 +901,35 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
             .disturbances
             .extend(built.disturbances);
     }
+    ensure_systems(app);
     Ok(())
+}
+
+/// Adds the host's systems once there is something to host (a scene without controllers pays
+/// nothing per step), and the post-step diagnostics system once a law asks for them. Called
+/// at install and by `Simulation::add_controller`.
+pub fn ensure_systems(app: &mut App) {
+    use super::{SimStep, Stage};
+    let host = app.world().resource::<ControllerHost>();
+    let want_main = !(host.slots.is_empty() && host.disturbances.is_empty());
+    let want_post = host
+        .slots
+        .iter()
+        .any(|s| s.n_cols > 0 && s.at.contains(&DiagnosticsAt::PostStep));
+    let (add_main, add_post) = (
+        want_main && !host.systems_added,
+        want_post && !host.post_added,
+    );
+    if add_main {
+        app.world_mut()
+            .resource_mut::<ControllerHost>()
+            .systems_added = true;
+        add_systems(app);
+    }
+    if add_post {
+        app.world_mut().resource_mut::<ControllerHost>().post_added = true;
+        app.add_systems(SimStep, host_post_step.in_set(Stage::Monitor));
+    }
 }
 
 /// The host's systems, in their stages. Added by [`install`], after the docking mechanism's
@@ -750,10 +940,12 @@ fn add_systems(app: &mut App) {
     app.add_systems(
         SimStep,
         (
-            host_sense.in_set(Stage::Sense),
+            // After the L2 frame is brought to this step (an empty set outside L2 scenes).
+            host_sense
+                .in_set(Stage::Sense)
+                .after(super::environment::sync_l2_frame),
             host_control.in_set(Stage::Control),
             host_actuate.in_set(Stage::Actuate),
-            host_post_step.in_set(Stage::Monitor),
         ),
     );
 }

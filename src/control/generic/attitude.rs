@@ -228,6 +228,14 @@ impl Controller for Attitude {
         Command::in_frame(Frame::Body, Vector3::zeros(), tau)
     }
 
+    fn needs(&self) -> crate::control::interface::Needs {
+        crate::control::interface::Needs {
+            relative: false,
+            ports: matches!(self.params.mode, AttitudeMode::AlignPort),
+            gravity: false,
+        }
+    }
+
     fn columns(&self) -> Vec<String> {
         let p = &self.prefix;
         vec![

@@ -340,6 +340,14 @@ impl Controller for Glideslope {
     fn tracking_error(&self) -> Option<(f64, f64)> {
         self.error
     }
+
+    fn needs(&self) -> crate::control::interface::Needs {
+        crate::control::interface::Needs {
+            relative: true,
+            ports: self.params.axis == ApproachAxis::TargetPort,
+            gravity: false,
+        }
+    }
 }
 
 #[cfg(test)]

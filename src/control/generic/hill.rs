@@ -224,6 +224,14 @@ impl Controller for HillPd {
     fn tracking_error(&self) -> Option<(f64, f64)> {
         self.error
     }
+
+    fn needs(&self) -> crate::control::interface::Needs {
+        crate::control::interface::Needs {
+            relative: true,
+            ports: self.params.point == ControlPoint::Port,
+            gravity: false,
+        }
+    }
 }
 
 /// The discrete-time LQR gain K (a = −K [e; ė]) of the CW model with mean motion `n`, sampled

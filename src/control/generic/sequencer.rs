@@ -486,6 +486,21 @@ impl Controller for Sequencer {
         e
     }
 
+    fn needs(&self) -> crate::control::interface::Needs {
+        // Range conditions read the relative state, port ranges the ports.
+        let mut n = crate::control::interface::Needs {
+            relative: true,
+            ports: true,
+            gravity: false,
+        };
+        for ph in &self.phases {
+            for l in [&ph.translation, &ph.attitude].into_iter().flatten() {
+                n = n.union(l.1.needs());
+            }
+        }
+        n
+    }
+
     fn tracking_error(&self) -> Option<(f64, f64)> {
         self.phases[self.active]
             .translation
