@@ -1,6 +1,9 @@
 //! Analytic constraint surfaces (f64): the elliptic cissoid corridor (Guo 2016), the
-//! superquadric obstacle and heart-shaped keep-out (Xu, Wen, Wei 2019).
+//! superquadric obstacle and heart-shaped keep-out (Xu, Wen, Wei 2019); and sound bounds of a
+//! function of time over an interval from its rate bound ([`bounds`], the monitor's
+//! between-samples reasoning).
 
+pub mod bounds;
 pub mod cissoid;
 pub mod heart;
 pub mod superquadric;
