@@ -169,8 +169,9 @@ pub fn minimize(
 pub enum Crossing {
     /// f ≥ level on the whole interval (proven).
     Never,
-    /// f ≥ level on [0, `t_lo`] (proven) and f(`t_hi`) < level (found), `t_hi − t_lo` ≤ the
-    /// time tolerance.
+    /// f ≥ level on [0, `t_lo`] (proven) and f(`t_hi`) < level (found). `t_hi − t_lo` is the
+    /// time tolerance, or more where f stays within the evaluations' precision of the level
+    /// just before the crossing.
     At {
         /// Last time f is proven at or above the level, s (offset).
         t_lo: f64,
@@ -200,30 +201,34 @@ pub fn first_below(
     mut f: impl FnMut(f64) -> Bracket,
 ) -> Crossing {
     if fa.value < level {
-        return Crossing::At { t_lo: 0.0, t_hi: 0.0 };
+        return Crossing::At {
+            t_lo: 0.0,
+            t_hi: 0.0,
+        };
     }
-    // Stack of pieces, rightmost at the bottom.
+    // Stack of pieces, rightmost at the bottom. `pending`: start of the first piece (at the
+    // time tolerance) that could be neither cleared nor shown below the level — the crossing
+    // is at or after it; the bracket returned starts there.
     let mut stack = vec![(0.0, fa, h, fb)];
     let mut evals = 0;
-    let mut unresolved: Option<f64> = None;
+    let mut pending: Option<f64> = None;
     while let Some((a, fa, b, fb)) = stack.pop() {
         if interval_lower_bound(fa.lower, fb.lower, rate, b - a) >= level {
             continue;
         }
         if b - a <= t_tol {
             if fb.value < level {
-                return match unresolved {
-                    Some(t_lo) => Crossing::Unresolved { t_lo },
-                    None => Crossing::At { t_lo: a, t_hi: b },
+                return Crossing::At {
+                    t_lo: pending.unwrap_or(a),
+                    t_hi: b,
                 };
             }
-            // Cannot clear and nothing found: note it and go on to the right.
-            unresolved.get_or_insert(a);
+            pending.get_or_insert(a);
             continue;
         }
         if evals >= max_evals {
             return Crossing::Unresolved {
-                t_lo: unresolved.unwrap_or(a),
+                t_lo: pending.unwrap_or(a),
             };
         }
         let m = 0.5 * (a + b);
@@ -232,7 +237,7 @@ pub fn first_below(
         stack.push((m, fm, b, fb));
         stack.push((a, fa, m, fm));
     }
-    match unresolved {
+    match pending {
         Some(t_lo) => Crossing::Unresolved { t_lo },
         None => Crossing::Never,
     }

@@ -87,7 +87,9 @@ impl BroadPhase {
             if fresh || p.reach_from(&self.centre[i]) > self.margin[i] {
                 let speed = p.speed_max();
                 let step = (p.x1 - p.x0).norm() + speed * motion.dt_s;
-                let m = (speed * motion.dt_s * MARGIN_STEPS).max(MIN_MARGIN_M).max(2.0 * step);
+                let m = (speed * motion.dt_s * MARGIN_STEPS)
+                    .max(MIN_MARGIN_M)
+                    .max(2.0 * step);
                 self.centre[i] = p.x1;
                 self.margin[i] = m;
                 self.radius[i] = motion.extent_m[i] + m;

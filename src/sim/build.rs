@@ -200,7 +200,7 @@ impl Simulation {
                 ))
                 .id();
             let mut part_entities = Vec::new();
-            for pc in &colliders {
+            for (part_index, pc) in colliders.iter().enumerate() {
                 let Some(shape) = primitive_shape(&pc.shape) else {
                     return Err(loaded.error_at(
                         &format!("bodies.{}.parts.{}", b.name, pc.part),
@@ -218,6 +218,7 @@ impl Simulation {
                     ch,
                     ColliderRef {
                         body: index,
+                        part: part_index,
                         full_name: format!("{}/{}", b.name, pc.name),
                         docking: pc.role.is_docking(),
                     },
@@ -573,6 +574,7 @@ impl Simulation {
             "pairs": pairs,
             "min_clearance_non_docking_m": mon.min_clearance_per_pair.iter().copied().fold(f64::INFINITY, f64::min),
             "first_contact_s": cs.first_contact_s,
+            "first_touch_s": cs.first_touch_s,
             "first_collision_s": cs.first_collision_s,
             "collisions": collisions,
             "contact_per_part": cs.per_part,

@@ -531,13 +531,20 @@ fn physics_step(
         motion.lambda_kg_m2 = roster
             .bodies
             .iter()
-            .map(|e| motion::principal_range(&q.get(*e).expect("body").0.inertia_kg_m2))
+            .map(|e| motion::principal_moments(&q.get(*e).expect("body").0.inertia_kg_m2))
             .collect();
         sync.stale = vec![true; n];
     }
     sc.start.clear();
     sc.free_end.clear();
+    if motion.ready {
+        let paths = std::mem::replace(&mut motion.paths, Vec::with_capacity(n));
+        let free = std::mem::take(&mut motion.free_before);
+        motion.prev = Some(Box::new((paths, free)));
+    }
     motion.paths.clear();
+    motion.free_before.clear();
+    motion.free_before.resize(n, None);
     let jointed = |world: &rp::PhysicsWorld, h: rp::RigidBodyHandle| {
         world.impulse_joints.attached_joints(h).next().is_some()
     };
@@ -667,6 +674,12 @@ fn physics_step(
                 crate::geometry::bounds::Crossing::Unresolved { t_lo } => Some(t_ca + t_lo),
             }
         };
+        if std::env::var_os("RPOD_DEBUG_SWEPT").is_some() {
+            eprintln!(
+                "t0 {t0} pair {i} {j}: d0 {:?} rate {rate} t_ca {t_ca} d_ca {:?} hit {t_hit:?}",
+                d0.d, d_ca
+            );
+        }
         if let Some(th) = t_hit {
             engage = true;
             split = Some(split.map_or(th, |s: f64| s.min(th)));
@@ -752,6 +765,9 @@ fn physics_step(
                 (v_new - sc.start[k].vel_m_s) * b.mass_kg - (w.force_n + w.gravity_n) * dt;
             s.vel_m_s = v_new;
             s.omega_rad_s = conv::na(rb.angvel());
+            if !prev_attached[k] {
+                motion.free_before[k] = Some(motion.paths[k].clone());
+            }
             match sync.last_split_s {
                 Some(ts) if !prev_attached[k] => motion.paths[k].split_then_straight(ts - t0, &s),
                 _ => motion.paths[k] = motion::BodyPath::straight(&sc.start[k], &s, dt),
@@ -831,7 +847,14 @@ impl MonitorState {
 }
 
 /// Interior margin evaluations allowed per guarantee per step.
-const MAX_GUARANTEE_EVALS: u32 = 48;
+const MAX_GUARANTEE_EVALS: u32 = 256;
+
+/// A positive worst margin is refined until its certified lower bound is within this fraction
+/// of it (or zero is proven): what matters there is the proof that it holds.
+pub const POSITIVE_MARGIN_REL_TOL: f64 = 0.1;
+
+/// A negative worst margin (a violation) is refined to this fraction of its size.
+pub const NEGATIVE_MARGIN_REL_TOL: f64 = 1e-3;
 
 /// Time tolerance of refined violation and restoration times, as a fraction of the step
 /// (2⁻¹⁶: 0.15 µs at dt = 10 ms).
@@ -844,9 +867,10 @@ const MAX_CROSSING_EVALS: u32 = 256;
 /// whole interval since the last one.
 ///
 /// With |m′| ≤ L over the step, the margin is at least (m(t₀) + m(t₁) − L·dt)/2 on it. If that
-/// does not clear what the verdict needs — zero while the worst margin so far is positive (to
-/// prove the guarantee still holds), else the worst margin less its tolerance
-/// (max([`Guarantee::tolerance`], 0.1 %)) — the step is bisected on the bodies' paths
+/// does not clear what the verdict needs — while the worst margin W so far is positive,
+/// max(0, W − max([`Guarantee::tolerance`], [`POSITIVE_MARGIN_REL_TOL`]·W)) (zero proves the
+/// guarantee still holds); once violated, W less max(tolerance, [`NEGATIVE_MARGIN_REL_TOL`]·|W|)
+/// — the step is bisected on the bodies' paths
 /// ([`crate::geometry::bounds::minimize`]). A violation found (at the sample or inside) is
 /// then located: the first time the margin is below zero, bracketed to
 /// [`EVENT_TIME_TOL`]·dt ([`crate::geometry::bounds::first_below`]), and, if it holds again by
@@ -861,9 +885,7 @@ fn check_guarantees(
     geo: Res<monitor::MonitorGeometry>,
     mut scratch: Local<monitor::DistanceScratch>,
 ) {
-    use crate::geometry::bounds::{
-        Bracket, Crossing, first_below, interval_lower_bound, minimize,
-    };
+    use crate::geometry::bounds::{Bracket, Crossing, first_below, interval_lower_bound, minimize};
     use crate::guarantee::{IntervalFinding, Reads};
     let t = clock.t_s();
     let view = MonitorView {
@@ -952,11 +974,10 @@ fn check_guarantees(
         let abs_tol = inv.tolerance();
         let thr = |b: f64| {
             let x = w.min(b);
-            let tol = abs_tol.max(1e-3 * x.abs());
             if x >= 0.0 {
-                (x - tol).max(0.0)
+                (x - abs_tol.max(POSITIVE_MARGIN_REL_TOL * x)).max(0.0)
             } else {
-                x - tol
+                x - abs_tol.max(NEGATIVE_MARGIN_REL_TOL * x.abs())
             }
         };
         let mut finding = IntervalFinding {
@@ -1000,7 +1021,9 @@ fn check_guarantees(
         }
         if m1.value >= 0.0 && (m0.value < 0.0 || finding.min_value < 0.0) {
             // The last time it was below zero: the first, going backwards from t₁.
-            let c = first_below(dt, m1, m0, rate, 0.0, t_tol, MAX_CROSSING_EVALS, |u| eval(dt - u));
+            let c = first_below(dt, m1, m0, rate, 0.0, t_tol, MAX_CROSSING_EVALS, |u| {
+                eval(dt - u)
+            });
             finding.restored_s = match c {
                 Crossing::At { t_lo, t_hi } => Some((t - t_hi, t - t_lo)),
                 Crossing::Unresolved { t_lo } => Some((t0, t - t_lo)),

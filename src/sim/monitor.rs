@@ -22,6 +22,8 @@ use std::collections::{BTreeMap, HashMap};
 pub struct ColliderRef {
     /// Body index.
     pub body: usize,
+    /// Collider index within the body (scene order).
+    pub part: usize,
     /// `body/collider` name.
     pub full_name: String,
     /// Part role is docking.
@@ -81,6 +83,9 @@ pub struct ContactState {
     pub first_contact_s: Option<f64>,
     /// First collision (a contact that is not a docking contact), s.
     pub first_collision_s: Option<f64>,
+    /// Time of first touch of the first contact, refined on the step's free-flight paths
+    /// ([`touch_time`]), s.
+    pub first_touch_s: Option<f64>,
     /// Every collision start: (t_s, part, part).
     pub collisions: Vec<(f64, String, String)>,
     /// Per part pair ever in contact, accumulated over the whole run across restarts, so the
@@ -367,18 +372,16 @@ pub fn closest_parts(
             b: bb,
         };
     }
-    let bracket = |a: usize, b: usize| {
-        shape_bracket(&pi[a].0, &*si[a], pi[a].1, &pj[b].0, &*sj[b], pj[b].1)
-    };
+    let bracket =
+        |a: usize, b: usize| shape_bracket(&pi[a].0, &*si[a], pi[a].1, &pj[b].0, &*sj[b], pj[b].1);
     count.exact += 1;
     let mut lower = bracket(ba, bb).lower;
     for &(d, a, b) in evaluated.iter() {
         if (a, b) == (ba, bb) {
             continue;
         }
-        let scale = (pi[a].0.translation.vector - pj[b].0.translation.vector).norm()
-            + pi[a].1
-            + pj[b].1;
+        let scale =
+            (pi[a].0.translation.vector - pj[b].0.translation.vector).norm() + pi[a].1 + pj[b].1;
         let loose = d * (1.0 - GJK_REL_TOL) - F32_REL_TOL * scale;
         if loose < lower {
             count.exact += 1;
@@ -569,29 +572,26 @@ pub fn distances(
             &mut count,
         );
         let (dock_i, dock_j) = (&geo.docking[i], &geo.docking[j]);
-        let clearance = if geo.has_docking[i]
-            && geo.has_docking[j]
-            && dock_i[hit.a]
-            && dock_j[hit.b]
-        {
-            closest_parts(
-                &geo,
-                i,
-                pi,
-                j,
-                pj,
-                &|a, b| !(dock_i[a] && dock_j[b]),
-                None,
-                false,
-                &mut sc.candidates,
-                &mut sc.evaluated,
-                &mut count,
-            )
-            .d
-            .value
-        } else {
-            hit.d.value
-        };
+        let clearance =
+            if geo.has_docking[i] && geo.has_docking[j] && dock_i[hit.a] && dock_j[hit.b] {
+                closest_parts(
+                    &geo,
+                    i,
+                    pi,
+                    j,
+                    pj,
+                    &|a, b| !(dock_i[a] && dock_j[b]),
+                    None,
+                    false,
+                    &mut sc.candidates,
+                    &mut sc.evaluated,
+                    &mut count,
+                )
+                .d
+                .value
+            } else {
+                hit.d.value
+            };
         mon.pairs[k] = PairDistance {
             a: i,
             b: j,
@@ -625,21 +625,12 @@ pub fn distances(
             if interval_lower_bound(d0.lower, hit.d.lower, rate, dt) < thr(hit.d.value) {
                 let mut at = (hit.a, hit.b);
                 let mut parts_at = Vec::new();
-                let r = minimize(
-                    dt,
-                    d0,
-                    hit.d,
-                    rate,
-                    thr,
-                    MAX_MIN_EVALS,
-                    dt * 1e-9,
-                    |tau| {
-                        let h = pair_at(&geo, &motion, i, j, tau, Some(at), sc, &mut count);
-                        at = (h.a, h.b);
-                        parts_at.push((tau, h.a, h.b));
-                        h.d
-                    },
-                );
+                let r = minimize(dt, d0, hit.d, rate, thr, MAX_MIN_EVALS, dt * 1e-9, |tau| {
+                    let h = pair_at(&geo, &motion, i, j, tau, Some(at), sc, &mut count);
+                    at = (h.a, h.b);
+                    parts_at.push((tau, h.a, h.b));
+                    h.d
+                });
                 mon.interval_evals += u64::from(r.evals);
                 if r.value < best.distance_m && r.t < dt {
                     let (pa, pb) = parts_at
@@ -723,7 +714,10 @@ pub fn distances(
         }
     }
     if let Some(c) = mon.closest.clone()
-        && mon.overall.as_ref().is_none_or(|o| c.distance_m < o.distance_m)
+        && mon
+            .overall
+            .as_ref()
+            .is_none_or(|o| c.distance_m < o.distance_m)
     {
         mon.overall = Some(super::PairMin {
             distance_m: c.distance_m,
@@ -752,6 +746,77 @@ pub fn distances(
     mon.pruned_pairs += count.pruned;
 }
 
+/// Two parts count as touching, for the time of first touch, at this distance, m.
+pub const TOUCH_DISTANCE_M: f64 = 1e-4;
+
+/// The time of first touch of a part pair that rapier reports in contact at the end of the
+/// step just taken: the first time, on the bodies' unobstructed paths over the step (the f64
+/// free flight, or rapier's straight path for a body it already drove), that the two parts are
+/// within [`TOUCH_DISTANCE_M`], found by bisection with the rate bound of the paths and
+/// bracketed to `EVENT_TIME_TOL`·dt; if they are that close from the step's start, the same
+/// search on the step before (rapier flags a contact whose approach just closed the gap one
+/// step late). If they never get that close on those paths (rapier's solver acts from its
+/// prediction distance on), the end of the step. Returns (time, tolerance).
+pub fn touch_time(
+    geo: &MonitorGeometry,
+    motion: &StepMotion,
+    (i, a): (usize, usize),
+    (j, b): (usize, usize),
+    sc: &mut DistanceScratch,
+) -> (f64, f64) {
+    use crate::geometry::bounds::{Crossing, first_below};
+    let dt = motion.dt_s;
+    let t0 = motion.t0_s;
+    let tol = dt * super::EVENT_TIME_TOL;
+    let mut search = |pi: &super::motion::BodyPath, pj: &super::motion::BodyPath| {
+        let rate = super::motion::rel_speed(pi, pj)
+            + pi.omega_max_rad_s * geo.extent_m[i]
+            + pj.omega_max_rad_s * geo.extent_m[j];
+        let mut f = |tau: f64| {
+            let (xi, qi) = pi.pose_at(tau);
+            let (xj, qj) = pj.pose_at(tau);
+            let [ti, tj] = &mut sc.tmp;
+            geo.part_poses(i, &xi, &qi, ti);
+            geo.part_poses(j, &xj, &qj, tj);
+            shape_bracket(
+                &ti[a].0,
+                &*geo.shapes[i][a],
+                ti[a].1,
+                &tj[b].0,
+                &*geo.shapes[j][b],
+                tj[b].1,
+            )
+        };
+        let (f0, f1) = (f(0.0), f(dt));
+        first_below(dt, f0, f1, rate, TOUCH_DISTANCE_M, tol, 256, &mut f)
+    };
+    let free = |paths: &[super::motion::BodyPath],
+                before: &[Option<super::motion::BodyPath>],
+                k: usize| {
+        before
+            .get(k)
+            .and_then(|p: &Option<super::motion::BodyPath>| p.clone())
+            .unwrap_or_else(|| paths[k].clone())
+    };
+    let c = search(motion.free_path(i), motion.free_path(j));
+    if let Crossing::At { t_lo: 0.0, .. } = c
+        && let Some(prev) = &motion.prev
+    {
+        // Within the touch distance from the start of this step: they touched in the last one.
+        let (pi, pj) = (free(&prev.0, &prev.1, i), free(&prev.0, &prev.1, j));
+        match search(&pi, &pj) {
+            Crossing::At { t_lo, t_hi } => return (t0 - dt + t_lo, t_hi - t_lo),
+            Crossing::Unresolved { t_lo } => return (t0 - dt + t_lo, dt - t_lo),
+            Crossing::Never => return (t0, 0.0),
+        }
+    }
+    match c {
+        Crossing::At { t_lo, t_hi } => (t0 + t_lo, t_hi - t_lo),
+        Crossing::Unresolved { t_lo } => (t0 + t_lo, dt - t_lo),
+        Crossing::Never => (t0 + dt, 0.0),
+    }
+}
+
 /// Monitor system: rapier's contacts between bodies, named by part; start/end events, peak
 /// force and impulse per part, docking contact vs collision.
 ///
@@ -759,17 +824,23 @@ pub fn distances(
 /// exact for the step rapier took; rapier's per-point normal impulses (which also carry its
 /// position-correction bias) only split it among the part pairs touching that body. Each pair's
 /// impulse is the mean of the two bodies' attributions (equal when the pair is the only contact).
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it uses
 pub fn contacts(
     phys: Res<super::Physics>,
     clock: Res<Clock>,
     sync: Res<super::RapierSync>,
+    geo: Res<MonitorGeometry>,
+    motion: Res<StepMotion>,
     mut cs: ResMut<ContactState>,
     mut log: ResMut<EventLog>,
+    mut scratch: Local<DistanceScratch>,
 ) {
     let t = clock.t_s();
     let dt = clock.dt_s;
     // (pair key) → (docking, body a, body b, rapier's raw normal impulse)
     let mut now: BTreeMap<(String, String), (bool, usize, usize, f64)> = BTreeMap::new();
+    // (pair key) → (body, part) of each side, for the time of first touch.
+    let mut who: BTreeMap<(String, String), ((usize, usize), (usize, usize))> = BTreeMap::new();
     // When rapier did not step (nothing near), its contact pairs are an older step's.
     let pairs = phys
         .world
@@ -796,11 +867,22 @@ pub fn contacts(
             .map(|p| p.data.impulse.max(0.0) as f64)
             .sum();
         let docking = a.docking && b.docking;
-        let (key, ba, bb) = if (a.body, &a.full_name) <= (b.body, &b.full_name) {
-            ((a.full_name.clone(), b.full_name.clone()), a.body, b.body)
+        let (key, ba, bb, sides) = if (a.body, &a.full_name) <= (b.body, &b.full_name) {
+            (
+                (a.full_name.clone(), b.full_name.clone()),
+                a.body,
+                b.body,
+                ((a.body, a.part), (b.body, b.part)),
+            )
         } else {
-            ((b.full_name.clone(), a.full_name.clone()), b.body, a.body)
+            (
+                (b.full_name.clone(), a.full_name.clone()),
+                b.body,
+                a.body,
+                ((b.body, b.part), (a.body, a.part)),
+            )
         };
+        who.insert(key.clone(), sides);
         let e = now.entry(key).or_insert((docking, ba, bb, 0.0));
         e.3 += raw;
     }
@@ -837,10 +919,16 @@ pub fn contacts(
         let force = impulse / dt;
         if !cs.active.contains_key(&k) {
             cs.first_contact_s.get_or_insert(t);
+            let (t_touch, t_tol) = match (motion.ready, who.get(&k)) {
+                (true, Some(&(sa, sb))) => touch_time(&geo, &motion, sa, sb, &mut scratch),
+                _ => (t, 0.0),
+            };
+            cs.first_touch_s.get_or_insert(t_touch);
             log.push(
                 t,
                 "contact_start",
-                serde_json::json!({"a": k.0, "b": k.1, "docking": docking}),
+                serde_json::json!({"a": k.0, "b": k.1, "docking": docking,
+                    "t_contact_s": t_touch, "t_tol_s": t_tol}),
             );
             if !docking {
                 cs.first_collision_s.get_or_insert(t);
