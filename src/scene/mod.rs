@@ -72,6 +72,12 @@ pub struct MonitorSpec {
     /// [`MonitorSpec::ALL_PAIRS_MAX_BODIES`] bodies, 10 m above.
     #[serde(default)]
     pub horizon_m: Option<f64>,
+    /// Step rapier every step, free flight included (default: only while some pair can come
+    /// within 1 m or touches; see `sim::RAPIER_ENGAGE_M`). Outputs are then byte-identical to
+    /// builds before free flight skipped rapier, also where a first contact opens several
+    /// collider pairs at once.
+    #[serde(default)]
+    pub rapier_every_step: bool,
 }
 
 impl MonitorSpec {

@@ -29,7 +29,10 @@ pub const MIN_MARGIN_M: f64 = 0.05;
 /// The broad phase's state.
 #[derive(Resource, Debug, Clone, Default)]
 pub struct BroadPhase {
-    /// Pairs whose fat spheres come within this of each other are near, m.
+    /// The monitor's horizon: near pairs within it are tracked, m.
+    pub horizon_m: f64,
+    /// Pairs whose fat spheres come within this of each other are near, m: the horizon, or
+    /// more where the physics stage needs to see pairs whose rapier boxes could overlap.
     pub reach_m: f64,
     /// Every pair is near (small scenes with an infinite horizon): no spheres are kept.
     pub all_pairs: bool,
@@ -48,11 +51,13 @@ pub struct BroadPhase {
 }
 
 impl BroadPhase {
-    /// A broad phase for `n` bodies with the given horizon (`None`: every pair is near).
-    pub fn new(n: usize, reach_m: Option<f64>) -> Self {
+    /// A broad phase for `n` bodies with the given horizon (`None`: every pair is near) and
+    /// the reach the physics stage needs (`physics_reach_m`).
+    pub fn new(n: usize, horizon_m: Option<f64>, physics_reach_m: f64) -> Self {
         Self {
-            reach_m: reach_m.unwrap_or(f64::INFINITY),
-            all_pairs: reach_m.is_none(),
+            horizon_m: horizon_m.unwrap_or(f64::INFINITY),
+            reach_m: horizon_m.map_or(f64::INFINITY, |h| h.max(physics_reach_m)),
+            all_pairs: horizon_m.is_none(),
             centre: vec![Vector3::zeros(); n],
             radius: vec![f64::NAN; n],
             margin: vec![0.0; n],

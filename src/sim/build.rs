@@ -383,7 +383,22 @@ impl Simulation {
                 extent_m: geo.extent_m.clone(),
                 ..Default::default()
             };
-            let mut bp = super::broadphase::BroadPhase::new(n, scene.monitor.horizon_for(n));
+            // The physics stage engages rapier for pairs whose collider boxes may come within
+            // RAPIER_ENGAGE_M: boxes reach √3 of a part's bounding radius, so pairs up to
+            // that much beyond the extents must be seen by the broad phase.
+            let physics_reach = super::RAPIER_ENGAGE_M
+                + 2.0
+                    * geo
+                        .aabb_extent_m
+                        .iter()
+                        .zip(&geo.extent_m)
+                        .map(|(a, e)| a - e)
+                        .fold(0.0, f64::max);
+            let mut bp = super::broadphase::BroadPhase::new(
+                n,
+                scene.monitor.horizon_for(n),
+                physics_reach,
+            );
             bp.update(&motion);
             let mut named: Vec<(usize, usize)> = w
                 .resource::<Guarantees>()
@@ -406,7 +421,10 @@ impl Simulation {
             });
             w.insert_resource(bp);
             w.insert_resource(super::NamedPairs(named));
-            w.insert_resource(super::RapierSync::default());
+            w.insert_resource(super::RapierSync {
+                every_step: scene.monitor.rapier_every_step,
+                ..Default::default()
+            });
         }
         // The monitor's view of t = 0.
         {
@@ -585,7 +603,7 @@ impl Simulation {
                 "pruned_pairs": mon.pruned_pairs,
                 "interval_evaluations": mon.interval_evals,
                 "guarantee_interval_queries": g.interval_queries,
-                "horizon_m": if bp.all_pairs { None } else { Some(bp.reach_m) },
+                "horizon_m": if bp.all_pairs { None } else { Some(bp.horizon_m) },
                 "tracked_pairs": mon.pairs.len(),
                 "broad_phase_refreshes": bp.refreshes,
                 "rapier_steps": sync.rapier_steps,

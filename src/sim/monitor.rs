@@ -472,8 +472,10 @@ pub fn distances(
     motion: Res<StepMotion>,
     bp: Res<BroadPhase>,
     named: Res<NamedPairs>,
+    rec: Res<super::output::Recorder>,
     mut scratch: Local<DistanceScratch>,
 ) {
+    let every = (rec.every, rec.force_row);
     let t = clock.t_s();
     let n = roster.bodies.len();
     let sc = &mut *scratch;
@@ -513,7 +515,12 @@ pub fn distances(
             .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
             .collect()
     } else {
-        let mut v: Vec<(usize, usize)> = bp.near.iter().copied().collect();
+        let mut v: Vec<(usize, usize)> = bp
+            .near
+            .iter()
+            .copied()
+            .filter(|(i, j)| bp.sphere_gap(*i, *j) <= bp.horizon_m)
+            .collect();
         v.extend(named.0.iter().copied());
         v.sort_unstable();
         v.dedup();
@@ -662,14 +669,28 @@ pub fn distances(
         }
     }
     mon.closest = closest.map(|k| mon.pairs[k].clone());
-    if !bp.all_pairs {
-        let best = mon.closest.as_ref().map_or(f64::INFINITY, |p| p.distance_m);
-        if best > bp.reach_m {
-            // No tracked pair within the horizon: the closest pair may be any.
-            let x: Vec<Vector3<f64>> = mon.bodies.iter().map(|b| b.pos_m).collect();
-            let mut best = best;
+    let row_due = step.is_multiple_of(u64::from(every.0.max(1))) || every.1;
+    if !bp.all_pairs && row_due {
+        let mut best = mon.closest.as_ref().map_or(f64::INFINITY, |p| p.distance_m);
+        if best > bp.horizon_m {
+            // No tracked pair within the horizon: the closest pair may be any. Start from the
+            // last row's closest pair.
             let mut found: Option<PairDistance> = None;
-            for (lb, i, j) in bp.closest_candidates(&x, &geo.extent_m, best) {
+            let mut cands = Vec::new();
+            if let Some((i, j)) = mon.row_closest_pair {
+                cands.push((f64::NEG_INFINITY, i, j));
+            }
+            let x: Vec<Vector3<f64>> = mon.bodies.iter().map(|b| b.pos_m).collect();
+            let mut swept = false;
+            let mut k = 0;
+            while k < cands.len() || !swept {
+                if k == cands.len() {
+                    cands.extend(bp.closest_candidates(&x, &geo.extent_m, best));
+                    swept = true;
+                    continue;
+                }
+                let (lb, i, j) = cands[k];
+                k += 1;
                 if lb >= best {
                     break;
                 }
@@ -694,7 +715,7 @@ pub fn distances(
                     &mut sc.evaluated,
                     &mut count,
                 );
-                if hit.d.value < best {
+                if hit.d.value < best || found.is_none() && hit.d.value <= best {
                     best = hit.d.value;
                     found = Some(PairDistance {
                         a: i,
@@ -707,6 +728,9 @@ pub fn distances(
                         t_s: t,
                     });
                 }
+            }
+            if let Some(f) = &found {
+                mon.row_closest_pair = Some((f.a, f.b));
             }
             if found.is_some() {
                 mon.closest = found;
