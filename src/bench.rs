@@ -47,13 +47,18 @@ pub fn measure(loaded: &LoadedScene, steps: u64) -> Result<Measure, SceneError> 
     let after = sim.summary();
     let count = |s: &serde_json::Value| {
         let m = &s["monitor"];
-        ["exact_queries", "guarantee_interval_queries", "swept_test_queries"]
-            .iter()
-            .map(|k| m[*k].as_u64().unwrap_or(0))
-            .sum::<u64>()
+        [
+            "exact_queries",
+            "guarantee_interval_queries",
+            "swept_test_queries",
+        ]
+        .iter()
+        .map(|k| m[*k].as_u64().unwrap_or(0))
+        .sum::<u64>()
     };
     let exact_per_step = (count(&after) - count(&before)) as f64 / steps as f64;
-    let skipped = |s: &serde_json::Value| s["monitor"]["rapier_skipped_steps"].as_u64().unwrap_or(0);
+    let skipped =
+        |s: &serde_json::Value| s["monitor"]["rapier_skipped_steps"].as_u64().unwrap_or(0);
     let rapier_skipped = (skipped(&after) - skipped(&before)) as f64 / steps as f64;
 
     // 2. Bare rapier: the same world, stepped alone.
@@ -147,7 +152,8 @@ pub fn run(scene: &Path, steps: u64) -> Result<String, SceneError> {
 /// between the first two; the monitor's horizon at 5 m (grid neighbours are about 10 m apart,
 /// so no pair is tracked but the named one).
 pub fn swarm_scene(n: usize, seed: u64) -> String {
-    let mut rng = crate::math::rng::Lcg(seed.wrapping_mul(2_862_933_555_777_941_757).wrapping_add(3));
+    let mut rng =
+        crate::math::rng::Lcg(seed.wrapping_mul(2_862_933_555_777_941_757).wrapping_add(3));
     let side = (1..).find(|k: &usize| k * k * k >= n).unwrap_or(1);
     let mut bodies = Vec::new();
     for k in 0..n {

@@ -80,6 +80,7 @@ struct Piece {
 /// `best − threshold(best)` of `best`, or above the threshold), when `max_evals` interior
 /// evaluations have been made, or when sub-intervals are narrower than `min_width` (then their
 /// bound stands as is). `f(t)` evaluates at an interior offset.
+#[allow(clippy::too_many_arguments)] // the interval, its ends, the bound, and the stop rules
 pub fn minimize(
     h: f64,
     fa: Bracket,
@@ -104,16 +105,13 @@ pub fn minimize(
     }];
     let mut evals = 0;
     let mut settled_lb = f64::INFINITY;
-    loop {
-        // The piece with the lowest bound (few pieces: a linear scan beats a heap).
-        let Some((k, p)) = pieces
-            .iter()
-            .copied()
-            .enumerate()
-            .min_by(|x, y| x.1.lb.total_cmp(&y.1.lb))
-        else {
-            break;
-        };
+    // The piece with the lowest bound (few pieces: a linear scan beats a heap).
+    while let Some((k, p)) = pieces
+        .iter()
+        .copied()
+        .enumerate()
+        .min_by(|x, y| x.1.lb.total_cmp(&y.1.lb))
+    {
         let thr = threshold(value);
         if p.lb >= thr {
             break;
@@ -190,6 +188,7 @@ pub enum Crossing {
 ///
 /// Depth-first, left half first, over sub-intervals; a sub-interval whose bound is at or above
 /// the level is cleared. `fa`, `fb` are f at 0 and h; `rate` bounds |f′|.
+#[allow(clippy::too_many_arguments)] // the interval, its ends, the bound, and the stop rules
 pub fn first_below(
     h: f64,
     fa: Bracket,

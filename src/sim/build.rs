@@ -394,11 +394,8 @@ impl Simulation {
                         .zip(&geo.extent_m)
                         .map(|(a, e)| a - e)
                         .fold(0.0, f64::max);
-            let mut bp = super::broadphase::BroadPhase::new(
-                n,
-                scene.monitor.horizon_for(n),
-                physics_reach,
-            );
+            let mut bp =
+                super::broadphase::BroadPhase::new(n, scene.monitor.horizon_for(n), physics_reach);
             bp.update(&motion);
             let mut named: Vec<(usize, usize)> = w
                 .resource::<Guarantees>()

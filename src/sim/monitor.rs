@@ -179,7 +179,7 @@ pub fn shape_bracket(
         Ok(query::ClosestPoints::Intersecting) => Bracket::exact(0.0),
         Ok(query::ClosestPoints::WithinMargin(p1, p2)) => {
             let d = (p2 - p1).length();
-            if !(d > 0.0) {
+            if d.is_nan() || d <= 0.0 {
                 return Bracket::exact(0.0);
             }
             let (Some(sa), Some(sb)) = (a.as_support_map(), b.as_support_map()) else {
@@ -398,11 +398,17 @@ pub fn closest_parts(
     }
 }
 
+/// World poses and bounding radii of one body's parts.
+pub type PartPoses = Vec<(Isometry3<f64>, f64)>;
+
+/// (body, part) of each side of a contact pair.
+type ContactSides = ((usize, usize), (usize, usize));
+
 /// Buffers the monitor reuses from step to step.
 #[derive(Default)]
 pub struct DistanceScratch {
     /// World pose and bounding radius of every part, per body, and the step they are for.
-    poses: Vec<(u64, Vec<(Isometry3<f64>, f64)>)>,
+    poses: Vec<(u64, PartPoses)>,
     /// Part poses at an interior time, two bodies.
     tmp: [Vec<(Isometry3<f64>, f64)>; 2],
     /// (lower bound, part a, part b) for the current body pair.
@@ -411,6 +417,7 @@ pub struct DistanceScratch {
     evaluated: Vec<(f64, usize, usize)>,
 }
 
+#[allow(clippy::too_many_arguments)]
 /// Full-geometry distance of bodies i < j at an offset τ into the last step, on the bodies'
 /// paths (`sim::motion`), with a certified lower bound.
 pub fn pair_at(
@@ -864,7 +871,7 @@ pub fn contacts(
     // (pair key) → (docking, body a, body b, rapier's raw normal impulse)
     let mut now: BTreeMap<(String, String), (bool, usize, usize, f64)> = BTreeMap::new();
     // (pair key) → (body, part) of each side, for the time of first touch.
-    let mut who: BTreeMap<(String, String), ((usize, usize), (usize, usize))> = BTreeMap::new();
+    let mut who: BTreeMap<(String, String), ContactSides> = BTreeMap::new();
     // When rapier did not step (nothing near), its contact pairs are an older step's.
     let pairs = phys
         .world

@@ -288,6 +288,9 @@ impl BodyPath {
     }
 }
 
+/// One step's paths and the free-flight paths rapier replaced (see [`StepMotion`]).
+pub type StepPaths = (Vec<BodyPath>, Vec<Option<BodyPath>>);
+
 /// Every body's path over the step just taken, and the constant geometry bounds.
 #[derive(Resource, Debug, Clone, Default)]
 pub struct StepMotion {
@@ -311,7 +314,7 @@ pub struct StepMotion {
     pub free_before: Vec<Option<BodyPath>>,
     /// The step before: its paths (as `paths`, `free_before`), for a contact rapier reports one
     /// step after the parts first touched.
-    pub prev: Option<Box<(Vec<BodyPath>, Vec<Option<BodyPath>>)>>,
+    pub prev: Option<Box<StepPaths>>,
 }
 
 /// Bound on |x′_a − x′_b| over the step for two paths, m/s: the velocities are linear on each
