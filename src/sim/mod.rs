@@ -687,12 +687,6 @@ fn physics_step(
                 crate::geometry::bounds::Crossing::Unresolved { t_lo } => Some(t_ca + t_lo),
             }
         };
-        if std::env::var_os("RPOD_DEBUG_SWEPT").is_some() {
-            eprintln!(
-                "t0 {t0} pair {i} {j}: d0 {:?} rate {rate} t_ca {t_ca} d_ca {:?} hit {t_hit:?}",
-                d0.d, d_ca
-            );
-        }
         if let Some(th) = t_hit {
             engage = true;
             split = Some(split.map_or(th, |s: f64| s.min(th)));
