@@ -4,7 +4,20 @@
 //! the unit it names (metres for distances). A scene registers guarantees (min distance, keep-out
 //! sphere); a controller registers its own (e.g. "chaser inside the corridor"), written against
 //! [`MonitorView`], which carries the f64 truth of every body and the full-geometry distances.
+//!
+//! # Judged on intervals, not only at samples
+//! A guarantee that says how fast its margin can change ([`Guarantee::rate_bound`], from the
+//! bounds on the bodies' motion over the step that [`MotionBounds`] gives) is judged on the whole
+//! step interval: with |m′| ≤ L, min over [t₀, t₁] of m ≥ (m(t₀) + m(t₁) − L·dt)/2, and where that
+//! bound does not clear what the verdict needs, the monitor bisects the step, evaluating
+//! [`Guarantee::margin`] on the bodies' path inside it (`sim::motion`), until the violation is
+//! found or excluded ([`crate::geometry::bounds`]). The status then records the worst margin
+//! *including between samples*, with its time and whether it was found at a sample or inside an
+//! interval, and the first violation to a time tolerance. A guarantee without a rate bound is
+//! judged at the samples only and says so ([`GuaranteeStatus::judged`] = `"samples only"`):
+//! between samples it is not known to hold.
 
+use crate::geometry::bounds::Bracket;
 use nalgebra::{UnitQuaternion, Vector3};
 use serde::Serialize;
 
@@ -39,6 +52,12 @@ pub struct PairDistance {
     /// Minimum distance over the part pairs that are not both docking parts (cone/slot), m:
     /// the clearance of everything the mechanism is not meant to touch.
     pub clearance_m: f64,
+    /// Certified lower bound of `distance_m` (parry's GJK stops at a relative tolerance and
+    /// works in f32; this is the separating-axis gap along the witness direction, less the f32
+    /// rounding of the relative pose), m.
+    pub lower_m: f64,
+    /// Time of this evaluation, s (a pair beyond the monitor's horizon keeps its last one).
+    pub t_s: f64,
 }
 
 /// What a guarantee may look at.
@@ -64,7 +83,53 @@ impl MonitorView<'_> {
     }
 }
 
+/// Bounds on every body's motion over one step (the monitor's `sim::motion::StepMotion`
+/// implements it), in the world frame. Every bound holds on the whole step interval.
+pub trait MotionBounds {
+    /// The step, s.
+    fn dt_s(&self) -> f64;
+    /// Bound on the speed of body i's centre of mass, m/s.
+    fn speed_bound(&self, i: usize) -> f64;
+    /// Bound on |v_i − v_j| (centres of mass), m/s.
+    fn rel_speed_bound(&self, i: usize, j: usize) -> f64;
+    /// Bound on body i's angular speed, rad/s.
+    fn omega_bound(&self, i: usize) -> f64;
+    /// Radius about body i's centre of mass of a sphere holding all its parts, m.
+    fn extent_m(&self, i: usize) -> f64;
+    /// Bound on |r_i − r_j| (centres of mass), m.
+    fn separation_bound(&self, i: usize, j: usize) -> f64;
+    /// Bound on the rate of change of the full-geometry distance between bodies i and j:
+    /// |v_i − v_j| + Ω_i R_i + Ω_j R_j, m/s.
+    fn distance_rate_bound(&self, i: usize, j: usize) -> f64 {
+        self.rel_speed_bound(i, j)
+            + self.omega_bound(i) * self.extent_m(i)
+            + self.omega_bound(j) * self.extent_m(j)
+    }
+    /// Bound on the rate of change of body i's centre of mass expressed in body j's axes
+    /// (about j's centre of mass): |v_i − v_j| + Ω_j·|r_i − r_j|, m/s.
+    fn rel_speed_in_body_bound(&self, i: usize, j: usize) -> f64 {
+        self.rel_speed_bound(i, j) + self.omega_bound(j) * self.separation_bound(i, j)
+    }
+}
+
+/// What a guarantee's margin reads besides the bodies' states (so the monitor knows which
+/// full-geometry distances to compute when it evaluates the margin between samples).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Reads {
+    /// Body states only (point-mass guarantees).
+    Bodies,
+    /// Body states and the distances of these body pairs.
+    Pairs(Vec<(usize, usize)>),
+    /// Anything in the view (every pair the monitor tracks).
+    Everything,
+}
+
 /// A named invariant.
+///
+/// Only `name` and `margin` are required. A guarantee that can bound the rate of change of its
+/// margin over a step overrides [`Guarantee::rate_bound`] (and [`Guarantee::reads`], so that
+/// evaluations between samples compute only what it reads); it is then judged on the whole
+/// interval. Without it, it is judged at the samples only, and the outputs say so.
 pub trait Guarantee: Send + Sync {
     /// Name shown in outputs.
     fn name(&self) -> &str;
@@ -74,6 +139,27 @@ pub trait Guarantee: Send + Sync {
     }
     /// Signed margin: ≥ 0 held, < 0 violated.
     fn margin(&self, view: &MonitorView) -> f64;
+    /// The margin with a certified lower bound (default: the margin, exact). A margin built
+    /// on a full-geometry distance uses the distance's certified lower bound
+    /// ([`PairDistance::lower_m`]).
+    fn margin_bracket(&self, view: &MonitorView) -> Bracket {
+        Bracket::exact(self.margin(view))
+    }
+    /// A bound on |d margin / dt| over the step that `motion` describes, or `None` if the
+    /// margin cannot be bounded between samples (then it is judged at the samples only).
+    fn rate_bound(&self, motion: &dyn MotionBounds) -> Option<f64> {
+        let _ = motion;
+        None
+    }
+    /// What the margin reads (default: everything in the view).
+    fn reads(&self) -> Reads {
+        Reads::Everything
+    }
+    /// Absolute tolerance of the margin, in its unit: the interval search stops refining once
+    /// the worst margin is known to within max(this, 0.1 % of its size) (default 1e-6).
+    fn tolerance(&self) -> f64 {
+        1e-6
+    }
 }
 
 /// Full-geometry clearance between two bodies: distance − `min_m`.
@@ -97,6 +183,20 @@ impl Guarantee for MinDistance {
         v.pair(self.a, self.b)
             .map_or(f64::INFINITY, |p| p.distance_m - self.min_m)
     }
+    fn margin_bracket(&self, v: &MonitorView) -> Bracket {
+        v.pair(self.a, self.b)
+            .map_or(Bracket::exact(f64::INFINITY), |p| Bracket {
+                value: p.distance_m - self.min_m,
+                lower: p.lower_m - self.min_m,
+            })
+    }
+    /// The full-geometry distance changes at most at |v_a − v_b| + Ω_a R_a + Ω_b R_b.
+    fn rate_bound(&self, m: &dyn MotionBounds) -> Option<f64> {
+        Some(m.distance_rate_bound(self.a, self.b))
+    }
+    fn reads(&self) -> Reads {
+        Reads::Pairs(vec![(self.a.min(self.b), self.a.max(self.b))])
+    }
 }
 
 /// Point-mass keep-out sphere: |r_body − r_around| − radius.
@@ -119,6 +219,50 @@ impl Guarantee for KeepOutSphere {
     fn margin(&self, v: &MonitorView) -> f64 {
         (v.bodies[self.body].pos_m - v.bodies[self.around].pos_m).norm() - self.radius_m
     }
+    /// |r_body − r_around| changes at most at |v_body − v_around|.
+    fn rate_bound(&self, m: &dyn MotionBounds) -> Option<f64> {
+        Some(m.rel_speed_bound(self.body, self.around))
+    }
+    fn reads(&self) -> Reads {
+        Reads::Bodies
+    }
+}
+
+/// What the monitor found about a margin on one step interval [t₀, t₁] (times absolute, s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IntervalFinding {
+    /// Smallest margin found on the interval (ends included).
+    pub min_value: f64,
+    /// Where, s.
+    pub min_t_s: f64,
+    /// The smallest margin was found strictly inside the interval (not at a sample).
+    pub inside: bool,
+    /// Certified lower bound of the margin over the interval.
+    pub lower: f64,
+    /// The margin first went below zero in [t_lo, t_hi] (s), if it did on this interval
+    /// while it was ≥ 0 at t₀.
+    pub first_violation_s: Option<(f64, f64)>,
+    /// The margin came back to ≥ 0 in [t_lo, t_hi] (s) after a violation inside the interval.
+    pub restored_s: Option<(f64, f64)>,
+    /// The search could neither exclude nor find a violation to its tolerance.
+    pub unresolved: bool,
+    /// Margin evaluations between the samples.
+    pub evals: u32,
+}
+
+/// A change of a guarantee's state, for the event log.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StatusChange {
+    /// When, s (to the refinement's time tolerance for interval-judged guarantees).
+    pub t_s: f64,
+    /// Time tolerance of `t_s`: the change happened in [t_s, t_s + t_tol_s], s.
+    pub t_tol_s: f64,
+    /// `true`: violated; `false`: holds again.
+    pub violated: bool,
+    /// Margin at the sample that revealed it, or the smallest found inside the interval.
+    pub margin: f64,
+    /// Found at a sample (`false`) or inside an interval (`true`).
+    pub inside: bool,
 }
 
 /// Running record of one guarantee over a run.
@@ -138,6 +282,28 @@ pub struct GuaranteeStatus {
     pub worst_margin_t_s: f64,
     /// Margin at the last evaluated step.
     pub last_margin: f64,
+    /// `"interval"`: judged on every step interval, between samples included; `"samples only"`:
+    /// the guarantee gives no rate bound, so it is judged at the samples and is not known to
+    /// hold between them.
+    pub judged: &'static str,
+    /// `"held"` (proven on every interval, or at every sample when judged at samples only),
+    /// `"violated"`, or `"unresolved"` (no violation found, but the certified lower bound dips
+    /// below zero by less than the evaluations' precision: not proven to hold).
+    pub verdict: &'static str,
+    /// Where the worst margin was found: `"sample"` or `"interval"` (between samples).
+    pub worst_margin_found: &'static str,
+    /// Certified lower bound of the margin over the whole run (interval-judged guarantees;
+    /// the worst sample otherwise).
+    pub worst_margin_lower: f64,
+    /// Where the first violation was found: `"sample"` or `"interval"`.
+    pub first_violation_found: Option<&'static str>,
+    /// Time tolerance of `first_violation_s`: the margin went below zero in
+    /// [first_violation_s, first_violation_s + this], s.
+    pub first_violation_tol_s: Option<f64>,
+    /// Number of separate violations (entries into a negative margin).
+    pub violations: u64,
+    /// Margin evaluations made between samples over the run.
+    pub interval_evaluations: u64,
 }
 
 impl GuaranteeStatus {
@@ -151,10 +317,92 @@ impl GuaranteeStatus {
             worst_margin: f64::INFINITY,
             worst_margin_t_s: 0.0,
             last_margin: f64::INFINITY,
+            judged: "samples only",
+            verdict: "held",
+            worst_margin_found: "sample",
+            worst_margin_lower: f64::INFINITY,
+            first_violation_found: None,
+            first_violation_tol_s: None,
+            violations: 0,
+            interval_evaluations: 0,
         }
     }
 
-    /// Folds in one evaluation; returns `Some(true)` on a new violation, `Some(false)` when a
+    /// Folds in one step [t1_s − dt_s, t1_s] judged on its whole interval: the sample `m1` at
+    /// `t1_s` and what the interval search found. Returns the changes (violated / holds again) in time order.
+    pub fn update_interval(
+        &mut self,
+        t1_s: f64,
+        m1: f64,
+        f: &IntervalFinding,
+        dt_s: f64,
+    ) -> Vec<StatusChange> {
+        self.judged = "interval";
+        self.interval_evaluations += u64::from(f.evals);
+        let was_ok = self.last_margin >= 0.0;
+        self.last_margin = m1;
+        if f.min_value < self.worst_margin {
+            self.worst_margin = f.min_value;
+            self.worst_margin_t_s = f.min_t_s;
+            self.worst_margin_found = if f.inside { "interval" } else { "sample" };
+        }
+        if m1 < self.worst_margin {
+            self.worst_margin = m1;
+            self.worst_margin_t_s = t1_s;
+            self.worst_margin_found = "sample";
+        }
+        self.worst_margin_lower = self.worst_margin_lower.min(f.lower).min(m1);
+        let mut out = Vec::new();
+        let went_negative = f.min_value < 0.0 || m1 < 0.0;
+        if was_ok && went_negative {
+            // Not located (the search did not run): somewhere in the step.
+            let (t_lo, t_hi) = f.first_violation_s.unwrap_or((t1_s - dt_s, t1_s));
+            let inside = m1 >= 0.0 || t_hi < t1_s;
+            out.push(StatusChange {
+                t_s: t_lo,
+                t_tol_s: (t_hi - t_lo).max(0.0),
+                violated: true,
+                margin: if m1 < 0.0 { m1 } else { f.min_value },
+                inside,
+            });
+            self.violations += 1;
+            if self.first_violation_s.is_none() {
+                self.first_violation_s = Some(t_lo);
+                self.first_violation_found = Some(if inside { "interval" } else { "sample" });
+                self.first_violation_tol_s = Some((t_hi - t_lo).max(0.0));
+            }
+            if m1 >= 0.0 {
+                let (r_lo, r_hi) = f.restored_s.unwrap_or((t1_s, t1_s));
+                out.push(StatusChange {
+                    t_s: r_lo,
+                    t_tol_s: (r_hi - r_lo).max(0.0),
+                    violated: false,
+                    margin: m1,
+                    inside: true,
+                });
+            }
+        } else if !was_ok && m1 >= 0.0 {
+            let (r_lo, r_hi) = f.restored_s.unwrap_or((t1_s, t1_s));
+            out.push(StatusChange {
+                t_s: r_lo,
+                t_tol_s: (r_hi - r_lo).max(0.0),
+                violated: false,
+                margin: m1,
+                inside: r_hi < t1_s,
+            });
+        }
+        if went_negative {
+            self.held = false;
+            self.verdict = "violated";
+        } else if self.verdict != "violated" && (f.unresolved || self.worst_margin_lower < 0.0) {
+            self.held = false;
+            self.verdict = "unresolved";
+        }
+        out
+    }
+
+    /// Folds in one sample (a guarantee judged at samples only, or the t = 0 sample); returns
+    /// `Some(true)` on a new violation, `Some(false)` when a
     /// violated guarantee holds again, `None` otherwise.
     pub fn update(&mut self, t_s: f64, margin: f64) -> Option<bool> {
         let was_ok = self.last_margin >= 0.0;
@@ -163,12 +411,18 @@ impl GuaranteeStatus {
             self.worst_margin = margin;
             self.worst_margin_t_s = t_s;
         }
+        self.worst_margin_lower = self.worst_margin_lower.min(margin);
         let ok = margin >= 0.0;
         if !ok {
             self.held = false;
+            self.verdict = "violated";
             if self.first_violation_s.is_none() {
                 self.first_violation_s = Some(t_s);
+                self.first_violation_found = Some("sample");
             }
+        }
+        if was_ok && !ok {
+            self.violations += 1;
         }
         match (was_ok, ok) {
             (true, false) => Some(true),

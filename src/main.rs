@@ -69,6 +69,20 @@ enum Cmd {
         /// Steps per measurement.
         #[arg(long, default_value_t = 20000)]
         steps: u64,
+        /// Instead of the scene: the swarm table for these body counts (e.g. 2,4,8,…,256).
+        #[arg(long, value_delimiter = ',')]
+        swarm: Vec<usize>,
+    },
+    /// Write an N-body swarm scene (tumbling winged spacecraft on a 20 m grid in orbit).
+    Swarm {
+        /// Number of spacecraft (1 … 4096).
+        n: usize,
+        /// Output file (default: print to stdout).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Seed of the drift velocities, attitudes and rates.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
     },
     /// Run a scene live in a window (feature `viewer`).
     #[cfg(feature = "viewer")]
@@ -330,7 +344,43 @@ fn main() -> ExitCode {
             scene.as_deref(),
             win.options(at),
         )),
-        Cmd::Bench { scene, steps } => match rpod::bench::run(&scene, steps) {
+        Cmd::Swarm { n, out, seed } => {
+            if !(1..=4096).contains(&n) {
+                eprintln!("error: the swarm size must be 1 … 4096, got {n}");
+                return ExitCode::from(2);
+            }
+            let text = rpod::bench::swarm_scene(n, seed);
+            match out {
+                Some(p) => match std::fs::write(&p, text) {
+                    Ok(()) => ExitCode::SUCCESS,
+                    Err(e) => {
+                        eprintln!("error: {}: {e}", p.display());
+                        ExitCode::from(2)
+                    }
+                },
+                None => {
+                    out!("{text}");
+                    ExitCode::SUCCESS
+                }
+            }
+        }
+        Cmd::Bench { swarm, steps, .. } if !swarm.is_empty() => {
+            if let Some(n) = swarm.iter().find(|n| !(1..=4096).contains(*n)) {
+                eprintln!("error: the swarm sizes must be 1 … 4096, got {n}");
+                return ExitCode::from(2);
+            }
+            match rpod::bench::run_swarm(&swarm, steps) {
+                Ok(report) => {
+                    out!("{report}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            }
+        }
+        Cmd::Bench { scene, steps, .. } => match rpod::bench::run(&scene, steps) {
             Ok(report) => {
                 out!("{report}");
                 ExitCode::SUCCESS

@@ -1,8 +1,10 @@
 //! Analytic constraint surfaces (f64): the elliptic cissoid corridor (Guo 2016), the
 //! superquadric obstacle and heart-shaped keep-out (Xu, Wen, Wei 2019); the approach cone of a
-//! docking port checked against a body's full geometry.
+//! docking port checked against a body's full geometry; and sound bounds of a function of time
+//! over an interval from its rate bound ([`bounds`], the monitor's between-samples reasoning).
 
 pub mod approach_cone;
+pub mod bounds;
 pub mod cissoid;
 pub mod heart;
 pub mod superquadric;

@@ -52,6 +52,48 @@ pub struct Scene {
     /// The docking mechanism between a chaser port and a target port, if any.
     #[serde(default)]
     pub docking: Option<DockingSpec>,
+    /// How far the monitor looks (which body pairs it tracks); see [`MonitorSpec`].
+    #[serde(default)]
+    pub monitor: MonitorSpec,
+}
+
+/// Which body pairs the monitor tracks exactly.
+///
+/// Tracked pairs get an exact full-geometry distance every step, a closest approach over the
+/// run (judged between samples too) and a line in `pairs.csv` per recorded row. Pairs a
+/// guarantee names are always tracked; any other pair is tracked while it can be within
+/// `horizon_m` (the broad phase certifies every other pair farther than that, so it costs
+/// nothing). The closest pair overall (`min_distance_m`, `closest_parts`) is exact at every
+/// row whatever the horizon.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MonitorSpec {
+    /// Horizon, m. Default: none (every pair tracked) for scenes of at most
+    /// [`MonitorSpec::ALL_PAIRS_MAX_BODIES`] bodies, 10 m above.
+    #[serde(default)]
+    pub horizon_m: Option<f64>,
+    /// Step rapier every step, free flight included (default: only while some pair can come
+    /// within 1 m or touches; see `sim::RAPIER_ENGAGE_M`). Outputs are then byte-identical to
+    /// builds before free flight skipped rapier, also where a first contact opens several
+    /// collider pairs at once.
+    #[serde(default)]
+    pub rapier_every_step: bool,
+}
+
+impl MonitorSpec {
+    /// Up to this many bodies, every pair is tracked unless a horizon is given.
+    pub const ALL_PAIRS_MAX_BODIES: usize = 8;
+    /// Default horizon for larger scenes, m.
+    pub const DEFAULT_HORIZON_M: f64 = 10.0;
+
+    /// The horizon in force for a scene of `n` bodies (`None`: every pair).
+    pub fn horizon_for(&self, n: usize) -> Option<f64> {
+        match self.horizon_m {
+            Some(h) => Some(h),
+            None if n <= Self::ALL_PAIRS_MAX_BODIES => None,
+            None => Some(Self::DEFAULT_HORIZON_M),
+        }
+    }
 }
 
 /// The docking mechanism: an electromagnet in the chaser's cone, an iron plate in the target's

@@ -144,6 +144,9 @@ pub fn validate(s: &Scene) -> Check {
     if let Some(d) = &s.docking {
         validate_docking(s, d)?;
     }
+    if let Some(h) = s.monitor.horizon_m {
+        positive("monitor.horizon_m", h, "metres")?;
+    }
     for g in &s.guarantees {
         let p = format!("guarantees.{}", g.name());
         let body_exists = |n: &str| s.bodies.iter().any(|b| b.name == n);

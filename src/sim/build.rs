@@ -103,6 +103,8 @@ impl Simulation {
 
         let mut pw = rp::PhysicsWorld::new();
         pw.gravity = rp::Vector::ZERO;
+        // No speed cap: debris and fly-bys move at km/s (rapier's default clamps at 400 m/s).
+        pw.integration_parameters.normalized_max_linear_velocity = f32::MAX;
         pw.integration_parameters.dt = (dt / f64::from(scene.physics_substeps)) as f32;
 
         let reference = super::environment::install(&mut app, &scene.environment, dt);
@@ -157,7 +159,7 @@ impl Simulation {
                 ))
                 .id();
             let mut part_entities = Vec::new();
-            for pc in &colliders {
+            for (part_index, pc) in colliders.iter().enumerate() {
                 let Some(shape) = primitive_shape(&pc.shape) else {
                     return Err(loaded.error_at(
                         &format!("bodies.{}.parts.{}", b.name, pc.part),
@@ -175,6 +177,7 @@ impl Simulation {
                     ch,
                     ColliderRef {
                         body: index,
+                        part: part_index,
                         full_name: format!("{}/{}", b.name, pc.name),
                         docking: pc.role.is_docking(),
                     },
@@ -322,6 +325,7 @@ impl Simulation {
                 .iter()
                 .map(|ps| ps.iter().map(|p| p.role.is_docking()).collect())
                 .collect(),
+            min_lower_m: f64::INFINITY,
             ..Default::default()
         })
         .insert_resource(EventLog::default())
@@ -337,6 +341,7 @@ impl Simulation {
             force_row: false,
             last_row_t_s: None,
             contact_impulse_at_row: Default::default(),
+            pair_columns: Vec::new(),
         });
         super::add_pipeline(&mut app);
         super::environment::add_systems(&mut app, &scene.environment);
@@ -345,6 +350,68 @@ impl Simulation {
         super::controllers::install(&mut app, loaded)?;
         app.finish();
         app.cleanup();
+        // The monitor's geometry, broad phase, and the pairs guarantees name.
+        {
+            let w = app.world_mut();
+            let geo = super::monitor::MonitorGeometry::from_world(w);
+            let n = geo.extent_m.len();
+            let states: Vec<BodyState> = w
+                .resource::<Roster>()
+                .bodies
+                .clone()
+                .iter()
+                .map(|e| w.get::<BodyState>(*e).expect("state").clone())
+                .collect();
+            let motion = super::motion::StepMotion {
+                t0_s: 0.0,
+                dt_s: dt,
+                paths: states
+                    .iter()
+                    .map(|s| super::motion::BodyPath::at_rest(s, dt))
+                    .collect(),
+                extent_m: geo.extent_m.clone(),
+                ..Default::default()
+            };
+            // The physics stage engages rapier for pairs whose collider boxes may come within
+            // RAPIER_ENGAGE_M: boxes reach √3 of a part's bounding radius, so pairs up to
+            // that much beyond the extents must be seen by the broad phase.
+            let physics_reach = super::RAPIER_ENGAGE_M
+                + 2.0
+                    * geo
+                        .aabb_extent_m
+                        .iter()
+                        .zip(&geo.extent_m)
+                        .map(|(a, e)| a - e)
+                        .fold(0.0, f64::max);
+            let mut bp =
+                super::broadphase::BroadPhase::new(n, scene.monitor.horizon_for(n), physics_reach);
+            bp.update(&motion);
+            let mut named: Vec<(usize, usize)> = w
+                .resource::<Guarantees>()
+                .list
+                .iter()
+                .flat_map(|g| match g.reads() {
+                    crate::guarantee::Reads::Pairs(l) => l,
+                    _ => Vec::new(),
+                })
+                .map(|(a, b)| (a.min(b), a.max(b)))
+                .filter(|(a, b)| a != b)
+                .collect();
+            named.sort_unstable();
+            named.dedup();
+            w.insert_resource(geo);
+            w.insert_resource(super::motion::StepMotion {
+                paths: Vec::new(),
+                ready: false,
+                ..motion
+            });
+            w.insert_resource(bp);
+            w.insert_resource(super::NamedPairs(named));
+            w.insert_resource(super::RapierSync {
+                every_step: scene.monitor.rapier_every_step,
+                ..Default::default()
+            });
+        }
         // The monitor's view of t = 0.
         {
             use bevy::ecs::system::RunSystemOnce;
@@ -510,17 +577,17 @@ impl Simulation {
         let g = w.resource::<Guarantees>();
         let roster = w.resource::<Roster>();
         let rec = w.resource::<Recorder>();
+        let bp = w.resource::<super::broadphase::BroadPhase>();
+        let sync = w.resource::<super::RapierSync>();
+        let motion = w.resource::<super::motion::StepMotion>();
         let steps = self.steps();
-        let overall = mon
-            .min_per_pair
-            .iter()
-            .zip(&mon.pairs)
-            .min_by(|a, b| a.0.distance_m.total_cmp(&b.0.distance_m))
-            .map(|(m, p)| {
-                serde_json::json!({"value_m": m.distance_m,
-                    "parts": [mon.part_name(p.a, m.part_a), mon.part_name(p.b, m.part_b)],
-                    "t_s": m.t_s})
-            });
+        let overall = mon.overall.as_ref().map(|m| {
+            let (a, b) = mon.overall_pair;
+            serde_json::json!({"value_m": m.distance_m,
+                "parts": [mon.part_name(a, m.part_a), mon.part_name(b, m.part_b)],
+                "t_s": m.t_s, "found": if m.inside { "interval" } else { "sample" },
+                "tolerance_m": super::monitor::min_distance_tolerance_m(m.distance_m)})
+        });
         let pairs: Vec<_> = mon
             .min_per_pair
             .iter()
@@ -529,7 +596,7 @@ impl Simulation {
                 serde_json::json!({"a": roster.names[p.a], "b": roster.names[p.b],
                     "min_distance_m": m.distance_m,
                     "parts": [mon.part_name(p.a, m.part_a), mon.part_name(p.b, m.part_b)],
-                    "t_s": m.t_s})
+                    "t_s": m.t_s, "found": if m.inside { "interval" } else { "sample" }})
             })
             .collect();
         let finals: serde_json::Map<String, serde_json::Value> = roster
@@ -575,12 +642,28 @@ impl Simulation {
             "pairs": pairs,
             "min_clearance_non_docking_m": mon.min_clearance_per_pair.iter().copied().fold(f64::INFINITY, f64::min),
             "first_contact_s": cs.first_contact_s,
+            "first_touch_s": cs.first_touch_s,
             "first_collision_s": cs.first_collision_s,
             "collisions": collisions,
             "contact_per_part": cs.per_part,
             "guarantees": g.status,
             "final_states": finals,
-            "monitor": {"exact_queries": mon.exact_queries, "pruned_pairs": mon.pruned_pairs},
+            "monitor": {
+                "exact_queries": mon.exact_queries,
+                "pruned_pairs": mon.pruned_pairs,
+                "interval_evaluations": mon.interval_evals,
+                "guarantee_interval_queries": g.interval_queries,
+                "horizon_m": if bp.all_pairs { None } else { Some(bp.horizon_m) },
+                "tracked_pairs": mon.pairs.len(),
+                "broad_phase_refreshes": bp.refreshes,
+                "rapier_steps": sync.rapier_steps,
+                "rapier_skipped_steps": sync.skipped_steps,
+                "split_steps": sync.split_steps,
+                "swept_test_queries": sync.swept_queries,
+                "rotation_under_resolved_steps": motion.under_resolved_steps,
+                "min_distance_tolerance": "max(1e-6 m, 0.1 % of the distance)",
+                "event_time_tolerance_s": self.scene.dt_s * super::EVENT_TIME_TOL,
+            },
             "docking": w.get_resource::<super::docking::Docking>().map(super::docking::summary),
             "controllers": w.resource::<super::controllers::ControllerHost>().summary(),
         })

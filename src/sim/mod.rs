@@ -24,11 +24,13 @@
 //! same scene gives byte-identical outputs on every run.
 
 pub mod airbearing;
+pub mod broadphase;
 pub mod build;
 pub mod controllers;
 pub mod docking;
 pub mod environment;
 pub mod monitor;
+pub mod motion;
 pub mod output;
 
 use crate::guarantee::{BodyView, Guarantee, GuaranteeStatus, MonitorView, PairDistance};
@@ -230,6 +232,10 @@ pub struct Guarantees {
     pub list: Vec<Box<dyn Guarantee>>,
     /// Their status, same order.
     pub status: Vec<GuaranteeStatus>,
+    /// Their margin (with its certified lower bound) at the last sample, same order.
+    pub last: Vec<crate::geometry::bounds::Bracket>,
+    /// Exact parry calls made by the interval searches of guarantees over the run.
+    pub interval_queries: u64,
 }
 
 impl Guarantees {
@@ -379,8 +385,110 @@ pub fn rotate_rk4(
     (q1, q1 * w1)
 }
 
-/// Physics: apply wrenches, step rapier, update the f64 truth, advance the reference orbit and
-/// the clock.
+/// rapier is stepped while the axis-aligned boxes of two bodies' colliders can be within this
+/// of each other during the step, m: rapier's broad phase pairs colliders whose boxes, grown by
+/// its prediction distance (0.02 m) and its tree's change-detection skin (0.04 m a side),
+/// overlap. Stepping rapier from well before a pair can exist there keeps rapier's state, when
+/// the pair does come near, the same as if it had stepped all along — so skipping free flight
+/// does not change a single output byte (checked on every bundled scene against the outputs of
+/// the build that stepped rapier every step) — except where a first contact opens several
+/// collider pairs at once (the `geng2015_*` scenes: bus, antenna and port parts): rapier
+/// optimises its BVH incrementally every step (frame-indexed sub-tree rotation), so the tree,
+/// and the order in which it reports the new pairs to the solver, depend on how many steps it
+/// took; the first-contact impulse then differs in the last digits (13.03 vs 13.19 N·s in
+/// `geng2015_m1_linear`), whatever this margin (tried 0.25, 1 and 10 m). Runs stay
+/// deterministic; `monitor: (rapier_every_step: true)` steps rapier every step as before.
+pub const RAPIER_ENGAGE_M: f64 = 1.0;
+
+/// rapier makes contact points for colliders closer than its prediction distance (0.02 m by
+/// default) at the start of its step; a pair closer than this (90 % of it) is left to rapier, m.
+pub const RAPIER_SEES_M: f64 = 0.018;
+
+/// A step is split at the time the swept test finds a pair's gap at or below this (half of
+/// rapier's 0.02 m prediction distance), so that rapier, stepping the rest, sees the contact, m.
+pub const SPLIT_GAP_M: f64 = 0.01;
+
+/// Bookkeeping of the f64 → rapier hand-over (see `physics_step`).
+#[derive(Resource, Debug, Clone, Default)]
+pub struct RapierSync {
+    /// Per body: rapier's copy of its state is older than the f64 truth (free flight since
+    /// the last rapier step); written just before rapier next steps.
+    pub stale: Vec<bool>,
+    /// Steps in which rapier stepped.
+    pub rapier_steps: u64,
+    /// Steps in which no pair could come near: rapier was not stepped.
+    pub skipped_steps: u64,
+    /// Steps split at a time of impact found by the swept test.
+    pub split_steps: u64,
+    /// Start of the last split step's rapier part (absolute time, s), if the last step was split.
+    pub last_split_s: Option<f64>,
+    /// rapier stepped in the last step (its contact pairs are current).
+    pub stepped: bool,
+    /// Exact parry calls of the swept tests over the run.
+    pub swept_queries: u64,
+    /// Step rapier every step, free flight included (scene `monitor.rapier_every_step`).
+    pub every_step: bool,
+}
+
+/// Scratch buffers of the physics step.
+#[derive(Default)]
+pub struct PhysicsScratch {
+    /// Per body, in scene order: the state at the start of the step.
+    start: Vec<BodyState>,
+    /// Per body: the f64 free-flight end state.
+    free_end: Vec<BodyState>,
+    /// Pair evaluation buffers.
+    dist: monitor::DistanceScratch,
+}
+
+impl guarantee_bounds::MotionBounds for motion::StepMotion {
+    fn dt_s(&self) -> f64 {
+        self.dt_s
+    }
+    fn speed_bound(&self, i: usize) -> f64 {
+        motion::StepMotion::speed_bound(self, i)
+    }
+    fn rel_speed_bound(&self, i: usize, j: usize) -> f64 {
+        motion::StepMotion::rel_speed_bound(self, i, j)
+    }
+    fn omega_bound(&self, i: usize) -> f64 {
+        motion::StepMotion::omega_bound(self, i)
+    }
+    fn extent_m(&self, i: usize) -> f64 {
+        self.extent_m[i]
+    }
+    fn separation_bound(&self, i: usize, j: usize) -> f64 {
+        motion::StepMotion::separation_bound(self, i, j)
+    }
+}
+
+mod guarantee_bounds {
+    pub use crate::guarantee::MotionBounds;
+}
+
+/// Writes a body's f64 state into rapier (pose, velocities).
+fn write_rapier(rb: &mut rp::RigidBody, b: &SimBody, s: &BodyState) {
+    let pose = s.body_pose(&b.com_body_m);
+    rb.set_position(conv::pose(&pose), false);
+    rb.set_linvel(conv::v(&s.vel_m_s), false);
+    rb.set_angvel(conv::v(&s.omega_rad_s), false);
+}
+
+/// Steps rapier `substeps` times with a step of `h_s` in total.
+fn step_rapier(phys: &mut Physics, h_s: f64, dt_s: f64) {
+    let substeps = phys.substeps;
+    let full = phys.world.integration_parameters.dt;
+    if h_s != dt_s {
+        phys.world.integration_parameters.dt = (h_s / f64::from(substeps)) as f32;
+    }
+    for _ in 0..substeps {
+        phys.world.step();
+    }
+    phys.world.integration_parameters.dt = full;
+}
+
+/// Physics: the f64 free flight of every body, a swept test of every pair that could come near
+/// within the step, rapier only where a contact is possible, then the f64 truth committed.
 ///
 /// Free flight, in f64: with a_g(x) the differential gravity and a_c the held force per mass,
 /// x₁ = x₀ + v₀·dt + ½(a_g(x₀) + a_c)·dt², v₁ = v₀ + ½(a_g(x₀) + a_g(x₁))·dt + a_c·dt
@@ -389,17 +497,211 @@ pub fn rotate_rk4(
 /// 1.7 % of the kinetic energy of a tumbling body over 600 s (`tests/val_tumbling.rs` measures
 /// it), so in free flight rapier only detects contacts; its result is overwritten by the f64
 /// state.
+///
+/// Each step, in order:
+/// 1. The f64 free-flight end state of every body, and its path over the step
+///    ([`motion::BodyPath`]); the broad phase's spheres follow ([`broadphase::BroadPhase`]).
+/// 2. For every near pair of bodies in free flight, the swept test: the distance over the step
+///    is at least d(t₀) − S·dt (S the pair's distance-rate bound); where that is not clear of
+///    [`RAPIER_ENGAGE_M`], the exact distance at t₀ and, if rapier would not see the pair at
+///    the start of its step (gap above [`SPLIT_GAP_M`]), conservative advancement and then
+///    bisection along the paths for the first time the gap is at most [`SPLIT_GAP_M`]: a time
+///    of impact inside the step.
+/// 3. rapier: not stepped at all when no pair is within [`RAPIER_ENGAGE_M`], no body touches
+///    and no joint exists (rapier's state is written from the f64 truth only when it steps
+///    next: [`RapierSync`]); split at the earliest time of impact — rapier-driven bodies are
+///    stepped to it, the free bodies placed on their paths at it, and rapier steps the rest,
+///    so the impact happens in rapier, where contacts are resolved and recorded; else one
+///    ordinary step.
+/// 4. Bodies touching another or jointed take rapier's state (and their contact impulse is
+///    measured); the others commit their f64 free-flight end state — the path is the same
+///    whether or not the step was split.
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it uses
 fn physics_step(
     mut phys: ResMut<Physics>,
     mut clock: ResMut<Clock>,
     gravity: Option<ResMut<Gravity>>,
     mut q: Query<(&SimBody, &mut BodyState, &mut Wrench)>,
     mut contact: ResMut<monitor::ContactState>,
+    mut motion: ResMut<motion::StepMotion>,
+    mut bp: ResMut<broadphase::BroadPhase>,
+    mut sync: ResMut<RapierSync>,
+    mon: Res<MonitorState>,
+    geo: Res<monitor::MonitorGeometry>,
+    roster: Res<Roster>,
+    mut scratch: Local<PhysicsScratch>,
 ) {
     let dt = clock.dt_s;
-    {
-        let world = &mut phys.world;
-        for (b, _, w) in &q {
+    let t0 = clock.t_s();
+    let n = roster.bodies.len();
+    let sc = &mut *scratch;
+    // The gravity field moves to t + dt first: gravity at the new positions needs it.
+    let gravity = gravity.map(|mut g| {
+        g.0.advance(dt);
+        g
+    });
+    if motion.paths.len() != n {
+        motion.paths = Vec::with_capacity(n);
+        motion.extent_m = geo.extent_m.clone();
+        motion.lambda_kg_m2 = roster
+            .bodies
+            .iter()
+            .map(|e| motion::principal_moments(&q.get(*e).expect("body").0.inertia_kg_m2))
+            .collect();
+        sync.stale = vec![true; n];
+    }
+    sc.start.clear();
+    sc.free_end.clear();
+    if motion.ready {
+        let paths = std::mem::replace(&mut motion.paths, Vec::with_capacity(n));
+        let free = std::mem::take(&mut motion.free_before);
+        motion.prev = Some(Box::new((paths, free)));
+    }
+    motion.paths.clear();
+    motion.free_before.clear();
+    motion.free_before.resize(n, None);
+    let jointed = |world: &rp::PhysicsWorld, h: rp::RigidBodyHandle| {
+        world.impulse_joints.attached_joints(h).next().is_some()
+    };
+    let mut any_attached = false;
+    let mut under_resolved = false;
+    // 1. f64 free flight of every body, in scene order.
+    for e in &roster.bodies {
+        let (b, s, w) = q.get(*e).expect("roster body");
+        let a_g0 = w.gravity_n / b.mass_kg;
+        let a_c = w.force_n / b.mass_kg;
+        let v0 = s.vel_m_s;
+        let mut end = s.clone();
+        end.pos_m += v0 * dt + (a_g0 + a_c) * (0.5 * dt * dt);
+        let a_g1 = match &gravity {
+            Some(g) => g.0.accel_m_s2(&end.pos_m),
+            None => Vector3::zeros(),
+        };
+        end.vel_m_s = v0 + (a_g0 + a_g1) * (0.5 * dt) + a_c * dt;
+        let (att, omega) = rotate_rk4(
+            &s.att,
+            &s.omega_rad_s,
+            &w.torque_nm,
+            &b.inertia_kg_m2,
+            &b.inertia_inv,
+            dt,
+        );
+        end.att = att;
+        end.omega_rad_s = omega;
+        under_resolved |= s.att.angle_to(&att) > motion::UNDER_RESOLVED_TURN_RAD;
+        let path = motion::BodyPath::free(
+            s,
+            a_g0 + a_c,
+            w.torque_nm,
+            b,
+            motion.lambda_kg_m2[b.index],
+            (&end.pos_m, &end.att, &end.omega_rad_s),
+            dt,
+        );
+        motion.paths.push(path);
+        sc.start.push(s.clone());
+        sc.free_end.push(end);
+        let attached = contact.touching.get(b.index).copied().unwrap_or(false)
+            || jointed(&phys.world, b.handle);
+        any_attached |= attached;
+    }
+    motion.t0_s = t0;
+    motion.dt_s = dt;
+    motion.ready = true;
+    motion.under_resolved_steps += u64::from(under_resolved);
+    bp.update(&motion);
+    // 2. The swept test over the near pairs of bodies in free flight.
+    let prev_attached: Vec<bool> = roster
+        .bodies
+        .iter()
+        .map(|e| {
+            let b = q.get(*e).expect("body").0;
+            contact.touching.get(b.index).copied().unwrap_or(false)
+                || jointed(&phys.world, b.handle)
+        })
+        .collect();
+    // rapier keeps stepping while its own broad phase still pairs any colliders.
+    let mut engage = sync.every_step
+        || any_attached
+        || phys.world.impulse_joints.iter().next().is_some()
+        || phys.world.narrow_phase.contact_pairs().next().is_some();
+    let mut split: Option<f64> = None;
+    let pairs: Vec<(usize, usize)> = if bp.all_pairs {
+        (0..n)
+            .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
+            .collect()
+    } else {
+        bp.near.iter().copied().collect()
+    };
+    let mut count = monitor::QueryCount::default();
+    for (i, j) in pairs {
+        if prev_attached[i] || prev_attached[j] {
+            continue;
+        }
+        let rate = motion.distance_rate_bound(i, j);
+        let sep0 = (sc.start[i].pos_m - sc.start[j].pos_m).norm();
+        let travel = (motion.speed_bound(i) + motion.speed_bound(j)) * dt;
+        if sep0 - geo.aabb_extent_m[i] - geo.aabb_extent_m[j] - travel <= RAPIER_ENGAGE_M {
+            engage = true;
+        }
+        // Lower bound at t₀: the monitor's certified distance if it has one for t₀, else the
+        // bounding spheres about the centres of mass.
+        let lb0 = match mon.pair_index.get(&(i, j)).map(|k| &mon.pairs[*k]) {
+            Some(p) if p.t_s == t0 => p.lower_m,
+            _ => sep0 - geo.extent_m[i] - geo.extent_m[j],
+        };
+        if lb0 - rate * dt > SPLIT_GAP_M {
+            continue;
+        }
+        let d0 = monitor::pair_at(&geo, &motion, i, j, 0.0, None, &mut sc.dist, &mut count);
+        if d0.d.value <= RAPIER_SEES_M {
+            continue; // rapier sees it at the start of its step
+        }
+        if d0.d.lower - rate * dt > SPLIT_GAP_M {
+            continue;
+        }
+        let mut warm = Some((d0.a, d0.b));
+        let mut f = |tau: f64| {
+            let h = monitor::pair_at(&geo, &motion, i, j, tau, warm, &mut sc.dist, &mut count);
+            warm = Some((h.a, h.b));
+            h.d
+        };
+        // Conservative advancement to the split gap, then bisection for the first time at or
+        // below it (CA alone crawls where the rate bound is loose, e.g. a spinning panel).
+        let Some((t_ca, d_ca)) =
+            crate::geometry::bounds::advance_to(dt, d0.d, rate, SPLIT_GAP_M, 0.0, 16, &mut f)
+        else {
+            continue;
+        };
+        let t_hit = if d_ca.value <= SPLIT_GAP_M {
+            Some(t_ca)
+        } else {
+            let d1 = f(dt);
+            let rest = dt - t_ca;
+            match crate::geometry::bounds::first_below(
+                rest,
+                d_ca,
+                d1,
+                rate,
+                SPLIT_GAP_M,
+                dt * 1e-6,
+                64,
+                |u| f(t_ca + u),
+            ) {
+                crate::geometry::bounds::Crossing::Never => None,
+                crate::geometry::bounds::Crossing::At { t_hi, .. } => Some(t_ca + t_hi),
+                crate::geometry::bounds::Crossing::Unresolved { t_lo } => Some(t_ca + t_lo),
+            }
+        };
+        if let Some(th) = t_hit {
+            engage = true;
+            split = Some(split.map_or(th, |s: f64| s.min(th)));
+        }
+    }
+    // 3. rapier.
+    let world_forces = |world: &mut rp::PhysicsWorld,
+                        q: &Query<(&SimBody, &mut BodyState, &mut Wrench)>| {
+        for (b, _, w) in q.iter() {
             if let Some(rb) = world.bodies.get_mut(b.handle) {
                 // rapier keeps user forces and torques until cleared, and `reset_forces` clears
                 // only the forces: without `reset_torques` every torque ever commanded would
@@ -410,30 +712,61 @@ fn physics_step(
                 rb.add_torque(conv::v(&w.torque_nm), true);
             }
         }
+    };
+    let stepped = engage || split.is_some();
+    sync.last_split_s = None;
+    if stepped {
+        // rapier's copy of every body in free flight since its last step.
+        for (k, e) in roster.bodies.iter().enumerate() {
+            if sync.stale[k] {
+                let (b, s, _) = q.get(*e).expect("body");
+                if let Some(rb) = phys.world.bodies.get_mut(b.handle) {
+                    write_rapier(rb, b, s);
+                }
+                sync.stale[k] = false;
+            }
+        }
+        world_forces(&mut phys.world, &q);
+        sync.rapier_steps += 1;
+        match split {
+            Some(tc) if tc > 0.0 => {
+                sync.split_steps += 1;
+                sync.last_split_s = Some(t0 + tc);
+                if any_attached || phys.world.impulse_joints.iter().next().is_some() {
+                    step_rapier(&mut phys, tc, dt);
+                }
+                for (k, e) in roster.bodies.iter().enumerate() {
+                    if prev_attached[k] {
+                        continue;
+                    }
+                    let b = q.get(*e).expect("body").0;
+                    let s = motion.paths[k].state_at(tc);
+                    if let Some(rb) = phys.world.bodies.get_mut(b.handle) {
+                        write_rapier(rb, b, &s);
+                    }
+                }
+                step_rapier(&mut phys, dt - tc, dt);
+            }
+            _ => step_rapier(&mut phys, dt, dt),
+        }
+        contact.refresh_touching(&phys.world);
+    } else {
+        sync.skipped_steps += 1;
+        contact.touching.iter_mut().for_each(|t| *t = false);
     }
-    let substeps = phys.substeps;
-    for _ in 0..substeps {
-        phys.world.step();
-    }
-    // The gravity field moves to t + dt first: gravity at the new positions needs it.
-    let gravity = gravity.map(|mut g| {
-        g.0.advance(dt);
-        g
-    });
-    // Which bodies touch something or are jointed: rapier is the truth for those.
-    contact.refresh_touching(&phys.world);
+    sync.swept_queries += count.exact;
+    sync.stepped = stepped;
+    // 4. Commit.
     let world = &mut phys.world;
-    for (b, mut s, mut w) in &mut q {
-        let Some(rb) = world.bodies.get_mut(b.handle) else {
-            continue;
-        };
-        let attached = contact.touching.get(b.index).copied().unwrap_or(false)
-            || world
-                .impulse_joints
-                .attached_joints(b.handle)
-                .next()
-                .is_some();
+    for e in &roster.bodies {
+        let (b, mut s, mut w) = q.get_mut(*e).expect("body");
+        let k = b.index;
+        let attached = stepped
+            && (contact.touching.get(k).copied().unwrap_or(false) || jointed(world, b.handle));
         if attached {
+            let Some(rb) = world.bodies.get(b.handle) else {
+                continue;
+            };
             let pose = rb.position();
             let att = conv::naq(pose.rotation);
             s.att = att;
@@ -441,35 +774,21 @@ fn physics_step(
             let v_new = conv::na(rb.linvel());
             // The contact (and joint) impulse on this body: its momentum change less what the
             // applied forces gave it over the step.
-            contact.body_impulse[b.index] =
-                (v_new - s.vel_m_s) * b.mass_kg - (w.force_n + w.gravity_n) * dt;
+            contact.body_impulse[k] =
+                (v_new - sc.start[k].vel_m_s) * b.mass_kg - (w.force_n + w.gravity_n) * dt;
             s.vel_m_s = v_new;
             s.omega_rad_s = conv::na(rb.angvel());
+            if !prev_attached[k] {
+                motion.free_before[k] = Some(motion.paths[k].clone());
+            }
+            match sync.last_split_s {
+                Some(ts) if !prev_attached[k] => motion.paths[k].split_then_straight(ts - t0, &s),
+                _ => motion.paths[k] = motion::BodyPath::straight(&sc.start[k], &s, dt),
+            }
         } else {
-            contact.body_impulse[b.index] = Vector3::zeros();
-            let a_g0 = w.gravity_n / b.mass_kg;
-            let a_c = w.force_n / b.mass_kg;
-            let v0 = s.vel_m_s;
-            s.pos_m += v0 * dt + (a_g0 + a_c) * (0.5 * dt * dt);
-            let a_g1 = match &gravity {
-                Some(g) => g.0.accel_m_s2(&s.pos_m),
-                None => Vector3::zeros(),
-            };
-            s.vel_m_s = v0 + (a_g0 + a_g1) * (0.5 * dt) + a_c * dt;
-            let (att, omega) = rotate_rk4(
-                &s.att,
-                &s.omega_rad_s,
-                &w.torque_nm,
-                &b.inertia_kg_m2,
-                &b.inertia_inv,
-                dt,
-            );
-            s.att = att;
-            s.omega_rad_s = omega;
-            let pose = s.body_pose(&b.com_body_m);
-            rb.set_position(conv::pose(&pose), false);
-            rb.set_linvel(conv::v(&s.vel_m_s), false);
-            rb.set_angvel(conv::v(&s.omega_rad_s), false);
+            contact.body_impulse[k] = Vector3::zeros();
+            *s = sc.free_end[k].clone();
+            sync.stale[k] = true;
         }
         *w = Wrench::default();
     }
@@ -495,6 +814,21 @@ pub struct MonitorState {
     pub exact_queries: u64,
     /// Part pairs skipped by bounding-sphere pruning over the run.
     pub pruned_pairs: u64,
+    /// Position of each tracked body pair (i < j) in `pairs`.
+    pub pair_index: std::collections::HashMap<(usize, usize), usize>,
+    /// The closest pair at the last step (tracked or not).
+    pub closest: Option<PairDistance>,
+    /// The closest approach of any pair over the run (to the tolerance of
+    /// [`monitor::min_distance_tolerance_m`]), and its pair.
+    pub overall: Option<PairMin>,
+    /// Bodies of `overall`.
+    pub overall_pair: (usize, usize),
+    /// Distance evaluations made between samples over the run.
+    pub interval_evals: u64,
+    /// Smallest certified lower bound met on a refined interval, m.
+    pub min_lower_m: f64,
+    /// The closest pair found at the last row by the search over every pair (horizon mode).
+    pub row_closest_pair: Option<(usize, usize)>,
 }
 
 /// The closest approach of one body pair over a run.
@@ -508,7 +842,13 @@ pub struct PairMin {
     pub part_b: usize,
     /// When, s.
     pub t_s: f64,
+    /// Found between two samples (by the interval search), not at a step.
+    pub inside: bool,
 }
+
+/// Body pairs that guarantees name (always tracked by the monitor), i < j.
+#[derive(Resource, Debug, Clone, Default)]
+pub struct NamedPairs(pub Vec<(usize, usize)>);
 
 impl MonitorState {
     /// `body/collider` name of a part.
@@ -521,13 +861,47 @@ impl MonitorState {
     }
 }
 
-/// Evaluates guarantees.
+/// Interior margin evaluations allowed per guarantee per step.
+const MAX_GUARANTEE_EVALS: u32 = 256;
+
+/// A positive worst margin is refined until its certified lower bound is within this fraction
+/// of it (or zero is proven): what matters there is the proof that it holds.
+pub const POSITIVE_MARGIN_REL_TOL: f64 = 0.1;
+
+/// A negative worst margin (a violation) is refined to this fraction of its size.
+pub const NEGATIVE_MARGIN_REL_TOL: f64 = 1e-3;
+
+/// Time tolerance of refined violation and restoration times, as a fraction of the step
+/// (2⁻¹⁶: 0.15 µs at dt = 10 ms).
+pub const EVENT_TIME_TOL: f64 = 1.0 / 65_536.0;
+
+/// Margin evaluations allowed to locate one violation or restoration time.
+const MAX_CROSSING_EVALS: u32 = 256;
+
+/// Evaluates guarantees: at the step's sample and, for a guarantee with a rate bound, on the
+/// whole interval since the last one.
+///
+/// With |m′| ≤ L over the step, the margin is at least (m(t₀) + m(t₁) − L·dt)/2 on it. If that
+/// does not clear what the verdict needs — while the worst margin W so far is positive,
+/// max(0, W − max([`Guarantee::tolerance`], [`POSITIVE_MARGIN_REL_TOL`]·W)) (zero proves the
+/// guarantee still holds); once violated, W less max(tolerance, [`NEGATIVE_MARGIN_REL_TOL`]·|W|)
+/// — the step is bisected on the bodies' paths
+/// ([`crate::geometry::bounds::minimize`]). A violation found (at the sample or inside) is
+/// then located: the first time the margin is below zero, bracketed to
+/// [`EVENT_TIME_TOL`]·dt ([`crate::geometry::bounds::first_below`]), and, if it holds again by
+/// the end of the step, the time it came back. A guarantee without a rate bound is judged at
+/// the samples only.
 fn check_guarantees(
     clock: Res<Clock>,
     mon: Res<MonitorState>,
     mut g: ResMut<Guarantees>,
     mut log: ResMut<EventLog>,
+    motion: Res<motion::StepMotion>,
+    geo: Res<monitor::MonitorGeometry>,
+    mut scratch: Local<monitor::DistanceScratch>,
 ) {
+    use crate::geometry::bounds::{Bracket, Crossing, first_below, interval_lower_bound, minimize};
+    use crate::guarantee::{IntervalFinding, Reads};
     let t = clock.t_s();
     let view = MonitorView {
         t_s: t,
@@ -535,22 +909,160 @@ fn check_guarantees(
         pairs: &mon.pairs,
     };
     let g = &mut *g;
-    for (inv, st) in g.list.iter().zip(g.status.iter_mut()) {
-        let m = inv.margin(&view);
-        match st.update(t, m) {
-            Some(true) => log.push(
-                t,
-                "guarantee_violated",
-                serde_json::json!({"name": st.name, "margin": m, "unit": st.unit}),
-            ),
-            Some(false) => log.push(
-                t,
-                "guarantee_restored",
-                serde_json::json!({"name": st.name, "margin": m, "unit": st.unit}),
-            ),
-            None => {}
+    g.last.resize(g.list.len(), Bracket::exact(f64::INFINITY));
+    let mut bodies_at: Vec<BodyView> = Vec::new();
+    let mut pairs_at: Vec<PairDistance> = Vec::new();
+    let mut count = monitor::QueryCount::default();
+    for k in 0..g.list.len() {
+        let inv = &g.list[k];
+        let m1 = inv.margin_bracket(&view);
+        let rate = if motion.ready {
+            inv.rate_bound(&*motion)
+        } else {
+            None
+        };
+        let st = &mut g.status[k];
+        let Some(rate) = rate else {
+            let m = m1.value;
+            match st.update(t, m) {
+                Some(true) => log.push(
+                    t,
+                    "guarantee_violated",
+                    serde_json::json!({"name": st.name, "margin": m, "unit": st.unit}),
+                ),
+                Some(false) => log.push(
+                    t,
+                    "guarantee_restored",
+                    serde_json::json!({"name": st.name, "margin": m, "unit": st.unit}),
+                ),
+                None => {}
+            }
+            g.last[k] = m1;
+            continue;
+        };
+        let dt = motion.dt_s;
+        let t0 = t - dt;
+        let m0 = g.last[k];
+        let reads = inv.reads();
+        let mut eval = |tau: f64| -> Bracket {
+            if bodies_at.len() != mon.bodies.len() {
+                bodies_at = mon.bodies.clone();
+            }
+            for (v, p) in bodies_at.iter_mut().zip(&motion.paths) {
+                let s = p.state_at(tau);
+                v.pos_m = s.pos_m;
+                v.vel_m_s = s.vel_m_s;
+                v.att = s.att;
+                v.omega_rad_s = s.omega_rad_s;
+            }
+            pairs_at.clear();
+            let list: Vec<(usize, usize)> = match &reads {
+                Reads::Bodies => Vec::new(),
+                Reads::Pairs(l) => l.clone(),
+                Reads::Everything => mon.pairs.iter().map(|p| (p.a, p.b)).collect(),
+            };
+            for (i, j) in list {
+                let warm = mon.pair_index.get(&(i, j)).map(|k| {
+                    let p = &mon.pairs[*k];
+                    (p.part_a, p.part_b)
+                });
+                let h = monitor::pair_at(&geo, &motion, i, j, tau, warm, &mut scratch, &mut count);
+                pairs_at.push(PairDistance {
+                    a: i,
+                    b: j,
+                    distance_m: h.d.value,
+                    part_a: h.a,
+                    part_b: h.b,
+                    clearance_m: h.d.value,
+                    lower_m: h.d.lower,
+                    t_s: t0 + tau,
+                });
+            }
+            let v = MonitorView {
+                t_s: t0 + tau,
+                bodies: &bodies_at,
+                pairs: &pairs_at,
+            };
+            inv.margin_bracket(&v)
+        };
+        let w = st.worst_margin;
+        let abs_tol = inv.tolerance();
+        let thr = |b: f64| {
+            let x = w.min(b);
+            if x >= 0.0 {
+                (x - abs_tol.max(POSITIVE_MARGIN_REL_TOL * x)).max(0.0)
+            } else {
+                x - abs_tol.max(NEGATIVE_MARGIN_REL_TOL * x.abs())
+            }
+        };
+        let mut finding = IntervalFinding {
+            min_value: m1.value,
+            min_t_s: t,
+            inside: false,
+            lower: interval_lower_bound(m0.lower, m1.lower, rate, dt),
+            first_violation_s: None,
+            restored_s: None,
+            unresolved: false,
+            evals: 0,
+        };
+        if finding.lower < thr(m1.value) {
+            let r = minimize(
+                dt,
+                m0,
+                m1,
+                rate,
+                thr,
+                MAX_GUARANTEE_EVALS,
+                dt * 1e-9,
+                &mut eval,
+            );
+            if r.value < finding.min_value && r.t > 0.0 && r.t < dt {
+                finding.min_value = r.value;
+                finding.min_t_s = t0 + r.t;
+                finding.inside = true;
+            }
+            finding.lower = r.lower;
+            finding.evals += r.evals;
         }
+        let t_tol = dt * EVENT_TIME_TOL;
+        let went_negative = finding.min_value < 0.0 || m1.value < 0.0;
+        if m0.value >= 0.0 && went_negative {
+            let c = first_below(dt, m0, m1, rate, 0.0, t_tol, MAX_CROSSING_EVALS, &mut eval);
+            finding.first_violation_s = match c {
+                Crossing::At { t_lo, t_hi } => Some((t0 + t_lo, t0 + t_hi)),
+                Crossing::Unresolved { t_lo } => Some((t0 + t_lo, t)),
+                Crossing::Never => None,
+            };
+        }
+        if m1.value >= 0.0 && (m0.value < 0.0 || finding.min_value < 0.0) {
+            // The last time it was below zero: the first, going backwards from t₁.
+            let c = first_below(dt, m1, m0, rate, 0.0, t_tol, MAX_CROSSING_EVALS, |u| {
+                eval(dt - u)
+            });
+            finding.restored_s = match c {
+                Crossing::At { t_lo, t_hi } => Some((t - t_hi, t - t_lo)),
+                Crossing::Unresolved { t_lo } => Some((t0, t - t_lo)),
+                Crossing::Never => None,
+            };
+        }
+        finding.unresolved = !went_negative && finding.lower < 0.0;
+        for c in st.update_interval(t, m1.value, &finding, dt) {
+            let kind = if c.violated {
+                "guarantee_violated"
+            } else {
+                "guarantee_restored"
+            };
+            log.push(
+                c.t_s,
+                kind,
+                serde_json::json!({"name": st.name, "margin": c.margin, "unit": st.unit,
+                    "found": if c.inside { "interval" } else { "sample" },
+                    "t_tol_s": c.t_tol_s, "t_step_s": t}),
+            );
+        }
+        g.last[k] = m1;
     }
+    g.interval_queries += count.exact;
 }
 
 /// Adds the pipeline to an app: the `SimStep` schedule with its chained stages and the systems

@@ -1,14 +1,20 @@
-//! The safety monitor: every step, the exact minimum distance between every pair of bodies'
-//! full geometry (parry, with bounding-sphere pruning), the closest part pair, and rapier's
-//! contacts named by part — docking contact (both parts docking parts) or collision.
+//! The safety monitor: every step, the exact minimum distance between the full geometry of
+//! every tracked pair of bodies (parry, with bounding-sphere pruning) with a certified lower
+//! bound, its closest approach over the run judged on the whole step interval (between
+//! samples too), the closest pair overall, and rapier's contacts named by part — docking
+//! contact (both parts docking parts) or collision — with the time of first touch refined on
+//! the step's path.
 
-use super::{BodyState, Clock, EventLog, MonitorState, Part, Roster, SimBody, conv};
+use super::broadphase::BroadPhase;
+use super::motion::StepMotion;
+use super::{BodyState, Clock, EventLog, MonitorState, NamedPairs, Part, Roster, SimBody, conv};
+use crate::geometry::bounds::{Bracket, interval_lower_bound, minimize};
 use crate::guarantee::{BodyView, PairDistance};
 use bevy::prelude::*;
 use bevy_rapier3d::parry::query;
 use bevy_rapier3d::rapier::math::Pose;
 use bevy_rapier3d::rapier::prelude as rp;
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use std::collections::{BTreeMap, HashMap};
 
 /// Who a collider is.
@@ -16,6 +22,8 @@ use std::collections::{BTreeMap, HashMap};
 pub struct ColliderRef {
     /// Body index.
     pub body: usize,
+    /// Collider index within the body (scene order).
+    pub part: usize,
     /// `body/collider` name.
     pub full_name: String,
     /// Part role is docking.
@@ -75,6 +83,9 @@ pub struct ContactState {
     pub first_contact_s: Option<f64>,
     /// First collision (a contact that is not a docking contact), s.
     pub first_collision_s: Option<f64>,
+    /// Time of first touch of the first contact, refined on the step's free-flight paths
+    /// ([`touch_time`]), s.
+    pub first_touch_s: Option<f64>,
     /// Every collision start: (t_s, part, part).
     pub collisions: Vec<(f64, String, String)>,
     /// Per part pair ever in contact, accumulated over the whole run across restarts, so the
@@ -130,50 +141,351 @@ pub fn shape_distance(
     query::distance(&Pose::IDENTITY, a, &conv::pose(&rel), b).unwrap_or(f32::NAN) as f64
 }
 
-/// Buffers the distance system reuses from step to step.
-#[derive(Default)]
-pub struct DistanceScratch {
-    /// World pose and bounding radius of every part, per body.
-    poses: Vec<Vec<(Isometry3<f64>, f64)>>,
-    /// Shapes, per body (cloned handles, fetched once).
-    shapes: Vec<Vec<rp::SharedShape>>,
-    /// (lower bound, part a, part b) for the current body pair.
-    candidates: Vec<(f64, usize, usize)>,
+/// Relative precision of parry's GJK distance: it stops once its upper and lower bounds agree
+/// to √(10·ε_f32) ≈ 1.09e-3 of the distance (parry `query::gjk::closest_points`); we allow
+/// 1.2e-3.
+pub const GJK_REL_TOL: f64 = 1.2e-3;
+
+/// f32 rounding of a relative pose and of the support points, as a fraction of the pose's
+/// scale (|translation| + the two bounding radii): 8 ulps.
+pub const F32_REL_TOL: f64 = 8.0 * f32::EPSILON as f64;
+
+/// A distance with a certified lower bound, for two shapes at f64 poses.
+///
+/// The value is parry's GJK distance (`query::closest_points`' witnesses); the lower bound is
+/// the gap between the two shapes along the witness direction n: n·(s_b(−n) − s_a(n)) with s
+/// the support points — any axis's gap is at most the distance — less the f32 rounding of the
+/// relative pose. A shape without a support map falls back to value·(1 − [`GJK_REL_TOL`]).
+pub fn shape_bracket(
+    pose_a: &Isometry3<f64>,
+    a: &dyn rp::Shape,
+    ra: f64,
+    pose_b: &Isometry3<f64>,
+    b: &dyn rp::Shape,
+    rb: f64,
+) -> Bracket {
+    let rel = pose_a.inv_mul(pose_b);
+    let scale = rel.translation.vector.norm() + ra + rb;
+    let eps = F32_REL_TOL * scale;
+    let rel32 = conv::pose(&rel);
+    let fallback = || {
+        let d = query::distance(&Pose::IDENTITY, a, &rel32, b).unwrap_or(f32::NAN) as f64;
+        Bracket {
+            value: d,
+            lower: (d * (1.0 - GJK_REL_TOL) - eps).max(0.0),
+        }
+    };
+    match query::closest_points(&Pose::IDENTITY, a, &rel32, b, f32::MAX) {
+        Ok(query::ClosestPoints::Intersecting) => Bracket::exact(0.0),
+        Ok(query::ClosestPoints::WithinMargin(p1, p2)) => {
+            let d = (p2 - p1).length();
+            if d.is_nan() || d <= 0.0 {
+                return Bracket::exact(0.0);
+            }
+            let (Some(sa), Some(sb)) = (a.as_support_map(), b.as_support_map()) else {
+                return fallback();
+            };
+            let n = (p2 - p1) / d;
+            let pa = sa.local_support_point(n);
+            let pb = rel32 * sb.local_support_point(rel32.rotation.inverse() * -n);
+            let gap = n.dot(pb - pa) as f64;
+            let value = d as f64;
+            Bracket {
+                value,
+                lower: (gap.min(value) - eps).max(0.0),
+            }
+        }
+        _ => fallback(),
+    }
 }
 
-/// Monitor system: full-geometry distances for every body pair.
+/// The parts of every body as the monitor uses them (fetched from the ECS once).
+#[derive(Resource, Debug, Clone, Default)]
+pub struct MonitorGeometry {
+    /// Shapes, per body, per collider.
+    pub shapes: Vec<Vec<rp::SharedShape>>,
+    /// Collider poses in the body frame.
+    pub pose_body: Vec<Vec<Isometry3<f64>>>,
+    /// Bounding radii about the collider origins, m.
+    pub radius: Vec<Vec<f64>>,
+    /// Per body, per collider: a docking part.
+    pub docking: Vec<Vec<bool>>,
+    /// Centres of mass in the body frames, m.
+    pub com_body_m: Vec<Vector3<f64>>,
+    /// Per body: radius about its centre of mass of a sphere holding all its parts, m.
+    pub extent_m: Vec<f64>,
+    /// Per body: it has a docking part.
+    pub has_docking: Vec<bool>,
+    /// Per body: radius about its centre of mass of a sphere holding the axis-aligned boxes of
+    /// all its parts in any attitude (a part's box lies within √3 of its bounding radius), m.
+    pub aabb_extent_m: Vec<f64>,
+}
+
+impl MonitorGeometry {
+    /// Reads the parts from the world.
+    pub fn from_world(world: &mut World) -> Self {
+        let roster = world.resource::<Roster>().clone();
+        let mut g = Self::default();
+        for (k, be) in roster.bodies.iter().enumerate() {
+            let com = world.get::<SimBody>(*be).expect("body").com_body_m;
+            let mut shapes = Vec::new();
+            let mut poses = Vec::new();
+            let mut radii = Vec::new();
+            let mut dock = Vec::new();
+            for pe in &roster.parts[k] {
+                let p = world.get::<Part>(*pe).expect("part");
+                shapes.push(p.shape.clone());
+                poses.push(p.pose_body);
+                radii.push(p.bound_radius_m);
+                dock.push(p.role.is_docking());
+            }
+            let extent = poses
+                .iter()
+                .zip(&radii)
+                .map(|(p, r)| (p.translation.vector - com).norm() + r)
+                .fold(0.0, f64::max);
+            let aabb_extent = poses
+                .iter()
+                .zip(&radii)
+                .map(|(p, r)| (p.translation.vector - com).norm() + 3f64.sqrt() * r)
+                .fold(0.0, f64::max);
+            g.aabb_extent_m.push(aabb_extent);
+            g.has_docking.push(dock.iter().any(|d| *d));
+            g.shapes.push(shapes);
+            g.pose_body.push(poses);
+            g.radius.push(radii);
+            g.docking.push(dock);
+            g.com_body_m.push(com);
+            g.extent_m.push(extent);
+        }
+        g
+    }
+
+    /// World poses (and bounding radii) of body i's parts, its centre of mass at `pos` with
+    /// attitude `att`.
+    pub fn part_poses(
+        &self,
+        i: usize,
+        pos: &Vector3<f64>,
+        att: &UnitQuaternion<f64>,
+        out: &mut Vec<(Isometry3<f64>, f64)>,
+    ) {
+        let origin = pos - att * self.com_body_m[i];
+        let body = Isometry3::from_parts(origin.into(), *att);
+        out.clear();
+        out.extend(
+            self.pose_body[i]
+                .iter()
+                .zip(&self.radius[i])
+                .map(|(p, r)| (body * p, *r)),
+        );
+    }
+}
+
+/// The closest part pair of two bodies found by [`closest_parts`].
+#[derive(Debug, Clone, Copy)]
+pub struct PartPairHit {
+    /// Distance (value, and a certified lower bound when asked for), m.
+    pub d: Bracket,
+    /// Part of the first body.
+    pub a: usize,
+    /// Part of the second body.
+    pub b: usize,
+}
+
+/// Query counters.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct QueryCount {
+    /// Exact parry calls.
+    pub exact: u64,
+    /// Part pairs skipped by their bounding-sphere bound.
+    pub pruned: u64,
+}
+
+/// Closest part pair of bodies i and j among those `keep` accepts, warm-started from `warm`.
 ///
-/// For each body pair, the closest part pair of the previous step is computed exactly first
-/// (temporal coherence); then every other part pair whose bounding-sphere lower bound
-/// |c_a − c_b| − r_a − r_b is below the best distance so far, in increasing order of that
-/// bound. The result is the exact minimum (to parry's tolerance) with few exact queries.
+/// The warm pair is computed exactly first (temporal coherence); then every other part pair
+/// whose bounding-sphere lower bound |c_a − c_b| − r_a − r_b is below the best distance so far,
+/// in increasing order of that bound. The result is the exact minimum (to parry's tolerance).
+/// With `certify`, the lower bound covers every part pair: the best pair's certified bracket
+/// ([`shape_bracket`]), every other evaluated pair's value less its GJK and f32 tolerances (or
+/// its certified bracket when that could be lower), and the sphere bound of the pruned pairs
+/// (all at or above the best value).
+#[allow(clippy::too_many_arguments)]
+pub fn closest_parts(
+    geo: &MonitorGeometry,
+    i: usize,
+    pi: &[(Isometry3<f64>, f64)],
+    j: usize,
+    pj: &[(Isometry3<f64>, f64)],
+    keep: &dyn Fn(usize, usize) -> bool,
+    warm: Option<(usize, usize)>,
+    certify: bool,
+    candidates: &mut Vec<(f64, usize, usize)>,
+    evaluated: &mut Vec<(f64, usize, usize)>,
+    count: &mut QueryCount,
+) -> PartPairHit {
+    let (si, sj) = (&geo.shapes[i], &geo.shapes[j]);
+    let query = |a: usize, b: usize| shape_distance(&pi[a].0, &*si[a], &pj[b].0, &*sj[b]);
+    let warm = warm.filter(|(a, b)| keep(*a, *b));
+    evaluated.clear();
+    let (mut best, mut ba, mut bb) = match warm {
+        Some((a, b)) => {
+            count.exact += 1;
+            let d = query(a, b);
+            evaluated.push((d, a, b));
+            (d, a, b)
+        }
+        None => (f64::INFINITY, 0, 0),
+    };
+    candidates.clear();
+    for (a, (pa, ra)) in pi.iter().enumerate() {
+        for (b, (pb, rb)) in pj.iter().enumerate() {
+            if !keep(a, b) || warm == Some((a, b)) {
+                continue;
+            }
+            let lb = (pa.translation.vector - pb.translation.vector).norm() - ra - rb;
+            if lb < best {
+                candidates.push((lb, a, b));
+            } else {
+                count.pruned += 1;
+            }
+        }
+    }
+    candidates.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+    for (c, &(lb, a, b)) in candidates.iter().enumerate() {
+        if lb >= best {
+            count.pruned += (candidates.len() - c) as u64;
+            break;
+        }
+        let d = query(a, b);
+        count.exact += 1;
+        evaluated.push((d, a, b));
+        if d < best {
+            (best, ba, bb) = (d, a, b);
+        }
+    }
+    if !certify || !best.is_finite() {
+        return PartPairHit {
+            d: Bracket::exact(best),
+            a: ba,
+            b: bb,
+        };
+    }
+    let bracket =
+        |a: usize, b: usize| shape_bracket(&pi[a].0, &*si[a], pi[a].1, &pj[b].0, &*sj[b], pj[b].1);
+    count.exact += 1;
+    let mut lower = bracket(ba, bb).lower;
+    for &(d, a, b) in evaluated.iter() {
+        if (a, b) == (ba, bb) {
+            continue;
+        }
+        let scale =
+            (pi[a].0.translation.vector - pj[b].0.translation.vector).norm() + pi[a].1 + pj[b].1;
+        let loose = d * (1.0 - GJK_REL_TOL) - F32_REL_TOL * scale;
+        if loose < lower {
+            count.exact += 1;
+            lower = lower.min(bracket(a, b).lower);
+        }
+    }
+    PartPairHit {
+        d: Bracket {
+            value: best,
+            lower: lower.min(best),
+        },
+        a: ba,
+        b: bb,
+    }
+}
+
+/// World poses and bounding radii of one body's parts.
+pub type PartPoses = Vec<(Isometry3<f64>, f64)>;
+
+/// (body, part) of each side of a contact pair.
+type ContactSides = ((usize, usize), (usize, usize));
+
+/// Buffers the monitor reuses from step to step.
+#[derive(Default)]
+pub struct DistanceScratch {
+    /// World pose and bounding radius of every part, per body, and the step they are for.
+    poses: Vec<(u64, PartPoses)>,
+    /// Part poses at an interior time, two bodies.
+    tmp: [Vec<(Isometry3<f64>, f64)>; 2],
+    /// (lower bound, part a, part b) for the current body pair.
+    candidates: Vec<(f64, usize, usize)>,
+    /// Part pairs evaluated for the current body pair.
+    evaluated: Vec<(f64, usize, usize)>,
+}
+
+#[allow(clippy::too_many_arguments)]
+/// Full-geometry distance of bodies i < j at an offset τ into the last step, on the bodies'
+/// paths (`sim::motion`), with a certified lower bound.
+pub fn pair_at(
+    geo: &MonitorGeometry,
+    motion: &StepMotion,
+    i: usize,
+    j: usize,
+    tau: f64,
+    warm: Option<(usize, usize)>,
+    sc: &mut DistanceScratch,
+    count: &mut QueryCount,
+) -> PartPairHit {
+    let (xi, qi) = motion.paths[i].pose_at(tau);
+    let (xj, qj) = motion.paths[j].pose_at(tau);
+    let [ti, tj] = &mut sc.tmp;
+    geo.part_poses(i, &xi, &qi, ti);
+    geo.part_poses(j, &xj, &qj, tj);
+    closest_parts(
+        geo,
+        i,
+        ti,
+        j,
+        tj,
+        &|_, _| true,
+        warm,
+        true,
+        &mut sc.candidates,
+        &mut sc.evaluated,
+        count,
+    )
+}
+
+/// Tolerance of a tracked closest approach: max(1 µm, 0.1 % of the distance), m.
+pub fn min_distance_tolerance_m(d: f64) -> f64 {
+    (1e-3 * d.abs()).max(1e-6)
+}
+
+/// Interior evaluations allowed per pair per step for its closest approach.
+const MAX_MIN_EVALS: u32 = 48;
+
+/// Monitor system: full-geometry distances of every tracked body pair, their closest
+/// approach over the run judged on the whole step interval, and the closest pair overall.
+///
+/// Tracked pairs (every pair in small scenes; else the pairs a guarantee names and those the
+/// broad phase says can be within the horizon) get an exact distance every step, with a
+/// certified lower bound. Between two samples the distance is at least
+/// (d(t₀) + d(t₁) − S·dt)/2 with S the pair's distance-rate bound (`sim::motion`); where that
+/// could undercut the closest approach so far by more than its tolerance
+/// ([`min_distance_tolerance_m`]), the step is bisected on the bodies' paths
+/// ([`crate::geometry::bounds::minimize`]) and the closest approach recorded where it is,
+/// inside the interval if that is where it is.
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 pub fn distances(
     roster: Res<Roster>,
     clock: Res<Clock>,
     bodies: Query<(&SimBody, &BodyState)>,
-    parts: Query<&Part>,
     mut mon: ResMut<MonitorState>,
+    geo: Res<MonitorGeometry>,
+    motion: Res<StepMotion>,
+    bp: Res<BroadPhase>,
+    named: Res<NamedPairs>,
+    rec: Res<super::output::Recorder>,
     mut scratch: Local<DistanceScratch>,
 ) {
+    let every = (rec.every, rec.force_row);
     let t = clock.t_s();
     let n = roster.bodies.len();
     let sc = &mut *scratch;
-    if sc.shapes.len() != n {
-        sc.shapes = roster
-            .parts
-            .iter()
-            .map(|pes| {
-                pes.iter()
-                    .map(|e| parts.get(*e).expect("part").shape.clone())
-                    .collect()
-            })
-            .collect();
-        sc.poses = roster
-            .parts
-            .iter()
-            .map(|pes| Vec::with_capacity(pes.len()))
-            .collect();
-    }
     if mon.bodies.len() != n {
         mon.bodies = roster
             .bodies
@@ -190,118 +502,350 @@ pub fn distances(
             })
             .collect();
     }
+    if sc.poses.len() != n {
+        sc.poses = vec![(u64::MAX, Vec::new()); n];
+    }
     for (k, be) in roster.bodies.iter().enumerate() {
-        let (b, s) = bodies.get(*be).expect("roster body");
+        let (_, s) = bodies.get(*be).expect("roster body");
         let v = &mut mon.bodies[k];
         v.pos_m = s.pos_m;
         v.vel_m_s = s.vel_m_s;
         v.att = s.att;
         v.omega_rad_s = s.omega_rad_s;
-        let body_pose = s.body_pose(&b.com_body_m);
-        let poses = &mut sc.poses[k];
-        poses.clear();
-        for pe in &roster.parts[k] {
-            let p = parts.get(*pe).expect("roster part");
-            poses.push((body_pose * p.pose_body, p.bound_radius_m));
-        }
     }
-    let first = mon.pairs.len() != n * (n - 1) / 2;
-    if first {
-        mon.pairs.clear();
-        mon.min_per_pair.clear();
-        mon.min_clearance_per_pair.clear();
-    }
-    let (mut exact, mut pruned) = (0u64, 0u64);
-    let mut k = 0;
-    for i in 0..n {
-        for j in i + 1..n {
-            let (pi, pj) = (&sc.poses[i], &sc.poses[j]);
-            let dock_i = &mon.part_docking[i];
-            let dock_j = &mon.part_docking[j];
-            let any_docking_pair = dock_i.iter().any(|d| *d) && dock_j.iter().any(|d| *d);
-            let shapes = &sc.shapes;
-            let candidates = &mut sc.candidates;
-            // Closest part pair among those `keep` accepts, warm-started from `warm`.
-            let mut closest = |keep: &dyn Fn(usize, usize) -> bool,
-                               warm: Option<(usize, usize)>| {
-                let query = |a: usize, b: usize| {
-                    shape_distance(&pi[a].0, &*shapes[i][a], &pj[b].0, &*shapes[j][b])
-                };
-                let warm = warm.filter(|(a, b)| keep(*a, *b));
-                let (mut best, mut ba, mut bb) = match warm {
-                    Some((a, b)) => {
-                        exact += 1;
-                        (query(a, b), a, b)
-                    }
-                    None => (f64::INFINITY, 0, 0),
-                };
-                candidates.clear();
-                for (a, (pa, ra)) in pi.iter().enumerate() {
-                    for (b, (pb, rb)) in pj.iter().enumerate() {
-                        if !keep(a, b) || warm == Some((a, b)) {
-                            continue;
-                        }
-                        let lb = (pa.translation.vector - pb.translation.vector).norm() - ra - rb;
-                        if lb < best {
-                            candidates.push((lb, a, b));
-                        } else {
-                            pruned += 1;
-                        }
-                    }
-                }
-                candidates
-                    .sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
-                for (c, &(lb, a, b)) in candidates.iter().enumerate() {
-                    if lb >= best {
-                        pruned += (candidates.len() - c) as u64;
-                        break;
-                    }
-                    let d = query(a, b);
-                    exact += 1;
-                    if d < best {
-                        (best, ba, bb) = (d, a, b);
-                    }
-                }
-                (best, ba, bb)
-            };
-            let warm = (!first).then(|| (mon.pairs[k].part_a, mon.pairs[k].part_b));
-            let (best, ba, bb) = closest(&|_, _| true, warm);
-            let clearance = if any_docking_pair && dock_i[ba] && dock_j[bb] {
-                closest(&|a, b| !(dock_i[a] && dock_j[b]), None).0
-            } else {
-                best
-            };
-            let pd = PairDistance {
-                a: i,
-                b: j,
-                distance_m: best,
-                part_a: ba,
-                part_b: bb,
-                clearance_m: clearance,
-            };
-            let pm = super::PairMin {
-                distance_m: best,
-                part_a: ba,
-                part_b: bb,
-                t_s: t,
-            };
-            if first {
-                mon.pairs.push(pd);
-                mon.min_per_pair.push(pm);
-                mon.min_clearance_per_pair.push(clearance);
-            } else {
-                mon.pairs[k] = pd;
-                if best < mon.min_per_pair[k].distance_m {
-                    mon.min_per_pair[k] = pm;
-                }
-                let c = &mut mon.min_clearance_per_pair[k];
-                *c = c.min(clearance);
+    let step = clock.step;
+    let mut count = QueryCount::default();
+    // Tracked pairs, in a stable order: every pair (i < j) when all are tracked; else pairs
+    // join the list when first tracked and keep their place.
+    let tracked_now: Vec<(usize, usize)> = if bp.all_pairs {
+        (0..n)
+            .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
+            .collect()
+    } else {
+        let mut v: Vec<(usize, usize)> = bp
+            .near
+            .iter()
+            .copied()
+            .filter(|(i, j)| bp.sphere_gap(*i, *j) <= bp.horizon_m)
+            .collect();
+        v.extend(named.0.iter().copied());
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
+    for &(i, j) in &tracked_now {
+        let k = match mon.pair_index.get(&(i, j)) {
+            Some(k) => *k,
+            None => {
+                let k = mon.pairs.len();
+                mon.pair_index.insert((i, j), k);
+                mon.pairs.push(PairDistance {
+                    a: i,
+                    b: j,
+                    distance_m: f64::INFINITY,
+                    part_a: 0,
+                    part_b: 0,
+                    clearance_m: f64::INFINITY,
+                    lower_m: f64::INFINITY,
+                    t_s: f64::NAN,
+                });
+                mon.min_per_pair.push(super::PairMin {
+                    distance_m: f64::INFINITY,
+                    part_a: 0,
+                    part_b: 0,
+                    t_s: t,
+                    inside: false,
+                });
+                mon.min_clearance_per_pair.push(f64::INFINITY);
+                k
             }
-            k += 1;
+        };
+        for b in [i, j] {
+            if sc.poses[b].0 != step {
+                let s = &mon.bodies[b];
+                let (pos, att) = (s.pos_m, s.att);
+                geo.part_poses(b, &pos, &att, &mut sc.poses[b].1);
+                sc.poses[b].0 = step;
+            }
+        }
+        let prev = mon.pairs[k].clone();
+        let fresh_prev = prev.t_s.is_finite();
+        let warm = fresh_prev.then_some((prev.part_a, prev.part_b));
+        let (pi, pj) = (&sc.poses[i].1, &sc.poses[j].1);
+        let hit = closest_parts(
+            &geo,
+            i,
+            pi,
+            j,
+            pj,
+            &|_, _| true,
+            warm,
+            true,
+            &mut sc.candidates,
+            &mut sc.evaluated,
+            &mut count,
+        );
+        let (dock_i, dock_j) = (&geo.docking[i], &geo.docking[j]);
+        let clearance =
+            if geo.has_docking[i] && geo.has_docking[j] && dock_i[hit.a] && dock_j[hit.b] {
+                closest_parts(
+                    &geo,
+                    i,
+                    pi,
+                    j,
+                    pj,
+                    &|a, b| !(dock_i[a] && dock_j[b]),
+                    None,
+                    false,
+                    &mut sc.candidates,
+                    &mut sc.evaluated,
+                    &mut count,
+                )
+                .d
+                .value
+            } else {
+                hit.d.value
+            };
+        mon.pairs[k] = PairDistance {
+            a: i,
+            b: j,
+            distance_m: hit.d.value,
+            part_a: hit.a,
+            part_b: hit.b,
+            clearance_m: clearance,
+            lower_m: hit.d.lower,
+            t_s: t,
+        };
+        // The closest approach over the run, judged on [t − dt, t].
+        let w = mon.min_per_pair[k].distance_m;
+        let mut best = super::PairMin {
+            distance_m: hit.d.value,
+            part_a: hit.a,
+            part_b: hit.b,
+            t_s: t,
+            inside: false,
+        };
+        let dt = motion.dt_s;
+        if motion.ready && fresh_prev && (prev.t_s - (t - dt)).abs() <= 1e-9 * t.max(1.0) {
+            let rate = motion.distance_rate_bound(i, j);
+            let d0 = Bracket {
+                value: prev.distance_m,
+                lower: prev.lower_m,
+            };
+            let thr = |b: f64| {
+                let w = w.min(b);
+                w - min_distance_tolerance_m(w)
+            };
+            if interval_lower_bound(d0.lower, hit.d.lower, rate, dt) < thr(hit.d.value) {
+                let mut at = (hit.a, hit.b);
+                let mut parts_at = Vec::new();
+                let r = minimize(dt, d0, hit.d, rate, thr, MAX_MIN_EVALS, dt * 1e-9, |tau| {
+                    let h = pair_at(&geo, &motion, i, j, tau, Some(at), sc, &mut count);
+                    at = (h.a, h.b);
+                    parts_at.push((tau, h.a, h.b));
+                    h.d
+                });
+                mon.interval_evals += u64::from(r.evals);
+                if r.value < best.distance_m && r.t < dt {
+                    let (pa, pb) = parts_at
+                        .iter()
+                        .find(|p| p.0 == r.t)
+                        .map_or((prev.part_a, prev.part_b), |p| (p.1, p.2));
+                    best = super::PairMin {
+                        distance_m: r.value,
+                        part_a: pa,
+                        part_b: pb,
+                        t_s: t - dt + r.t,
+                        inside: r.t > 0.0,
+                    };
+                }
+                mon.min_lower_m = mon.min_lower_m.min(r.lower);
+            }
+        }
+        if !mon.min_per_pair[k].distance_m.is_finite() || best.distance_m < w {
+            mon.min_per_pair[k] = best;
+        }
+        let c = &mut mon.min_clearance_per_pair[k];
+        *c = c.min(clearance);
+    }
+    // The closest pair now: the first smallest among the tracked pairs, in list order.
+    let mut closest: Option<usize> = None;
+    for (k, p) in mon.pairs.iter().enumerate() {
+        if p.t_s == t && closest.is_none_or(|c| p.distance_m < mon.pairs[c].distance_m) {
+            closest = Some(k);
         }
     }
-    mon.exact_queries += exact;
-    mon.pruned_pairs += pruned;
+    mon.closest = closest.map(|k| mon.pairs[k].clone());
+    let row_due = step.is_multiple_of(u64::from(every.0.max(1))) || every.1;
+    if !bp.all_pairs && row_due {
+        let mut best = mon.closest.as_ref().map_or(f64::INFINITY, |p| p.distance_m);
+        if best > bp.horizon_m {
+            // No tracked pair within the horizon: the closest pair may be any. Start from the
+            // last row's closest pair.
+            let mut found: Option<PairDistance> = None;
+            let mut cands = Vec::new();
+            if let Some((i, j)) = mon.row_closest_pair {
+                cands.push((f64::NEG_INFINITY, i, j));
+            }
+            let x: Vec<Vector3<f64>> = mon.bodies.iter().map(|b| b.pos_m).collect();
+            let mut swept = false;
+            let mut k = 0;
+            while k < cands.len() || !swept {
+                if k == cands.len() {
+                    cands.extend(bp.closest_candidates(&x, &geo.extent_m, best));
+                    swept = true;
+                    continue;
+                }
+                let (lb, i, j) = cands[k];
+                k += 1;
+                if lb >= best {
+                    break;
+                }
+                for b in [i, j] {
+                    if sc.poses[b].0 != step {
+                        let s = &mon.bodies[b];
+                        let (pos, att) = (s.pos_m, s.att);
+                        geo.part_poses(b, &pos, &att, &mut sc.poses[b].1);
+                        sc.poses[b].0 = step;
+                    }
+                }
+                let hit = closest_parts(
+                    &geo,
+                    i,
+                    &sc.poses[i].1,
+                    j,
+                    &sc.poses[j].1,
+                    &|_, _| true,
+                    None,
+                    false,
+                    &mut sc.candidates,
+                    &mut sc.evaluated,
+                    &mut count,
+                );
+                if hit.d.value < best || found.is_none() && hit.d.value <= best {
+                    best = hit.d.value;
+                    found = Some(PairDistance {
+                        a: i,
+                        b: j,
+                        distance_m: hit.d.value,
+                        part_a: hit.a,
+                        part_b: hit.b,
+                        clearance_m: hit.d.value,
+                        lower_m: hit.d.lower,
+                        t_s: t,
+                    });
+                }
+            }
+            if let Some(f) = &found {
+                mon.row_closest_pair = Some((f.a, f.b));
+            }
+            if found.is_some() {
+                mon.closest = found;
+            }
+        }
+    }
+    if let Some(c) = mon.closest.clone()
+        && mon
+            .overall
+            .as_ref()
+            .is_none_or(|o| c.distance_m < o.distance_m)
+    {
+        mon.overall = Some(super::PairMin {
+            distance_m: c.distance_m,
+            part_a: c.part_a,
+            part_b: c.part_b,
+            t_s: t,
+            inside: false,
+        });
+        mon.overall_pair = (c.a, c.b);
+    }
+    // Interval minima found inside a step can undercut the sampled overall minimum.
+    let mut under: Option<usize> = None;
+    for (k, m) in mon.min_per_pair.iter().enumerate() {
+        let cur = under.map_or(mon.overall.as_ref().map(|o| o.distance_m), |u| {
+            Some(mon.min_per_pair[u].distance_m)
+        });
+        if m.inside && cur.is_none_or(|o| m.distance_m < o) {
+            under = Some(k);
+        }
+    }
+    if let Some(k) = under {
+        mon.overall_pair = (mon.pairs[k].a, mon.pairs[k].b);
+        mon.overall = Some(mon.min_per_pair[k].clone());
+    }
+    mon.exact_queries += count.exact;
+    mon.pruned_pairs += count.pruned;
+}
+
+/// Two parts count as touching, for the time of first touch, at this distance, m.
+pub const TOUCH_DISTANCE_M: f64 = 1e-4;
+
+/// The time of first touch of a part pair that rapier reports in contact at the end of the
+/// step just taken: the first time, on the bodies' unobstructed paths over the step (the f64
+/// free flight, or rapier's straight path for a body it already drove), that the two parts are
+/// within [`TOUCH_DISTANCE_M`], found by bisection with the rate bound of the paths and
+/// bracketed to `EVENT_TIME_TOL`·dt; if they are that close from the step's start, the same
+/// search on the step before (rapier flags a contact whose approach just closed the gap one
+/// step late). If they never get that close on those paths (rapier's solver acts from its
+/// prediction distance on), the end of the step. Returns (time, tolerance).
+pub fn touch_time(
+    geo: &MonitorGeometry,
+    motion: &StepMotion,
+    (i, a): (usize, usize),
+    (j, b): (usize, usize),
+    sc: &mut DistanceScratch,
+) -> (f64, f64) {
+    use crate::geometry::bounds::{Crossing, first_below};
+    let dt = motion.dt_s;
+    let t0 = motion.t0_s;
+    let tol = dt * super::EVENT_TIME_TOL;
+    let mut search = |pi: &super::motion::BodyPath, pj: &super::motion::BodyPath| {
+        let rate = super::motion::rel_speed(pi, pj)
+            + pi.omega_max_rad_s * geo.extent_m[i]
+            + pj.omega_max_rad_s * geo.extent_m[j];
+        let mut f = |tau: f64| {
+            let (xi, qi) = pi.pose_at(tau);
+            let (xj, qj) = pj.pose_at(tau);
+            let [ti, tj] = &mut sc.tmp;
+            geo.part_poses(i, &xi, &qi, ti);
+            geo.part_poses(j, &xj, &qj, tj);
+            shape_bracket(
+                &ti[a].0,
+                &*geo.shapes[i][a],
+                ti[a].1,
+                &tj[b].0,
+                &*geo.shapes[j][b],
+                tj[b].1,
+            )
+        };
+        let (f0, f1) = (f(0.0), f(dt));
+        first_below(dt, f0, f1, rate, TOUCH_DISTANCE_M, tol, 256, &mut f)
+    };
+    let free = |paths: &[super::motion::BodyPath],
+                before: &[Option<super::motion::BodyPath>],
+                k: usize| {
+        before
+            .get(k)
+            .and_then(|p: &Option<super::motion::BodyPath>| p.clone())
+            .unwrap_or_else(|| paths[k].clone())
+    };
+    let c = search(motion.free_path(i), motion.free_path(j));
+    if let Crossing::At { t_lo: 0.0, .. } = c
+        && let Some(prev) = &motion.prev
+    {
+        // Within the touch distance from the start of this step: they touched in the last one.
+        let (pi, pj) = (free(&prev.0, &prev.1, i), free(&prev.0, &prev.1, j));
+        match search(&pi, &pj) {
+            Crossing::At { t_lo, t_hi } => return (t0 - dt + t_lo, t_hi - t_lo),
+            Crossing::Unresolved { t_lo } => return (t0 - dt + t_lo, dt - t_lo),
+            Crossing::Never => return (t0, 0.0),
+        }
+    }
+    match c {
+        Crossing::At { t_lo, t_hi } => (t0 + t_lo, t_hi - t_lo),
+        Crossing::Unresolved { t_lo } => (t0 + t_lo, dt - t_lo),
+        Crossing::Never => (t0 + dt, 0.0),
+    }
 }
 
 /// Monitor system: rapier's contacts between bodies, named by part; start/end events, peak
@@ -311,17 +855,30 @@ pub fn distances(
 /// exact for the step rapier took; rapier's per-point normal impulses (which also carry its
 /// position-correction bias) only split it among the part pairs touching that body. Each pair's
 /// impulse is the mean of the two bodies' attributions (equal when the pair is the only contact).
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it uses
 pub fn contacts(
     phys: Res<super::Physics>,
     clock: Res<Clock>,
+    sync: Res<super::RapierSync>,
+    geo: Res<MonitorGeometry>,
+    motion: Res<StepMotion>,
     mut cs: ResMut<ContactState>,
     mut log: ResMut<EventLog>,
+    mut scratch: Local<DistanceScratch>,
 ) {
     let t = clock.t_s();
     let dt = clock.dt_s;
     // (pair key) → (docking, body a, body b, rapier's raw normal impulse)
     let mut now: BTreeMap<(String, String), (bool, usize, usize, f64)> = BTreeMap::new();
-    for pair in phys.world.narrow_phase.contact_pairs() {
+    // (pair key) → (body, part) of each side, for the time of first touch.
+    let mut who: BTreeMap<(String, String), ContactSides> = BTreeMap::new();
+    // When rapier did not step (nothing near), its contact pairs are an older step's.
+    let pairs = phys
+        .world
+        .narrow_phase
+        .contact_pairs()
+        .filter(|_| sync.stepped);
+    for pair in pairs {
         if !touching(pair) {
             continue;
         }
@@ -341,11 +898,22 @@ pub fn contacts(
             .map(|p| p.data.impulse.max(0.0) as f64)
             .sum();
         let docking = a.docking && b.docking;
-        let (key, ba, bb) = if (a.body, &a.full_name) <= (b.body, &b.full_name) {
-            ((a.full_name.clone(), b.full_name.clone()), a.body, b.body)
+        let (key, ba, bb, sides) = if (a.body, &a.full_name) <= (b.body, &b.full_name) {
+            (
+                (a.full_name.clone(), b.full_name.clone()),
+                a.body,
+                b.body,
+                ((a.body, a.part), (b.body, b.part)),
+            )
         } else {
-            ((b.full_name.clone(), a.full_name.clone()), b.body, a.body)
+            (
+                (b.full_name.clone(), a.full_name.clone()),
+                b.body,
+                a.body,
+                ((b.body, b.part), (a.body, a.part)),
+            )
         };
+        who.insert(key.clone(), sides);
         let e = now.entry(key).or_insert((docking, ba, bb, 0.0));
         e.3 += raw;
     }
@@ -382,10 +950,16 @@ pub fn contacts(
         let force = impulse / dt;
         if !cs.active.contains_key(&k) {
             cs.first_contact_s.get_or_insert(t);
+            let (t_touch, t_tol) = match (motion.ready, who.get(&k)) {
+                (true, Some(&(sa, sb))) => touch_time(&geo, &motion, sa, sb, &mut scratch),
+                _ => (t, 0.0),
+            };
+            cs.first_touch_s.get_or_insert(t_touch);
             log.push(
                 t,
                 "contact_start",
-                serde_json::json!({"a": k.0, "b": k.1, "docking": docking}),
+                serde_json::json!({"a": k.0, "b": k.1, "docking": docking,
+                    "t_contact_s": t_touch, "t_tol_s": t_tol}),
             );
             if !docking {
                 cs.first_collision_s.get_or_insert(t);

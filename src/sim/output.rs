@@ -78,6 +78,8 @@ pub struct Recorder {
     pub last_row_t_s: Option<f64>,
     /// Each part pair's cumulative contact impulse at the last row written.
     pub contact_impulse_at_row: BTreeMap<(String, String), CumulativeImpulse>,
+    /// Body pairs with a `distance.A.B_m` column (see [`pair_columns`]).
+    pub pair_columns: Vec<(usize, usize)>,
 }
 
 const STATE_COLS: [&str; 13] = [
@@ -142,10 +144,33 @@ const HILL_COLS: [&str; 6] = [
     "hill_vz_m_s",
 ];
 
-/// The CSV header for the current roster, guarantees and diagnostics. `orbit`: the scene is in
-/// orbit (then the reference orbit's ECI state `ref.*` and each body's Hill-frame state
-/// `NAME.hill_*` end the row).
-pub fn header(roster: &Roster, g: &Guarantees, diag: &Diagnostics, orbit: bool) -> String {
+/// The body pairs that get a `distance.A.B_m` column: every pair when the monitor tracks every
+/// pair and there are more than two bodies; with a horizon (many bodies), only the pairs a
+/// guarantee names — the others go to `pairs.csv` while they are within the horizon.
+pub fn pair_columns(n: usize, all_pairs: bool, named: &[(usize, usize)]) -> Vec<(usize, usize)> {
+    if all_pairs {
+        if n > 2 {
+            (0..n)
+                .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
+                .collect()
+        } else {
+            Vec::new()
+        }
+    } else {
+        named.to_vec()
+    }
+}
+
+/// The CSV header for the current roster, pair columns, guarantees and diagnostics. `orbit`:
+/// the scene is in orbit (then the reference orbit's ECI state `ref.*` and each body's
+/// Hill-frame state `NAME.hill_*` end the row).
+pub fn header(
+    roster: &Roster,
+    pairs: &[(usize, usize)],
+    g: &Guarantees,
+    diag: &Diagnostics,
+    orbit: bool,
+) -> String {
     let mut cols = vec!["t_s".to_string()];
     for name in &roster.names {
         for c in STATE_COLS {
@@ -154,15 +179,11 @@ pub fn header(roster: &Roster, g: &Guarantees, diag: &Diagnostics, orbit: bool) 
     }
     cols.push("min_distance_m".into());
     cols.push("closest_parts".into());
-    if roster.names.len() > 2 {
-        for i in 0..roster.names.len() {
-            for j in i + 1..roster.names.len() {
-                cols.push(format!(
-                    "distance.{}.{}_m",
-                    roster.names[i], roster.names[j]
-                ));
-            }
-        }
+    for (i, j) in pairs {
+        cols.push(format!(
+            "distance.{}.{}_m",
+            roster.names[*i], roster.names[*j]
+        ));
     }
     for s in &g.status {
         cols.push(format!("guarantee.{}.margin_{}", s.name, s.unit));
@@ -199,6 +220,7 @@ fn write_row(
     w: &mut impl Write,
     t_s: f64,
     states: &[(&SimBody, &BodyState)],
+    pair_cols: &[(usize, usize)],
     mon: &MonitorState,
     g: &Guarantees,
     diag: &Diagnostics,
@@ -225,20 +247,17 @@ fn write_row(
             write!(w, ",{v}")?;
         }
     }
-    let best = mon
-        .pairs
-        .iter()
-        .min_by(|a, b| a.distance_m.total_cmp(&b.distance_m));
-    match best {
+    match &mon.closest {
         Some(p) => {
             let (a, b) = mon.pair_names(p);
             write!(w, ",{},{a}|{b}", p.distance_m)?
         }
         None => write!(w, ",,")?,
     }
-    if states.len() > 2 {
-        for p in &mon.pairs {
-            write!(w, ",{}", p.distance_m)?;
+    for ij in pair_cols {
+        match mon.pair_index.get(ij) {
+            Some(k) => write!(w, ",{}", mon.pairs[*k].distance_m)?,
+            None => write!(w, ",")?,
         }
     }
     for s in &g.status {
@@ -331,7 +350,8 @@ fn write_step(
         return;
     }
     if let Some(files) = rec.files.as_mut()
-        && let Err(err) = write_row(&mut files.traj, t, states, mon, g, diag, orbit)
+        && let Err(err) =
+            write_row(&mut files.traj, t, states, &rec.pair_columns, mon, g, diag, orbit)
     {
         rec.error.get_or_insert(err.to_string());
     }
@@ -410,13 +430,20 @@ pub fn record(
 
 /// Writes the header line (called once, when recording starts).
 pub fn write_header(world: &mut World) {
+    let cols = pair_columns(
+        world.resource::<Roster>().names.len(),
+        world.resource::<super::broadphase::BroadPhase>().all_pairs,
+        &world.resource::<super::NamedPairs>().0,
+    );
     let h = header(
         world.resource::<Roster>(),
+        &cols,
         world.resource::<Guarantees>(),
         world.resource::<Diagnostics>(),
         world.contains_resource::<super::OrbitEnv>(),
     );
     let mut rec = world.resource_mut::<Recorder>();
+    rec.pair_columns = cols;
     if let Some(files) = rec.files.as_mut()
         && let Err(e) = writeln!(files.traj, "{h}")
     {

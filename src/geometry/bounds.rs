@@ -1,0 +1,350 @@
+//! Sound bounds of a function of time over an interval, from its values at sample points and a
+//! bound on its rate of change (Bevy-free, f64).
+//!
+//! The monitor judges distances and guarantee margins on whole step intervals, not only at the
+//! step times. Everything here rests on one fact: if |f′(t)| ≤ L on [a, b], then for every t
+//! in [a, b], f(t) ≥ max(f(a) − L·(t − a), f(b) − L·(b − t)), hence
+//!
+//! ```text
+//! min over [a, b] of f ≥ (f(a) + f(b) − L·(b − a)) / 2.
+//! ```
+//!
+//! Values may come with an error bar: a [`Bracket`] carries the value an evaluation found
+//! (achieved: f really is that small there, to the evaluation's precision) and a certified
+//! lower bound (f is at least that large there). Exact parry distances are brackets — GJK stops
+//! at a relative tolerance and parry works in f32.
+//!
+//! * [`minimize`]: branch and bound on the interval, bisecting the sub-interval with the lowest
+//!   bound until every sub-interval's bound clears a caller's threshold (which may depend on
+//!   the best value found so far) — the minimum to a tolerance, or a proof that it stays above
+//!   a level.
+//! * [`first_below`]: the earliest time f drops below a level, bracketed to a time tolerance,
+//!   or a proof it never does on the interval.
+//! * [`advance_to`]: conservative advancement — the earliest time f can reach a target, by
+//!   steps (f(t) − target)/L that never overshoot the first crossing.
+//!
+//! A rate bound that is too small makes the bounds unsound; callers derive theirs from the
+//! motion (see `sim::motion`), with the argument written where they do.
+
+/// A function value with a certified lower bound: `lower ≤ f(t) ≲ value`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bracket {
+    /// The value found (f is this small at the point, to the evaluation's precision).
+    pub value: f64,
+    /// A certified lower bound of f at the point.
+    pub lower: f64,
+}
+
+impl Bracket {
+    /// An exact value (lower bound equal to the value).
+    pub fn exact(v: f64) -> Self {
+        Self { value: v, lower: v }
+    }
+}
+
+/// The interval lower bound from the ends' lower bounds and the rate bound, over a width `h`:
+/// (f(a) + f(b) − L·h)/2, never above either end.
+pub fn interval_lower_bound(fa: f64, fb: f64, rate: f64, h: f64) -> f64 {
+    ((fa + fb - rate * h) * 0.5).min(fa).min(fb)
+}
+
+/// The result of [`minimize`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MinSearch {
+    /// Smallest value found (at an end or at an evaluated interior point).
+    pub value: f64,
+    /// Where, as an offset from the interval start, s.
+    pub t: f64,
+    /// Certified lower bound of f over the whole interval.
+    pub lower: f64,
+    /// Interior evaluations made.
+    pub evals: u32,
+    /// The evaluation budget ran out before every sub-interval cleared the threshold.
+    pub exhausted: bool,
+}
+
+#[derive(Clone, Copy)]
+struct Piece {
+    a: f64,
+    fa: Bracket,
+    b: f64,
+    fb: Bracket,
+    lb: f64,
+}
+
+/// Branch and bound for the minimum of f over [0, h].
+///
+/// `fa`, `fb` are f at 0 and h; `rate` bounds |f′|. `threshold(best)` says how low the bound
+/// of a sub-interval may be left, given the best value found so far: the search stops when
+/// every remaining sub-interval's bound is at or above it (so the minimum is within
+/// `best − threshold(best)` of `best`, or above the threshold), when `max_evals` interior
+/// evaluations have been made, or when sub-intervals are narrower than `min_width` (then their
+/// bound stands as is). `f(t)` evaluates at an interior offset.
+#[allow(clippy::too_many_arguments)] // the interval, its ends, the bound, and the stop rules
+pub fn minimize(
+    h: f64,
+    fa: Bracket,
+    fb: Bracket,
+    rate: f64,
+    threshold: impl Fn(f64) -> f64,
+    max_evals: u32,
+    min_width: f64,
+    mut f: impl FnMut(f64) -> Bracket,
+) -> MinSearch {
+    let (mut value, mut t) = if fb.value < fa.value {
+        (fb.value, h)
+    } else {
+        (fa.value, 0.0)
+    };
+    let mut pieces = vec![Piece {
+        a: 0.0,
+        fa,
+        b: h,
+        fb,
+        lb: interval_lower_bound(fa.lower, fb.lower, rate, h),
+    }];
+    let mut evals = 0;
+    let mut settled_lb = f64::INFINITY;
+    // The piece with the lowest bound (few pieces: a linear scan beats a heap).
+    while let Some((k, p)) = pieces
+        .iter()
+        .copied()
+        .enumerate()
+        .min_by(|x, y| x.1.lb.total_cmp(&y.1.lb))
+    {
+        let thr = threshold(value);
+        if p.lb >= thr {
+            break;
+        }
+        if evals >= max_evals {
+            let lower = p.lb.min(settled_lb);
+            return MinSearch {
+                value,
+                t,
+                lower,
+                evals,
+                exhausted: true,
+            };
+        }
+        pieces.swap_remove(k);
+        if p.b - p.a <= min_width {
+            settled_lb = settled_lb.min(p.lb);
+            continue;
+        }
+        let m = 0.5 * (p.a + p.b);
+        let fm = f(m);
+        evals += 1;
+        if fm.value < value {
+            value = fm.value;
+            t = m;
+        }
+        for (a, fa, b, fb) in [(p.a, p.fa, m, fm), (m, fm, p.b, p.fb)] {
+            pieces.push(Piece {
+                a,
+                fa,
+                b,
+                fb,
+                lb: interval_lower_bound(fa.lower, fb.lower, rate, b - a),
+            });
+        }
+    }
+    let lower = pieces
+        .iter()
+        .map(|p| p.lb)
+        .fold(settled_lb, f64::min)
+        .min(value);
+    MinSearch {
+        value,
+        t,
+        lower,
+        evals,
+        exhausted: false,
+    }
+}
+
+/// The result of [`first_below`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Crossing {
+    /// f ≥ level on the whole interval (proven).
+    Never,
+    /// f ≥ level on [0, `t_lo`] (proven) and f(`t_hi`) < level (found). `t_hi − t_lo` is the
+    /// time tolerance, or more where f stays within the evaluations' precision of the level
+    /// just before the crossing.
+    At {
+        /// Last time f is proven at or above the level, s (offset).
+        t_lo: f64,
+        /// First time f was found below it, s (offset).
+        t_hi: f64,
+    },
+    /// Neither proven nor found: f comes within the evaluations' precision of the level near
+    /// `t_lo` without an evaluation below it (or the budget ran out there).
+    Unresolved {
+        /// Start of the first sub-interval that could not be cleared, s (offset).
+        t_lo: f64,
+    },
+}
+
+/// The earliest time in [0, h] at which f < `level`, to `t_tol`.
+///
+/// Depth-first, left half first, over sub-intervals; a sub-interval whose bound is at or above
+/// the level is cleared. `fa`, `fb` are f at 0 and h; `rate` bounds |f′|.
+#[allow(clippy::too_many_arguments)] // the interval, its ends, the bound, and the stop rules
+pub fn first_below(
+    h: f64,
+    fa: Bracket,
+    fb: Bracket,
+    rate: f64,
+    level: f64,
+    t_tol: f64,
+    max_evals: u32,
+    mut f: impl FnMut(f64) -> Bracket,
+) -> Crossing {
+    if fa.value < level {
+        return Crossing::At {
+            t_lo: 0.0,
+            t_hi: 0.0,
+        };
+    }
+    // Stack of pieces, rightmost at the bottom. `pending`: start of the first piece (at the
+    // time tolerance) that could be neither cleared nor shown below the level — the crossing
+    // is at or after it; the bracket returned starts there.
+    let mut stack = vec![(0.0, fa, h, fb)];
+    let mut evals = 0;
+    let mut pending: Option<f64> = None;
+    while let Some((a, fa, b, fb)) = stack.pop() {
+        if interval_lower_bound(fa.lower, fb.lower, rate, b - a) >= level {
+            continue;
+        }
+        if b - a <= t_tol {
+            if fb.value < level {
+                return Crossing::At {
+                    t_lo: pending.unwrap_or(a),
+                    t_hi: b,
+                };
+            }
+            pending.get_or_insert(a);
+            continue;
+        }
+        if evals >= max_evals {
+            return Crossing::Unresolved {
+                t_lo: pending.unwrap_or(a),
+            };
+        }
+        let m = 0.5 * (a + b);
+        let fm = f(m);
+        evals += 1;
+        stack.push((m, fm, b, fb));
+        stack.push((a, fa, m, fm));
+    }
+    match pending {
+        Some(t_lo) => Crossing::Unresolved { t_lo },
+        None => Crossing::Never,
+    }
+}
+
+/// Conservative advancement: the earliest offset t in [0, h] at which f can be at or below
+/// `target`, stepping t ← t + (lower(t) − target)/rate, which never passes the first time f
+/// reaches the target. Returns `None` when the steps leave the interval (proven: f > target
+/// on [0, h]), else the offset reached and f there: its value is within `tol` of the target
+/// (or below it), or its lower bound no longer allows a step (the evaluation's precision), or
+/// `max_iter` steps were made (the offset is still before any crossing).
+pub fn advance_to(
+    h: f64,
+    f0: Bracket,
+    rate: f64,
+    target: f64,
+    tol: f64,
+    max_iter: u32,
+    mut f: impl FnMut(f64) -> Bracket,
+) -> Option<(f64, Bracket)> {
+    let (mut t, mut ft) = (0.0, f0);
+    for _ in 0..max_iter {
+        if ft.value <= target + tol || ft.lower <= target || rate <= 0.0 {
+            break;
+        }
+        let step = (ft.lower - target) / rate;
+        if t + step > h {
+            return None;
+        }
+        t += step;
+        ft = f(t);
+    }
+    if rate <= 0.0 && ft.lower > target {
+        return None;
+    }
+    Some((t, ft))
+}
+
+#[cfg(test)]
+mod tests {
+    //! Checked against closed forms: the distance |t − t*|·v + d_min of a straight fly-by at
+    //! speed v (a V-shaped function with slope exactly v), and sin t.
+    use super::*;
+
+    fn vee(t: f64) -> Bracket {
+        Bracket::exact((t - 0.37).abs() * 2.0 + 0.5)
+    }
+
+    #[test]
+    fn minimize_finds_an_interior_minimum() {
+        let r = minimize(
+            1.0,
+            vee(0.0),
+            vee(1.0),
+            2.0,
+            |best| best - 1e-9,
+            200,
+            1e-12,
+            vee,
+        );
+        assert!((r.value - 0.5).abs() < 2e-9, "{r:?}");
+        assert!(r.lower <= 0.5 && r.lower > 0.5 - 2e-9, "{r:?}");
+        assert!(!r.exhausted);
+    }
+
+    #[test]
+    fn minimize_stops_at_once_when_the_bound_clears() {
+        // f between 10 and 11 with rate 1 on a width of 0.1: bound 10.45 > threshold 5.
+        let r = minimize(
+            0.1,
+            Bracket::exact(10.0),
+            Bracket::exact(11.0),
+            1.0,
+            |_| 5.0,
+            10,
+            1e-12,
+            |_| panic!("no evaluation needed"),
+        );
+        assert_eq!(r.evals, 0);
+        assert!(r.lower >= 5.0);
+    }
+
+    #[test]
+    fn first_below_brackets_the_crossing() {
+        // sin t drops below −0.5 first at 7π/6.
+        let want = 7.0 * std::f64::consts::PI / 6.0;
+        let f = |t: f64| Bracket::exact(t.sin());
+        let c = first_below(4.0, f(0.0), f(4.0), 1.0, -0.5, 1e-9, 200, f);
+        match c {
+            Crossing::At { t_lo, t_hi } => {
+                assert!(t_lo <= want && want <= t_hi && t_hi - t_lo <= 1e-9, "{c:?}");
+            }
+            _ => panic!("{c:?}"),
+        }
+        assert_eq!(
+            first_below(4.0, f(0.0), f(4.0), 1.0, -1.5, 1e-9, 200, f),
+            Crossing::Never
+        );
+    }
+
+    #[test]
+    fn advance_never_passes_the_first_contact() {
+        // Head-on at 100 m/s from 0.4 m: contact at 0.004 s.
+        let f = |t: f64| Bracket::exact(0.4 - 100.0 * t);
+        let (t, ft) = advance_to(0.01, f(0.0), 100.0, 0.0, 1e-6, 50, f).expect("hits");
+        assert!(t <= 0.004 && ft.value <= 1e-6, "{t} {ft:?}");
+        // Receding: no contact.
+        let g = |t: f64| Bracket::exact(0.4 + 10.0 * t);
+        assert!(advance_to(0.01, g(0.0), 100.0, 0.0, 1e-6, 50, g).is_none());
+    }
+}
