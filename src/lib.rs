@@ -2,13 +2,14 @@
 //!
 //! Layers (see the README for the full map):
 //! - Bevy-free scientific core, f64, unit-tested alone: [`math`], [`orbit`], [`geometry`],
-//!   [`control`], [`actuation`], [`report`].
+//!   [`control`], [`actuation`], [`contact`], [`report`].
 //! - `sim` feature: the Bevy + rapier layer that turns a scene into a fixed-step `App`.
 //! - `viewer` feature: `viewer`, the window (`rpod view`, `rpod replay`).
 
 pub mod actuation;
 #[cfg(feature = "sim")]
 pub mod bench;
+pub mod contact;
 pub mod control;
 pub mod geometry;
 pub mod guarantee;
