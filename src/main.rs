@@ -40,6 +40,10 @@ enum Cmd {
         /// Override a scene field: `--set bodies.chaser.mass_kg=120` (repeatable).
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
+        /// Also write contact_points.csv: every contact point (position, normal, depth, force)
+        /// at every step, and every sub-step of the compliant docking contact.
+        #[arg(long)]
+        contact_points: bool,
     },
     /// Validate scene files (syntax, units, physics, geometry overlaps at t = 0).
     Check {
@@ -289,7 +293,8 @@ fn main() -> ExitCode {
             out,
             duration,
             set,
-        } => run(&scene, out, duration, &set),
+            contact_points,
+        } => run(&scene, out, duration, &set, contact_points),
         Cmd::Check { scenes, set } => {
             let mut bad = false;
             for s in &scenes {
@@ -367,6 +372,7 @@ fn run(
     out: Option<PathBuf>,
     duration: Option<f64>,
     set: &[String],
+    contact_points: bool,
 ) -> ExitCode {
     let mut sim = match load_and_build(scene, set) {
         Ok(s) => s,
@@ -381,6 +387,7 @@ fn run(
         return ExitCode::from(2);
     }
     let out = out.unwrap_or_else(|| PathBuf::from("out").join(&sim.scene.name));
+    sim.record_contact_points(contact_points);
     if let Err(e) = sim.record_to(&out) {
         eprintln!("error: cannot write to {}: {e}", out.display());
         return ExitCode::from(2);
@@ -448,9 +455,26 @@ fn run(
                     g["worst_margin_t_s"].as_f64().unwrap_or(f64::NAN)
                 );
             }
+            let d = &summary["docking"];
+            if !d.is_null() {
+                let c = &d["contact"];
+                out!(
+                    "docking {} ({}); peak loads on the mechanism: axial {:.1} N, lateral {:.1} N; {}",
+                    d["state"].as_str().unwrap_or(""),
+                    d["reason"].as_str().unwrap_or(""),
+                    c["peak_axial_load_n"].as_f64().unwrap_or(0.0),
+                    c["peak_lateral_load_n"].as_f64().unwrap_or(0.0),
+                    c["model"].as_str().unwrap_or("")
+                );
+            }
             out!(
-                "wrote {}/{{trajectory.csv, events.jsonl, contacts.csv, summary.json}}",
-                out.display()
+                "wrote {}/{{trajectory.csv, events.jsonl, contacts.csv, summary.json{}}}",
+                out.display(),
+                if contact_points {
+                    ", contact_points.csv"
+                } else {
+                    ""
+                }
             );
             ExitCode::SUCCESS
         }

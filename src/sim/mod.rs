@@ -25,6 +25,7 @@
 
 pub mod airbearing;
 pub mod build;
+pub mod contact_model;
 pub mod docking;
 pub mod laws;
 pub mod monitor;
@@ -389,6 +390,7 @@ fn physics_step(
     gravity: Option<ResMut<Gravity>>,
     mut q: Query<(&SimBody, &mut BodyState, &mut Wrench)>,
     mut contact: ResMut<monitor::ContactState>,
+    mut compliant: Option<ResMut<contact_model::CompliantContact>>,
 ) {
     let dt = clock.dt_s;
     {
@@ -405,6 +407,11 @@ fn physics_step(
             }
         }
     }
+    // Compliant docking contact: the docking pair sub-stepped in f64 while it can touch.
+    let substepped = compliant.as_deref_mut().and_then(|c| {
+        c.t_step_s = clock.t_s();
+        c.pre_step(&q, &mut phys.world, dt)
+    });
     let substeps = phys.substeps;
     for _ in 0..substeps {
         phys.world.step();
@@ -428,6 +435,7 @@ fn physics_step(
                 .next()
                 .is_some();
         if attached {
+            contact_model::note_rapier_held(compliant.as_deref_mut(), &substepped, b.index);
             let pose = rb.position();
             let att = conv::naq(pose.rotation);
             s.att = att;
@@ -439,6 +447,15 @@ fn physics_step(
                 (v_new - s.vel_m_s) * b.mass_kg - (w.force_n + w.gravity_n) * dt;
             s.vel_m_s = v_new;
             s.omega_rad_s = conv::na(rb.angvel());
+        } else if let Some((_, new)) = substepped
+            .as_ref()
+            .and_then(|v| v.iter().find(|(i, _)| *i == b.index))
+        {
+            contact.body_impulse[b.index] = Vector3::zeros();
+            *s = new.clone();
+            rb.set_position(conv::pose(&s.body_pose(&b.com_body_m)), false);
+            rb.set_linvel(conv::v(&s.vel_m_s), false);
+            rb.set_angvel(conv::v(&s.omega_rad_s), false);
         } else {
             contact.body_impulse[b.index] = Vector3::zeros();
             let a_g0 = w.gravity_n / b.mass_kg;
