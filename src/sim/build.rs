@@ -251,6 +251,7 @@ impl Simulation {
         }
         contacts.touching = vec![false; scene.bodies.len()];
         contacts.body_impulse = vec![Vector3::zeros(); scene.bodies.len()];
+        contacts.body_angular_impulse = vec![Vector3::zeros(); scene.bodies.len()];
 
         // Parts of different bodies must not overlap at t = 0 unless marked.
         let states: Vec<BodyState> = roster

@@ -67,6 +67,8 @@ pub struct CompliantPair {
     pub poses: (Isometry3<f64>, Isometry3<f64>),
     /// Bounding radii about the part origins, m (a, b).
     pub radii: (f64, f64),
+    /// Vertices of the shapes in their part frames, m (a, b); see [`shape_vertices`].
+    pub vertices: (Vec<Vector3<f64>>, Vec<Vector3<f64>>),
     /// In contact at the end of the last sub-step.
     pub in_contact: bool,
     /// Normal approach speed when the current contact began, m/s.
@@ -290,6 +292,7 @@ fn pair_geometry(
     }
     let (mut wsum, mut wp, mut depth) = (0.0, Vector3::zeros(), f64::NEG_INFINITY);
     let mut closest = Vector3::zeros();
+    let mut deepest = (Vector3::zeros(), Vector3::zeros());
     for p in &manifold.points {
         let p1 = pa.transform_point(&conv::na(p.local_p1).into()).coords;
         let p2 = pb.transform_point(&conv::na(p.local_p2).into()).coords;
@@ -299,10 +302,46 @@ fn pair_geometry(
         if d > depth {
             depth = d;
             closest = (p1 + p2) * 0.5;
+            deepest = (p1, p2);
         }
         if d > 0.0 {
             wsum += d;
             wp += (p1 + p2) * (0.5 * d);
+        }
+    }
+    if depth > 0.0 {
+        // parry's polygonal features hold at most four vertices, so a face–face manifold (the
+        // cone's 32-sided tip on the back plate) is a subset of the contact polygon and its
+        // centroid can sit centimetres off the centre of pressure. The vertices of either
+        // shape inside the other, weighted by their depth below the other's contact plane
+        // (through the deepest point, normal n), give the whole polygon.
+        let (mut vsum, mut vp) = (0.0, Vector3::zeros());
+        let rel_inv = rel.inverse();
+        for v in &pair.vertices.1 {
+            let in_a = rel * nalgebra::Point3::from(*v);
+            if pair.shapes.0.contains_local_point(conv::v(&in_a.coords)) {
+                let w = pb.transform_point(&(*v).into()).coords;
+                let d = (deepest.0 - w).dot(&n);
+                if d > 0.0 {
+                    vsum += d;
+                    vp += w * d;
+                }
+            }
+        }
+        for u in &pair.vertices.0 {
+            let in_b = rel_inv * nalgebra::Point3::from(*u);
+            if pair.shapes.1.contains_local_point(conv::v(&in_b.coords)) {
+                let w = pa.transform_point(&(*u).into()).coords;
+                let d = (w - deepest.1).dot(&n);
+                if d > 0.0 {
+                    vsum += d;
+                    vp += w * d;
+                }
+            }
+        }
+        if vsum > 0.0 {
+            wsum = vsum;
+            wp = vp;
         }
     }
     Some(Geometry {
@@ -310,6 +349,26 @@ fn pair_geometry(
         normal: n,
         depth,
     })
+}
+
+/// The vertices of a shape, in its own frame (convex hulls and boxes; none for round shapes).
+pub fn shape_vertices(shape: &rp::SharedShape) -> Vec<Vector3<f64>> {
+    if let Some(c) = shape.as_convex_polyhedron() {
+        c.points().iter().map(|p| conv::na(*p)).collect()
+    } else if let Some(b) = shape.as_cuboid() {
+        let h = conv::na(b.half_extents);
+        let mut v = Vec::with_capacity(8);
+        for sx in [-1.0, 1.0] {
+            for sy in [-1.0, 1.0] {
+                for sz in [-1.0, 1.0] {
+                    v.push(Vector3::new(sx * h.x, sy * h.y, sz * h.z));
+                }
+            }
+        }
+        v
+    } else {
+        Vec::new()
+    }
 }
 
 /// The effective mass of the two bodies for an impulse along unit `dir` at world point `p`, kg.
@@ -867,6 +926,7 @@ pub fn install_between(
                 shapes: (a.shape.clone(), b.shape.clone()),
                 poses: (a.pose_body, b.pose_body),
                 radii: (a.bound_radius_m, b.bound_radius_m),
+                vertices: (shape_vertices(&a.shape), shape_vertices(&b.shape)),
                 in_contact: false,
                 impact_speed_m_s: 0.0,
                 contact_peak_n: 0.0,

@@ -54,10 +54,15 @@ pub struct DockingLoads {
     pub impacts: Vec<ImpactRecord>,
     /// Impacts in all.
     pub impact_count: u64,
-    /// Peak force of the latch joint, N.
+    /// Peak force of the latch joint on the chaser, N. The joint is rigid (a rapier fixed
+    /// joint): a latch that closes on a cone still moving stops it within one step, so this
+    /// peak is that impulse over dt and depends on the step; the impulse does not.
     pub peak_joint_force_n: f64,
-    /// Peak torque of the latch joint, N·m.
+    /// Peak moment of the latch joint on the chaser about its port, N·m (same caveat).
     pub peak_joint_torque_nm: f64,
+    /// The joint's impulse on the chaser in the first step after the latch (what it took to
+    /// stop the relative motion the latch caught), N·s.
+    pub latch_impulse_ns: Option<f64>,
     /// The compliant model's sub-stepping (absent for rigid contact).
     pub substepping: Option<super::contact_model::SubstepStats>,
 }
@@ -456,14 +461,38 @@ fn docking_monitor(
             if let Some(h) = dock.joint
                 && let Some(j) = phys.world.impulse_joints.get(h)
             {
-                let f = Vector3::new(j.impulses[0], j.impulses[1], j.impulses[2])
-                    .map(f64::from)
-                    .norm()
-                    / dt;
-                let tq = Vector3::new(j.impulses[3], j.impulses[4], j.impulses[5])
-                    .map(f64::from)
-                    .norm()
-                    / dt;
+                // The joint's load on the chaser: its momentum change less the applied forces
+                // (exact for the step rapier took, whatever its solver passes wrote back),
+                // when no contact shares it; the moment about the chaser's port. Otherwise
+                // rapier's last-pass joint impulses.
+                let ci = cb.index;
+                let shared = contacts
+                    .step_pairs
+                    .iter()
+                    .any(|p| p.bodies.0 == ci || p.bodies.1 == ci);
+                let (f, tq) = match (
+                    contacts.body_impulse.get(ci),
+                    contacts.body_angular_impulse.get(ci),
+                ) {
+                    (Some(jl), Some(ja)) if !shared => {
+                        let (pc, _) = port_world(cs, &cb.com_body_m, &dock.ports.0);
+                        let m_port = ja - (pc - cs.pos_m).cross(jl);
+                        (jl.norm() / dt, m_port.norm() / dt)
+                    }
+                    _ => (
+                        Vector3::new(j.impulses[0], j.impulses[1], j.impulses[2])
+                            .map(f64::from)
+                            .norm()
+                            / dt,
+                        Vector3::new(j.impulses[3], j.impulses[4], j.impulses[5])
+                            .map(f64::from)
+                            .norm()
+                            / dt,
+                    ),
+                };
+                if dock.loads.latch_impulse_ns.is_none() {
+                    dock.loads.latch_impulse_ns = Some(f * dt);
+                }
                 joint_now = (f, tq);
                 dock.peak_joint_force_n = dock.peak_joint_force_n.max(f);
                 dock.loads.peak_joint_force_n = dock.peak_joint_force_n;

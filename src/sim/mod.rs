@@ -442,22 +442,30 @@ fn physics_step(
             s.pos_m = conv::na(pose.translation) + att * b.com_body_m;
             let v_new = conv::na(rb.linvel());
             // The contact (and joint) impulse on this body: its momentum change less what the
-            // applied forces gave it over the step.
+            // applied forces gave it over the step; likewise its angular impulse about the
+            // centre of mass.
             contact.body_impulse[b.index] =
                 (v_new - s.vel_m_s) * b.mass_kg - (w.force_n + w.gravity_n) * dt;
+            let l_old = monitor::angular_momentum(&s.att, &b.inertia_kg_m2, &s.omega_rad_s);
             s.vel_m_s = v_new;
             s.omega_rad_s = conv::na(rb.angvel());
+            contact.body_angular_impulse[b.index] =
+                monitor::angular_momentum(&s.att, &b.inertia_kg_m2, &s.omega_rad_s)
+                    - l_old
+                    - w.torque_nm * dt;
         } else if let Some((_, new)) = substepped
             .as_ref()
             .and_then(|v| v.iter().find(|(i, _)| *i == b.index))
         {
             contact.body_impulse[b.index] = Vector3::zeros();
+            contact.body_angular_impulse[b.index] = Vector3::zeros();
             *s = new.clone();
             rb.set_position(conv::pose(&s.body_pose(&b.com_body_m)), false);
             rb.set_linvel(conv::v(&s.vel_m_s), false);
             rb.set_angvel(conv::v(&s.omega_rad_s), false);
         } else {
             contact.body_impulse[b.index] = Vector3::zeros();
+            contact.body_angular_impulse[b.index] = Vector3::zeros();
             let a_g0 = w.gravity_n / b.mass_kg;
             let a_c = w.force_n / b.mass_kg;
             let v0 = s.vel_m_s;

@@ -108,6 +108,9 @@ pub struct ContactState {
     /// Per body index: contact impulse received this step (momentum change less the applied
     /// forces' impulse), world frame, N·s.
     pub body_impulse: Vec<nalgebra::Vector3<f64>>,
+    /// Per body index: contact and joint angular impulse received this step about its centre of
+    /// mass (angular momentum change less the applied torques' impulse), world frame, N·m·s.
+    pub body_angular_impulse: Vec<nalgebra::Vector3<f64>>,
     /// Contacts in progress, keyed by the ordered pair of `body/collider` names.
     pub active: BTreeMap<(String, String), ActiveContact>,
     /// Totals per `body/collider`.
@@ -150,6 +153,16 @@ impl ContactState {
             }
         }
     }
+}
+
+/// Angular momentum about the centre of mass, world frame: R·J·Rᵀ·ω (J in body axes).
+pub fn angular_momentum(
+    att: &nalgebra::UnitQuaternion<f64>,
+    j_body: &nalgebra::Matrix3<f64>,
+    omega_world: &nalgebra::Vector3<f64>,
+) -> nalgebra::Vector3<f64> {
+    let r = att.to_rotation_matrix().into_inner();
+    r * j_body * r.transpose() * omega_world
 }
 
 /// A contact pair counts as touching when a contact point is at zero or negative distance or
