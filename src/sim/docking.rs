@@ -533,7 +533,7 @@ fn docking_monitor(
             {
                 new = Missed;
                 reason = format!(
-                    "the approach turned away outside the mouth: lateral offset {:.3} m > {:.3} m, separating at {:.4} m/s",
+                    "the approach turned away outside the mouth: lateral offset {:.3} m > {:.3} m, separating at {:.3e} m/s",
                     g.lateral_m, spec.mouth_radius_m, g.axial_rate_m_s
                 );
             } else if seated && (docking_contact || old == SoftCapture) {
@@ -593,7 +593,7 @@ fn docking_monitor(
                 if g.axial_rate_m_s > spec.miss.rebound_speed_m_s {
                     new = Rebound;
                     reason = format!(
-                        "the cone left the slot separating at {:.4} m/s",
+                        "the cone left the slot separating at {:.3e} m/s",
                         g.axial_rate_m_s
                     );
                 } else {
@@ -606,7 +606,7 @@ fn docking_monitor(
             {
                 new = Rebound;
                 reason = format!(
-                    "deflected: after touching the slot the cone moves away at {:.4} m/s",
+                    "deflected: after touching the slot the cone moves away at {:.3e} m/s",
                     g.axial_rate_m_s
                 );
             } else if old == Free && dock.magnet_on {
