@@ -62,7 +62,8 @@
 //!
 //! ## Layers
 //! - Bevy-free scientific core, f64, unit-tested alone: [`math`], [`orbit`], [`geometry`],
-//!   [`environment`], [`control`], [`actuation`], [`scene`], [`guarantee`], [`report`].
+//!   [`environment`], [`control`], [`actuation`], [`contact`], [`scene`], [`guarantee`],
+//!   [`report`].
 //! - `sim` feature: the Bevy + rapier layer that turns a scene into a fixed-step `App`
 //!   ([`sim::Simulation`]): Sense → Control → Actuate → Environment → rapier → Monitor → Record.
 //! - `viewer` feature: `viewer`, the window (`rpod view`, `rpod replay`).
@@ -72,6 +73,7 @@
 pub mod actuation;
 #[cfg(feature = "sim")]
 pub mod bench;
+pub mod contact;
 pub mod control;
 pub mod environment;
 pub mod geometry;

@@ -40,6 +40,10 @@ enum Cmd {
         /// Override a scene field: `--set bodies.chaser.mass_kg=120` (repeatable).
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
+        /// Also write contact_points.csv: every contact point (position, normal, depth, force)
+        /// at every step, and every sub-step of the compliant docking contact.
+        #[arg(long)]
+        contact_points: bool,
     },
     /// Validate scene files (syntax, units, physics, geometry overlaps at t = 0).
     Check {
@@ -303,7 +307,8 @@ fn main() -> ExitCode {
             out,
             duration,
             set,
-        } => run(&scene, out, duration, &set),
+            contact_points,
+        } => run(&scene, out, duration, &set, contact_points),
         Cmd::Check { scenes, set } => {
             let mut bad = false;
             for s in &scenes {
@@ -417,6 +422,7 @@ fn run(
     out: Option<PathBuf>,
     duration: Option<f64>,
     set: &[String],
+    contact_points: bool,
 ) -> ExitCode {
     let mut sim = match load_and_build(scene, set) {
         Ok(s) => s,
@@ -431,6 +437,7 @@ fn run(
         return ExitCode::from(2);
     }
     let out = out.unwrap_or_else(|| PathBuf::from("out").join(&sim.scene.name));
+    sim.record_contact_points(contact_points);
     if let Err(e) = sim.record_to(&out) {
         eprintln!("error: cannot write to {}: {e}", out.display());
         return ExitCode::from(2);
@@ -498,13 +505,19 @@ fn run(
                     g["worst_margin_t_s"].as_f64().unwrap_or(f64::NAN)
                 );
             }
-            if let Some(d) = summary["docking"].as_object() {
+            let d = &summary["docking"];
+            if !d.is_null() {
+                let c = &d["contact"];
                 out!(
-                    "docking: {}{}",
-                    d.get("state").and_then(|s| s.as_str()).unwrap_or("?"),
-                    d.get("t_latch_s")
-                        .and_then(|t| t.as_f64())
-                        .map_or(String::new(), |t| format!(", latched at t = {t:.2} s"))
+                    "docking {}{} ({}); peak loads on the mechanism: axial {:.1} N, lateral {:.1} N; {}",
+                    d["state"].as_str().unwrap_or(""),
+                    d["t_latch_s"]
+                        .as_f64()
+                        .map_or(String::new(), |t| format!(", latched at t = {t:.2} s")),
+                    d["reason"].as_str().unwrap_or(""),
+                    c["peak_axial_load_n"].as_f64().unwrap_or(0.0),
+                    c["peak_lateral_load_n"].as_f64().unwrap_or(0.0),
+                    c["model"].as_str().unwrap_or("")
                 );
             }
             for c in summary["controllers"].as_array().into_iter().flatten() {
@@ -517,8 +530,13 @@ fn run(
                 );
             }
             out!(
-                "wrote {}/{{trajectory.csv, events.jsonl, contacts.csv, summary.json}}",
-                out.display()
+                "wrote {}/{{trajectory.csv, events.jsonl, contacts.csv, summary.json{}}}",
+                out.display(),
+                if contact_points {
+                    ", contact_points.csv"
+                } else {
+                    ""
+                }
             );
             ExitCode::SUCCESS
         }

@@ -288,6 +288,9 @@ pub struct TrialResult {
     pub t_latch_s: Option<f64>,
     /// Peak contact force on any part, N.
     pub peak_contact_force_n: f64,
+    /// Peak axial and lateral loads on the docking mechanism up to the latch, N (the summary's
+    /// `docking.contact`).
+    pub peak_loads_n: (f64, f64),
     /// Largest misalignment in contact, deg.
     pub max_misalignment_deg: f64,
     /// Smallest clearance between parts that are not both docking parts, m.
@@ -313,6 +316,7 @@ pub fn run_trial(c: &Campaign, k: usize) -> TrialResult {
                 success: false,
                 t_latch_s: None,
                 peak_contact_force_n: 0.0,
+                peak_loads_n: (0.0, 0.0),
                 max_misalignment_deg: 0.0,
                 min_clearance_m: f64::NAN,
                 first_collision_s: None,
@@ -344,6 +348,9 @@ pub fn run_trial(c: &Campaign, k: usize) -> TrialResult {
             .values()
             .map(|p| p.peak_force_n)
             .fold(0.0, f64::max),
+        peak_loads_n: dock.as_ref().map_or((0.0, 0.0), |d| {
+            (d.loads.peak_axial_load_n, d.loads.peak_lateral_load_n)
+        }),
         max_misalignment_deg: dock.as_ref().map_or(0.0, |d| d.max_misalignment_deg),
         min_clearance_m: sim
             .monitor()
@@ -371,6 +378,8 @@ pub fn header(spec: &TrialsSpec) -> String {
             "success",
             "t_latch_s",
             "peak_contact_force_n",
+            "peak_axial_load_n",
+            "peak_lateral_load_n",
             "max_misalignment_deg",
             "min_clearance_non_docking_m",
             "first_collision_s",
@@ -390,6 +399,8 @@ pub fn row(r: &TrialResult) -> String {
     cells.push(r.success.to_string());
     cells.push(opt(r.t_latch_s));
     cells.push(format!("{}", r.peak_contact_force_n));
+    cells.push(format!("{}", r.peak_loads_n.0));
+    cells.push(format!("{}", r.peak_loads_n.1));
     cells.push(format!("{}", r.max_misalignment_deg));
     cells.push(format!("{}", r.min_clearance_m));
     cells.push(opt(r.first_collision_s));

@@ -156,7 +156,7 @@ pub fn apply_override(text: &str, file: &str, assignment: &str) -> Result<String
                 node = c;
             }
             None => {
-                if last && let NodeKind::Struct { open, .. } = &node.kind {
+                if last && let NodeKind::Struct { open, .. } = &unwrap_newtype(node).kind {
                     let mut out = String::with_capacity(text.len() + value.len() + 8);
                     out.push_str(&text[..open + 1]);
                     out.push_str(&format!("{seg}: {value}, "));
@@ -271,16 +271,35 @@ fn element_label(text: &str, v: &Node) -> Option<String> {
     None
 }
 
+/// The struct inside a newtype such as `Some((…))`, or the node itself.
+fn unwrap_newtype(node: &Node) -> &Node {
+    match &node.kind {
+        NodeKind::Seq(items) => match items.as_slice() {
+            [only] if matches!(only.kind, NodeKind::Struct { .. }) => only,
+            _ => node,
+        },
+        _ => node,
+    }
+}
+
 fn child<'a>(text: &str, node: &'a Node, seg: &str) -> Option<&'a Node> {
     match &node.kind {
         NodeKind::Struct { fields, .. } => fields.iter().find(|(k, _, _)| k == seg).map(|f| &f.2),
         NodeKind::Seq(items) => {
             if let Ok(i) = seg.parse::<usize>() {
                 items.get(i)
+            } else if let Some(v) = items
+                .iter()
+                .find(|v| element_label(text, v).as_deref() == Some(seg))
+            {
+                Some(v)
+            } else if let [only] = items.as_slice()
+                && matches!(only.kind, NodeKind::Struct { .. })
+            {
+                // A newtype such as `Some((…))`: its fields are the inner struct's.
+                child(text, only, seg)
             } else {
-                items
-                    .iter()
-                    .find(|v| element_label(text, v).as_deref() == Some(seg))
+                None
             }
         }
         NodeKind::Atom => None,
@@ -555,6 +574,15 @@ mod tests {
         assert_eq!(&t[s..e], "(1.0, 0.0, 0.0)");
         assert!(apply_override(T, "f", "bodies.zz.mass_kg=1").is_err());
         assert!(apply_override(T, "f", "nonsense").is_err());
+        // Through a newtype `Some((…))`: replace a field, insert a missing one.
+        let t = "Scene(docking: Some((seat_depth_m: 0.25)))";
+        let r = apply_override(t, "f", "docking.seat_depth_m=0.3").unwrap();
+        assert_eq!(r, "Scene(docking: Some((seat_depth_m: 0.3)))");
+        let r = apply_override(t, "f", "docking.contact=Rigid").unwrap();
+        assert_eq!(
+            r,
+            "Scene(docking: Some((contact: Rigid, seat_depth_m: 0.25)))"
+        );
     }
 
     #[test]

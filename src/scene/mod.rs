@@ -126,6 +126,10 @@ pub struct DockingSpec {
     /// When a run gives up.
     #[serde(default)]
     pub miss: MissSpec,
+    /// The cone–slot contact: `Compliant((law: …, dissipation: …))` (the default, with the
+    /// values documented in [`crate::contact`]) or `Rigid` (rapier's impulses).
+    #[serde(default)]
+    pub contact: crate::contact::ContactModelSpec,
 }
 
 /// Electromagnet: attractive force F(gap) = min(F0 / (1 + gap/g0)², F_max) on the chaser port,
@@ -177,7 +181,11 @@ pub struct MissSpec {
     pub jam_time_s: f64,
     /// Relative speed below which a stuck cone counts as jammed, m/s.
     pub jam_speed_m_s: f64,
-    /// After a docking contact ends, separating faster than this: REBOUND, m/s.
+    /// After a docking contact ends, separating faster than this: REBOUND, m/s. The default,
+    /// 1e-5 m/s, is a numerical floor (the f64 truth resolves 1e-9 m/s after rapier's f32
+    /// contact steps), not a physical threshold: any chaser that touched the slot and moves
+    /// away is a rebound, whatever the restitution of the contact that sent it (a perfectly
+    /// inelastic grazing hit leaves it drifting at under 1 mm/s, a bouncy one at cm/s).
     pub rebound_speed_m_s: f64,
     /// The approach judgements (passed beside the slot, turned away outside the mouth) apply
     /// only once the gap has fallen below this, m; absent: from t = 0. For a chaser that
@@ -191,7 +199,7 @@ impl Default for MissSpec {
         Self {
             jam_time_s: 5.0,
             jam_speed_m_s: 1e-3,
-            rebound_speed_m_s: 1e-3,
+            rebound_speed_m_s: 1e-5,
             arm_gap_m: None,
         }
     }

@@ -590,5 +590,8 @@ fn validate_docking(s: &Scene, d: &super::DockingSpec) -> Check {
         d.miss.rebound_speed_m_s,
         "m/s",
     )?;
+    if let crate::contact::ContactModelSpec::Compliant(c) = &d.contact {
+        crate::contact::validate(c).map_err(|(f, m)| (format!("docking.contact.{f}"), m))?;
+    }
     Ok(())
 }

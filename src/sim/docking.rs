@@ -6,6 +6,7 @@
 //! [`crate::scene::MagnetSpec`]. Contact is real: the cone and the slot's wall pieces are rapier
 //! colliders, and the monitor says which parts touch.
 
+use super::contact_model::{CompliantContact, ImpactRecord};
 use super::monitor::ContactState;
 use super::output::Diagnostics;
 use super::{BodyState, Clock, EventLog, Physics, SimBody, SimStep, Stage, Wrench, conv};
@@ -21,11 +22,74 @@ pub const CONTACT_HOLD_S: f64 = 0.1;
 /// A port in its body frame: (origin, unit outward axis).
 pub type PortFrame = (Vector3<f64>, Vector3<f64>);
 
+/// Impacts kept in the summary (the count is always given).
+pub const MAX_IMPACTS_LISTED: usize = 100;
+
+/// Loads on the mechanism from the first docking contact to the latch (the latched pair's
+/// internal forces are joint loads, reported apart). The contact force on the chaser's docking
+/// parts F is split along the target port axis a_t: axial |F·a_t|, lateral |F − (F·a_t)·a_t|.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct DockingLoads {
+    /// Which contact model ran ([`crate::contact::describe`]).
+    pub model: String,
+    /// Largest axial load, N.
+    pub peak_axial_load_n: f64,
+    /// When, s.
+    pub peak_axial_t_s: Option<f64>,
+    /// Largest lateral load, N.
+    pub peak_lateral_load_n: f64,
+    /// When, s.
+    pub peak_lateral_t_s: Option<f64>,
+    /// Largest contact force magnitude, N.
+    pub peak_force_n: f64,
+    /// Time in docking contact, s (compliant: sub-steps with a penetrating pair; rigid: steps
+    /// with a touching pair × dt).
+    pub contact_duration_s: f64,
+    /// Sum over steps of the magnitude of the contact impulse on the chaser, N·s.
+    pub impulse_ns: f64,
+    /// Net contact impulse on the chaser, world frame, N·s.
+    pub net_impulse_on_chaser_ns: [f64; 3],
+    /// Impacts (compliant model: first touch to separation of one part pair), the first
+    /// [`MAX_IMPACTS_LISTED`].
+    pub impacts: Vec<ImpactRecord>,
+    /// Impacts in all.
+    pub impact_count: u64,
+    /// Peak force of the latch joint on the chaser, N. The joint is rigid (a rapier fixed
+    /// joint): a latch that closes on a cone still moving stops it within one step, so this
+    /// peak is that impulse over dt and depends on the step; the impulse does not.
+    pub peak_joint_force_n: f64,
+    /// Peak moment of the latch joint on the chaser about its port, N·m (same caveat).
+    pub peak_joint_torque_nm: f64,
+    /// The joint's impulse on the chaser in the first step after the latch (what it took to
+    /// stop the relative motion the latch caught), N·s.
+    pub latch_impulse_ns: Option<f64>,
+    /// The compliant model's sub-stepping (absent for rigid contact).
+    pub substepping: Option<super::contact_model::SubstepStats>,
+}
+
+impl DockingLoads {
+    /// Adds one sample of the contact force on the chaser `f` (N, world) held for `h` s.
+    fn sample(&mut self, t: f64, f: &Vector3<f64>, axis: &Vector3<f64>) {
+        let ax = f.dot(axis);
+        let lat = (f - axis * ax).norm();
+        if ax.abs() > self.peak_axial_load_n {
+            self.peak_axial_load_n = ax.abs();
+            self.peak_axial_t_s = Some(t);
+        }
+        if lat > self.peak_lateral_load_n {
+            self.peak_lateral_load_n = lat;
+            self.peak_lateral_t_s = Some(t);
+        }
+        self.peak_force_n = self.peak_force_n.max(f.norm());
+    }
+}
+
 /// Docking state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "SCREAMING_SNAKE_CASE")]
 pub enum DockState {
-    /// No magnet, no contact.
+    /// No magnet and no contact (yet, or again after a contact that ended without the chaser
+    /// moving away).
     Free,
     /// Magnet on, no contact yet.
     Attracting,
@@ -122,6 +186,8 @@ pub struct Docking {
     pub joint: Option<rp::ImpulseJointHandle>,
     /// Peak latch-joint force, N.
     pub peak_joint_force_n: f64,
+    /// Loads on the mechanism.
+    pub loads: DockingLoads,
     /// Last step with a docking contact, s.
     pub last_docking_contact_s: Option<f64>,
     /// The approach judgements apply (the gap has fallen below `miss.arm_gap_m`, or no such
@@ -129,8 +195,9 @@ pub struct Docking {
     pub armed: bool,
     /// The chaser port's axial error at the previous step, m (positive: in front of the seat).
     pub prev_axial_error_m: Option<f64>,
-    /// Diagnostics column indices: gap, axial, lateral, misalignment, magnet, state.
-    cols: [usize; 6],
+    /// Diagnostics column indices: gap, axial, lateral, misalignment, magnet, state, joint force,
+    /// joint torque.
+    cols: [usize; 8],
 }
 
 /// World port origin and unit axis of a body.
@@ -197,8 +264,11 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         diag.column("dock.misalignment_deg"),
         diag.column("dock.magnet_n"),
         diag.column("dock.state"),
+        diag.column("dock.joint_force_n"),
+        diag.column("dock.joint_torque_nm"),
     ];
     let magnet_on = spec.magnet.on_at_start;
+    let spec_contact = spec.contact.clone();
     app.insert_resource(Docking {
         spec,
         bodies: (roster.bodies[ci], roster.bodies[ti]),
@@ -219,6 +289,10 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         max_misalignment_deg: 0.0,
         joint: None,
         peak_joint_force_n: 0.0,
+        loads: DockingLoads {
+            model: crate::contact::describe(&spec_contact),
+            ..Default::default()
+        },
         last_docking_contact_s: None,
         armed: false,
         prev_axial_error_m: None,
@@ -272,12 +346,71 @@ fn docking_monitor(
     q: Query<(&SimBody, &BodyState)>,
     mut log: ResMut<EventLog>,
     mut diag: ResMut<Diagnostics>,
+    mut compliant: Option<ResMut<CompliantContact>>,
 ) {
     let t = clock.t_s();
     let dt = clock.dt_s;
     let (ce, te) = dock.bodies;
     let [(cb, cs), (tb, ts)] = q.get_many([ce, te]).expect("docking bodies");
-    let (g, _, _) = geometry(&dock.spec, (cs, cb), (ts, tb), &dock.ports);
+    let (g, _, at) = geometry(&dock.spec, (cs, cb), (ts, tb), &dock.ports);
+    // Loads on the mechanism up to the latch: the compliant model's sub-step history, or the
+    // rigid contacts' impulse / dt.
+    let mut joint_now = (0.0, 0.0);
+    if dock.state != DockState::Latched {
+        let chaser = cb.index;
+        let loads = &mut dock.loads;
+        let mut j_step = Vector3::zeros();
+        match compliant
+            .as_deref_mut()
+            .filter(|c| c.enabled || !c.step.is_empty())
+        {
+            Some(c) => {
+                let sign = if c.indices.1 == chaser { 1.0 } else { -1.0 };
+                let mut tt = t - dt;
+                for (h, f) in &c.b_force_history {
+                    tt += h;
+                    loads.sample(tt, &(f * sign), &at);
+                }
+                loads.contact_duration_s += c.step_contact_s;
+                for st in &c.step {
+                    j_step += st.impulse_on_b_ns * sign;
+                }
+                for imp in c.impacts.drain(..) {
+                    log.push(
+                        imp.t_end_s,
+                        "impact",
+                        serde_json::to_value(&imp).unwrap_or_default(),
+                    );
+                    loads.impact_count += 1;
+                    if loads.impacts.len() < MAX_IMPACTS_LISTED {
+                        loads.impacts.push(imp);
+                    }
+                }
+            }
+            None => {
+                let mut any = false;
+                for sp in contacts.step_pairs.iter().filter(|p| p.docking) {
+                    if sp.bodies.1 == chaser {
+                        j_step += sp.impulse_on_b_ns;
+                    } else if sp.bodies.0 == chaser {
+                        j_step -= sp.impulse_on_b_ns;
+                    } else {
+                        continue;
+                    }
+                    any = true;
+                }
+                if any {
+                    loads.contact_duration_s += dt;
+                    loads.sample(t, &(j_step / dt), &at);
+                }
+            }
+        }
+        loads.impulse_ns += j_step.norm();
+        loads.substepping = compliant.as_deref().map(|c| c.stats);
+        for (n, v) in loads.net_impulse_on_chaser_ns.iter_mut().zip(j_step.iter()) {
+            *n += v;
+        }
+    }
     let prefix = (format!("{}/", cb.name), format!("{}/", tb.name));
     let between = |a: &str, b: &str| {
         (a.starts_with(&prefix.0) && b.starts_with(&prefix.1))
@@ -328,14 +461,48 @@ fn docking_monitor(
             if let Some(h) = dock.joint
                 && let Some(j) = phys.world.impulse_joints.get(h)
             {
-                let f = Vector3::new(j.impulses[0], j.impulses[1], j.impulses[2])
-                    .map(f64::from)
-                    .norm()
-                    / dt;
+                // The joint's load on the chaser: its momentum change less the applied forces
+                // (exact for the step rapier took, whatever its solver passes wrote back),
+                // when no contact shares it; the moment about the chaser's port. Otherwise
+                // rapier's last-pass joint impulses.
+                let ci = cb.index;
+                let shared = contacts
+                    .step_pairs
+                    .iter()
+                    .any(|p| p.bodies.0 == ci || p.bodies.1 == ci);
+                let (f, tq) = match (
+                    contacts.body_impulse.get(ci),
+                    contacts.body_angular_impulse.get(ci),
+                ) {
+                    (Some(jl), Some(ja)) if !shared => {
+                        let (pc, _) = port_world(cs, &cb.com_body_m, &dock.ports.0);
+                        let m_port = ja - (pc - cs.pos_m).cross(jl);
+                        (jl.norm() / dt, m_port.norm() / dt)
+                    }
+                    _ => (
+                        Vector3::new(j.impulses[0], j.impulses[1], j.impulses[2])
+                            .map(f64::from)
+                            .norm()
+                            / dt,
+                        Vector3::new(j.impulses[3], j.impulses[4], j.impulses[5])
+                            .map(f64::from)
+                            .norm()
+                            / dt,
+                    ),
+                };
+                if dock.loads.latch_impulse_ns.is_none() {
+                    dock.loads.latch_impulse_ns = Some(f * dt);
+                }
+                joint_now = (f, tq);
                 dock.peak_joint_force_n = dock.peak_joint_force_n.max(f);
+                dock.loads.peak_joint_force_n = dock.peak_joint_force_n;
+                dock.loads.peak_joint_torque_nm = dock.loads.peak_joint_torque_nm.max(tq);
                 if f > spec.latch.break_force_n {
                     phys.world.impulse_joints.remove(h, true);
                     dock.joint = None;
+                    if let Some(c) = compliant.as_deref_mut() {
+                        c.enabled = true;
+                    }
                     new = Free;
                     reason = format!(
                         "latch broke: joint force {f:.1} N > break force {:.1} N",
@@ -366,7 +533,7 @@ fn docking_monitor(
             {
                 new = Missed;
                 reason = format!(
-                    "the approach turned away outside the mouth: lateral offset {:.3} m > {:.3} m, separating at {:.4} m/s",
+                    "the approach turned away outside the mouth: lateral offset {:.3} m > {:.3} m, separating at {:.3e} m/s",
                     g.lateral_m, spec.mouth_radius_m, g.axial_rate_m_s
                 );
             } else if seated && (docking_contact || old == SoftCapture) {
@@ -387,6 +554,14 @@ fn docking_monitor(
                     let h = phys.world.insert_impulse_joint(tb.handle, cb.handle, joint);
                     dock.joint = Some(h);
                     dock.t_latch_s = Some(t);
+                    // The latched pair is one structure: no more docking contact (the joint
+                    // carries the loads, reported as joint loads).
+                    if let Some(c) = compliant.as_deref_mut() {
+                        c.enabled = false;
+                        for p in &mut c.pairs {
+                            p.in_contact = false;
+                        }
+                    }
                 }
             } else if docking_contact {
                 if old != Contact && old != Jammed {
@@ -418,7 +593,7 @@ fn docking_monitor(
                 if g.axial_rate_m_s > spec.miss.rebound_speed_m_s {
                     new = Rebound;
                     reason = format!(
-                        "the cone left the slot separating at {:.4} m/s",
+                        "the cone left the slot separating at {:.3e} m/s",
                         g.axial_rate_m_s
                     );
                 } else {
@@ -431,7 +606,7 @@ fn docking_monitor(
             {
                 new = Rebound;
                 reason = format!(
-                    "deflected: after touching the slot the cone moves away at {:.4} m/s",
+                    "deflected: after touching the slot the cone moves away at {:.3e} m/s",
                     g.axial_rate_m_s
                 );
             } else if old == Free && dock.magnet_on {
@@ -456,6 +631,8 @@ fn docking_monitor(
         g.misalignment_deg,
         dock.magnet_force_n,
         dock.state.code(),
+        joint_now.0,
+        joint_now.1,
     ];
     for (c, v) in dock.cols.iter().zip(values) {
         diag.values[*c] = v;
@@ -470,10 +647,13 @@ fn latch_joint(cs: &BodyState, cb: &SimBody, ts: &BodyState, tb: &SimBody) -> rp
     let pc: Isometry3<f64> = cs.body_pose(&cb.com_body_m);
     let frame1 = Isometry3::from_parts(Translation3::identity(), UnitQuaternion::identity());
     let frame2 = pc.inv_mul(&pt);
-    rp::FixedJointBuilder::new()
+    let mut j = rp::FixedJointBuilder::new()
         .local_frame1(conv::pose(&frame1))
         .local_frame2(conv::pose(&frame2))
-        .build()
+        .build();
+    // Contacts between the latched bodies would be internal forces of one structure.
+    j.data.set_contacts_enabled(false);
+    j
 }
 
 /// The docking section of `summary.json`.
@@ -486,5 +666,6 @@ pub fn summary(dock: &Docking) -> serde_json::Value {
         "max_misalignment_in_contact_deg": dock.max_misalignment_deg,
         "peak_latch_force_n": dock.peak_joint_force_n,
         "final_geometry": dock.geometry,
+        "contact": dock.loads,
     })
 }

@@ -27,6 +27,7 @@ pub mod airbearing;
 pub mod broadphase;
 pub mod build;
 pub mod controllers;
+pub mod contact_model;
 pub mod docking;
 pub mod environment;
 pub mod monitor;
@@ -530,6 +531,7 @@ fn physics_step(
     geo: Res<monitor::MonitorGeometry>,
     roster: Res<Roster>,
     mut scratch: Local<PhysicsScratch>,
+    mut compliant: Option<ResMut<contact_model::CompliantContact>>,
 ) {
     let dt = clock.dt_s;
     let t0 = clock.t_s();
@@ -563,6 +565,33 @@ fn physics_step(
     let jointed = |world: &rp::PhysicsWorld, h: rp::RigidBodyHandle| {
         world.impulse_joints.attached_joints(h).next().is_some()
     };
+    let world_forces = |world: &mut rp::PhysicsWorld,
+                        q: &Query<(&SimBody, &mut BodyState, &mut Wrench)>| {
+        for (b, _, w) in q.iter() {
+            if let Some(rb) = world.bodies.get_mut(b.handle) {
+                // rapier keeps user forces and torques until cleared, and `reset_forces` clears
+                // only the forces: without `reset_torques` every torque ever commanded would
+                // act again whenever rapier is the truth (contact, latch).
+                rb.reset_forces(false);
+                rb.reset_torques(false);
+                rb.add_force(conv::v(&(w.force_n + w.gravity_n)), true);
+                rb.add_torque(conv::v(&w.torque_nm), true);
+            }
+        }
+    };
+    // The wrenches go to rapier first (used if it steps); then the compliant docking contact
+    // sub-steps the docking pair in f64 while it can touch (and adds its mean wrench to
+    // rapier's forces, for a step in which rapier holds one of the bodies).
+    world_forces(&mut phys.world, &q);
+    let substepped = compliant.as_deref_mut().and_then(|c| {
+        c.t_step_s = t0;
+        c.pre_step(&q, &mut phys.world, dt)
+    });
+    let sub_of = |k: usize| {
+        substepped
+            .as_ref()
+            .and_then(|v| v.iter().find(|(i, _)| *i == k).map(|(_, s)| s.clone()))
+    };
     let mut any_attached = false;
     let mut under_resolved = false;
     // 1. f64 free flight of every body, in scene order.
@@ -589,15 +618,23 @@ fn physics_step(
         end.att = att;
         end.omega_rad_s = omega;
         under_resolved |= s.att.angle_to(&att) > motion::UNDER_RESOLVED_TURN_RAD;
-        let path = motion::BodyPath::free(
-            s,
-            a_g0 + a_c,
-            w.torque_nm,
-            b,
-            motion.lambda_kg_m2[b.index],
-            (&end.pos_m, &end.att, &end.omega_rad_s),
-            dt,
-        );
+        let path = match sub_of(b.index) {
+            // Sub-stepped under the compliant contact: its end state, and (as for a step
+            // rapier takes) a straight line plus constant-rate rotation between the ends.
+            Some(sub) => {
+                end = sub;
+                motion::BodyPath::straight(s, &end, dt)
+            }
+            None => motion::BodyPath::free(
+                s,
+                a_g0 + a_c,
+                w.torque_nm,
+                b,
+                motion.lambda_kg_m2[b.index],
+                (&end.pos_m, &end.att, &end.omega_rad_s),
+                dt,
+            ),
+        };
         motion.paths.push(path);
         sc.start.push(s.clone());
         sc.free_end.push(end);
@@ -636,6 +673,10 @@ fn physics_step(
     let mut count = monitor::QueryCount::default();
     for (i, j) in pairs {
         if prev_attached[i] || prev_attached[j] {
+            continue;
+        }
+        // The compliant contact owns the docking pair's motion this step.
+        if sub_of(i).is_some() && sub_of(j).is_some() {
             continue;
         }
         let rate = motion.distance_rate_bound(i, j);
@@ -699,20 +740,6 @@ fn physics_step(
         }
     }
     // 3. rapier.
-    let world_forces = |world: &mut rp::PhysicsWorld,
-                        q: &Query<(&SimBody, &mut BodyState, &mut Wrench)>| {
-        for (b, _, w) in q.iter() {
-            if let Some(rb) = world.bodies.get_mut(b.handle) {
-                // rapier keeps user forces and torques until cleared, and `reset_forces` clears
-                // only the forces: without `reset_torques` every torque ever commanded would
-                // act again whenever rapier is the truth (contact, latch).
-                rb.reset_forces(false);
-                rb.reset_torques(false);
-                rb.add_force(conv::v(&(w.force_n + w.gravity_n)), true);
-                rb.add_torque(conv::v(&w.torque_nm), true);
-            }
-        }
-    };
     let stepped = engage || split.is_some();
     sync.last_split_s = None;
     if stepped {
@@ -726,7 +753,6 @@ fn physics_step(
                 sync.stale[k] = false;
             }
         }
-        world_forces(&mut phys.world, &q);
         sync.rapier_steps += 1;
         match split {
             Some(tc) if tc > 0.0 => {
@@ -767,6 +793,7 @@ fn physics_step(
             let Some(rb) = world.bodies.get(b.handle) else {
                 continue;
             };
+            contact_model::note_rapier_held(compliant.as_deref_mut(), &substepped, k);
             let pose = rb.position();
             let att = conv::naq(pose.rotation);
             s.att = att;
@@ -778,6 +805,12 @@ fn physics_step(
                 (v_new - sc.start[k].vel_m_s) * b.mass_kg - (w.force_n + w.gravity_n) * dt;
             s.vel_m_s = v_new;
             s.omega_rad_s = conv::na(rb.angvel());
+            // … and its angular impulse about the centre of mass.
+            let st = &sc.start[k];
+            contact.body_angular_impulse[k] =
+                monitor::angular_momentum(&s.att, &b.inertia_kg_m2, &s.omega_rad_s)
+                    - monitor::angular_momentum(&st.att, &b.inertia_kg_m2, &st.omega_rad_s)
+                    - w.torque_nm * dt;
             if !prev_attached[k] {
                 motion.free_before[k] = Some(motion.paths[k].clone());
             }
@@ -787,6 +820,7 @@ fn physics_step(
             }
         } else {
             contact.body_impulse[k] = Vector3::zeros();
+            contact.body_angular_impulse[k] = Vector3::zeros();
             *s = sc.free_end[k].clone();
             sync.stale[k] = true;
         }

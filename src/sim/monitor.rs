@@ -37,9 +37,9 @@ pub struct ActiveContact {
     pub start_s: f64,
     /// Docking contact (both parts docking parts) or collision.
     pub docking: bool,
-    /// Peak normal force, N.
+    /// Peak contact force (magnitude: normal and friction), N.
     pub peak_force_n: f64,
-    /// Accumulated normal impulse, N·s.
+    /// Accumulated contact impulse (sum of the per-step magnitudes), N·s.
     pub impulse_ns: f64,
 }
 
@@ -65,6 +65,47 @@ pub struct CumulativeImpulse {
     pub on_b_ns: nalgebra::Vector3<f64>,
 }
 
+/// One contact point at one instant (a row of `contact_points.csv`).
+#[derive(Debug, Clone)]
+pub struct PointRow {
+    /// Time, s: the end of the step (rigid) or of the sub-step (compliant).
+    pub t_s: f64,
+    /// First part (`body/collider`).
+    pub a: String,
+    /// Second part.
+    pub b: String,
+    /// Computed by the compliant model (else: a rapier contact point).
+    pub compliant: bool,
+    /// Contact point, world, m (compliant: the point of application).
+    pub point_m: nalgebra::Vector3<f64>,
+    /// Unit contact normal, the direction of the normal force on `b`, world.
+    pub normal_on_b: nalgebra::Vector3<f64>,
+    /// Penetration depth, m (negative: a gap, for rapier's speculative points).
+    pub depth_m: f64,
+    /// Normal force, N (rigid: normal impulse / dt).
+    pub normal_force_n: f64,
+    /// Normal impulse over the step (rigid) or sub-step (compliant), N·s.
+    pub normal_impulse_ns: f64,
+    /// Contact force on `b`, world, N (compliant: normal and friction; rigid: the normal part
+    /// only, rapier solves friction per manifold).
+    pub force_on_b_n: nalgebra::Vector3<f64>,
+}
+
+/// What one part pair did in the last step.
+#[derive(Debug, Clone)]
+pub struct StepPair {
+    /// Pair key (`body/collider` names, the lower body index first).
+    pub key: (String, String),
+    /// Both parts are docking parts.
+    pub docking: bool,
+    /// Body indices of `key.0` and `key.1`.
+    pub bodies: (usize, usize),
+    /// Impulse on the second part over the step, world, N·s.
+    pub impulse_on_b_ns: nalgebra::Vector3<f64>,
+    /// Peak contact force within the step (rigid: |impulse| / dt), N.
+    pub peak_force_n: f64,
+}
+
 /// Contact bookkeeping.
 #[derive(Resource, Debug, Default)]
 pub struct ContactState {
@@ -75,6 +116,9 @@ pub struct ContactState {
     /// Per body index: contact impulse received this step (momentum change less the applied
     /// forces' impulse), world frame, N·s.
     pub body_impulse: Vec<nalgebra::Vector3<f64>>,
+    /// Per body index: contact and joint angular impulse received this step about its centre of
+    /// mass (angular momentum change less the applied torques' impulse), world frame, N·m·s.
+    pub body_angular_impulse: Vec<nalgebra::Vector3<f64>>,
     /// Contacts in progress, keyed by the ordered pair of `body/collider` names.
     pub active: BTreeMap<(String, String), ActiveContact>,
     /// Totals per `body/collider`.
@@ -91,6 +135,11 @@ pub struct ContactState {
     /// Per part pair ever in contact, accumulated over the whole run across restarts, so the
     /// recorder's per-row differences telescope to the run's totals.
     pub cumulative_impulse_ns: BTreeMap<(String, String), CumulativeImpulse>,
+    /// The contact points of the last step (rapier's and the compliant model's sub-step
+    /// samples), written to `contact_points.csv` every step.
+    pub points: Vec<PointRow>,
+    /// Every part pair that exchanged an impulse in the last step.
+    pub step_pairs: Vec<StepPair>,
 }
 
 impl ContactState {
@@ -115,6 +164,16 @@ impl ContactState {
             }
         }
     }
+}
+
+/// Angular momentum about the centre of mass, world frame: R·J·Rᵀ·ω (J in body axes).
+pub fn angular_momentum(
+    att: &nalgebra::UnitQuaternion<f64>,
+    j_body: &nalgebra::Matrix3<f64>,
+    omega_world: &nalgebra::Vector3<f64>,
+) -> nalgebra::Vector3<f64> {
+    let r = att.to_rotation_matrix().into_inner();
+    r * j_body * r.transpose() * omega_world
 }
 
 /// A contact pair counts as touching when a contact point is at zero or negative distance or
@@ -848,13 +907,16 @@ pub fn touch_time(
     }
 }
 
-/// Monitor system: rapier's contacts between bodies, named by part; start/end events, peak
-/// force and impulse per part, docking contact vs collision.
+/// Monitor system: rapier's contacts between bodies, named by part, and the compliant docking
+/// model's; start/end events, peak force and impulse per part, docking contact vs collision;
+/// the per-point rows of `contact_points.csv`.
 ///
-/// The impulse a body received is measured from its momentum (see `physics_step`), which is
-/// exact for the step rapier took; rapier's per-point normal impulses (which also carry its
-/// position-correction bias) only split it among the part pairs touching that body. Each pair's
-/// impulse is the mean of the two bodies' attributions (equal when the pair is the only contact).
+/// For rapier's contacts, the impulse a body received is measured from its momentum (see
+/// `physics_step`), which is exact for the step rapier took; rapier's per-point normal impulses
+/// (which also carry its position-correction bias) only split it among the part pairs touching
+/// that body. Each pair's impulse is the mean of the two bodies' attributions (equal when the
+/// pair is the only contact). The compliant model's pairs ([`super::contact_model`]) come with
+/// their exact impulses and sub-step peak forces.
 #[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it uses
 pub fn contacts(
     phys: Res<super::Physics>,
@@ -865,9 +927,13 @@ pub fn contacts(
     mut cs: ResMut<ContactState>,
     mut log: ResMut<EventLog>,
     mut scratch: Local<DistanceScratch>,
+    compliant: Option<Res<super::contact_model::CompliantContact>>,
 ) {
     let t = clock.t_s();
     let dt = clock.dt_s;
+    let cs = &mut *cs;
+    cs.points.clear();
+    cs.step_pairs.clear();
     // (pair key) → (docking, body a, body b, rapier's raw normal impulse)
     let mut now: BTreeMap<(String, String), (bool, usize, usize, f64)> = BTreeMap::new();
     // (pair key) → (body, part) of each side, for the time of first touch.
@@ -898,7 +964,8 @@ pub fn contacts(
             .map(|p| p.data.impulse.max(0.0) as f64)
             .sum();
         let docking = a.docking && b.docking;
-        let (key, ba, bb, sides) = if (a.body, &a.full_name) <= (b.body, &b.full_name) {
+        let swapped = (a.body, &a.full_name) > (b.body, &b.full_name);
+        let (key, ba, bb, sides) = if !swapped {
             (
                 (a.full_name.clone(), b.full_name.clone()),
                 a.body,
@@ -914,6 +981,36 @@ pub fn contacts(
             )
         };
         who.insert(key.clone(), sides);
+        // rapier's normal points from collider 1 to collider 2 and pushes collider 2 along it.
+        let sign = if swapped { -1.0 } else { 1.0 };
+        if let (Some(c1), Some(c2)) = (
+            phys.world.colliders.get(pair.collider1),
+            phys.world.colliders.get(pair.collider2),
+        ) {
+            for m in pair.solver_manifolds() {
+                let n = conv::na(m.data.normal) * sign;
+                for p in &m.points {
+                    if !(p.dist <= 0.0 || p.data.impulse > 0.0) {
+                        continue;
+                    }
+                    let p1 = conv::na(c1.position().transform_point(p.local_p1));
+                    let p2 = conv::na(c2.position().transform_point(p.local_p2));
+                    let j = f64::from(p.data.impulse.max(0.0));
+                    cs.points.push(PointRow {
+                        t_s: t,
+                        a: key.0.clone(),
+                        b: key.1.clone(),
+                        compliant: false,
+                        point_m: (p1 + p2) * 0.5,
+                        normal_on_b: n,
+                        depth_m: -f64::from(p.dist),
+                        normal_force_n: j / dt,
+                        normal_impulse_ns: j,
+                        force_on_b_n: n * (j / dt),
+                    });
+                }
+            }
+        }
         let e = now.entry(key).or_insert((docking, ba, bb, 0.0));
         e.3 += raw;
     }
@@ -921,6 +1018,32 @@ pub fn contacts(
     for (_, ba, bb, raw) in now.values() {
         raw_per_body[*ba] += raw;
         raw_per_body[*bb] += raw;
+    }
+    // The compliant model's pairs: (impulse on b, peak force) per key.
+    let mut given: BTreeMap<(String, String), (nalgebra::Vector3<f64>, f64)> = BTreeMap::new();
+    if let Some(cc) = &compliant {
+        for st in &cc.step {
+            let p = &cc.pairs[st.pair];
+            now.entry(p.names.clone())
+                .or_insert((true, cc.indices.0, cc.indices.1, 0.0));
+            given.insert(p.names.clone(), (st.impulse_on_b_ns, st.peak_force_n));
+        }
+        let t0 = t - dt;
+        for smp in &cc.samples {
+            let p = &cc.pairs[smp.pair];
+            cs.points.push(PointRow {
+                t_s: t0 + smp.t_in_step_s,
+                a: p.names.0.clone(),
+                b: p.names.1.clone(),
+                compliant: true,
+                point_m: smp.point_m,
+                normal_on_b: smp.normal_on_b,
+                depth_m: smp.depth_m,
+                normal_force_n: smp.normal_force_n,
+                normal_impulse_ns: smp.normal_force_n * smp.h_s,
+                force_on_b_n: smp.force_on_b_n,
+            });
+        }
     }
     let share = |body: usize, raw: f64, cs: &ContactState| {
         if raw_per_body[body] > 0.0 {
@@ -946,8 +1069,21 @@ pub fn contacts(
         );
     }
     for (k, (docking, ba, bb, raw)) in now {
-        let impulse = 0.5 * (share(ba, raw, &cs) + share(bb, raw, &cs));
-        let force = impulse / dt;
+        // Impulse magnitude, peak force, and the impulse vectors on the two parts.
+        let (impulse, force, on_a, on_b) = match given.get(&k) {
+            Some((j, peak)) => (j.norm(), *peak, -j, *j),
+            None => {
+                let impulse = 0.5 * (share(ba, raw, cs) + share(bb, raw, cs));
+                let on = |body: usize| {
+                    if raw_per_body[body] > 0.0 {
+                        cs.body_impulse[body] * (raw / raw_per_body[body])
+                    } else {
+                        nalgebra::Vector3::zeros()
+                    }
+                };
+                (impulse, impulse / dt, on(ba), on(bb))
+            }
+        };
         if !cs.active.contains_key(&k) {
             cs.first_contact_s.get_or_insert(t);
             let (t_touch, t_tol) = match (motion.ready, who.get(&k)) {
@@ -979,11 +1115,6 @@ pub fn contacts(
         let c = cs.active.get_mut(&k).expect("active");
         c.peak_force_n = c.peak_force_n.max(force);
         c.impulse_ns += impulse;
-        let on_b = if raw_per_body[bb] > 0.0 {
-            cs.body_impulse[bb] * (raw / raw_per_body[bb])
-        } else {
-            nalgebra::Vector3::zeros()
-        };
         let cum = cs
             .cumulative_impulse_ns
             .entry(k.clone())
@@ -993,12 +1124,7 @@ pub fn contacts(
             });
         cum.magnitude_ns += impulse;
         cum.on_b_ns += on_b;
-        for (name, body) in [(&k.0, ba), (&k.1, bb)] {
-            let vec = if raw_per_body[body] > 0.0 {
-                cs.body_impulse[body] * (raw / raw_per_body[body])
-            } else {
-                nalgebra::Vector3::zeros()
-            };
+        for (name, vec) in [(&k.0, on_a), (&k.1, on_b)] {
             let s = cs.per_part.entry(name.clone()).or_default();
             s.peak_force_n = s.peak_force_n.max(force);
             s.total_impulse_ns += impulse;
@@ -1006,5 +1132,12 @@ pub fn contacts(
                 *n += v;
             }
         }
+        cs.step_pairs.push(StepPair {
+            key: k,
+            docking,
+            bodies: (ba, bb),
+            impulse_on_b_ns: on_b,
+            peak_force_n: force,
+        });
     }
 }

@@ -1,7 +1,10 @@
-//! The output contract: `trajectory.csv`, `events.jsonl`, `summary.json`, and `contacts.csv`
-//! (per recorded row, each part pair's mean normal contact force since the previous row).
+//! The output contract: `trajectory.csv`, `events.jsonl`, `summary.json`, `contacts.csv`
+//! (per recorded row, each part pair's mean normal contact force since the previous row) and,
+//! on request (`rpod run --contact-points`), `contact_points.csv` (every contact point at every
+//! step, and every sub-step of the compliant docking contact: the full-rate contact force
+//! history; tens of MB for a run that stays in contact for tens of seconds).
 //!
-//! All four are written under a temporary name (`NAME.partial`) and renamed when the run
+//! All are written under a temporary name (`NAME.partial`) and renamed when the run
 //! finishes, so a crash never leaves a file that looks whole. Numbers are printed in Rust's
 //! shortest round-trip form, so the same run gives byte-identical files.
 
@@ -41,15 +44,20 @@ pub struct OutputFiles {
     traj: BufWriter<File>,
     events: BufWriter<File>,
     contacts: BufWriter<File>,
+    points: Option<BufWriter<File>>,
 }
 
 /// The output files, in the order they are renamed into place.
-const FILES: [&str; 4] = [
+const FILES: [&str; 5] = [
     "trajectory.csv",
     "events.jsonl",
     "contacts.csv",
+    "contact_points.csv",
     "summary.json",
 ];
+
+/// Header of `contact_points.csv`.
+pub const CONTACT_POINTS_HEADER: &str = "t_s,a,b,model,px_m,py_m,pz_m,nx_b,ny_b,nz_b,depth_m,normal_force_n,normal_impulse_ns,fx_b_n,fy_b_n,fz_b_n";
 
 /// Header of `contacts.csv`.
 pub const CONTACTS_HEADER: &str =
@@ -80,6 +88,8 @@ pub struct Recorder {
     pub contact_impulse_at_row: BTreeMap<(String, String), CumulativeImpulse>,
     /// Body pairs with a `distance.A.B_m` column (see [`pair_columns`]).
     pub pair_columns: Vec<(usize, usize)>,
+    /// Write `contact_points.csv` (set before recording starts).
+    pub contact_points: bool,
 }
 
 const STATE_COLS: [&str; 13] = [
@@ -92,16 +102,24 @@ fn partial(dir: &Path, name: &str) -> PathBuf {
 }
 
 impl OutputFiles {
-    /// Creates the directory and the temporary files.
-    pub fn create(dir: &Path) -> std::io::Result<Self> {
+    /// Creates the directory and the temporary files (`contact_points.csv` if `points`).
+    pub fn create(dir: &Path, points: bool) -> std::io::Result<Self> {
         std::fs::create_dir_all(dir)?;
         let mut contacts = BufWriter::new(File::create(partial(dir, "contacts.csv"))?);
         writeln!(contacts, "{CONTACTS_HEADER}")?;
+        let points = if points {
+            let mut w = BufWriter::new(File::create(partial(dir, "contact_points.csv"))?);
+            writeln!(w, "{CONTACT_POINTS_HEADER}")?;
+            Some(w)
+        } else {
+            None
+        };
         Ok(Self {
             dir: dir.to_path_buf(),
             traj: BufWriter::new(File::create(partial(dir, "trajectory.csv"))?),
             events: BufWriter::new(File::create(partial(dir, "events.jsonl"))?),
             contacts,
+            points,
         })
     }
 
@@ -110,13 +128,20 @@ impl OutputFiles {
         self.traj.flush()?;
         self.events.flush()?;
         self.contacts.flush()?;
+        if let Some(p) = self.points.as_mut() {
+            p.flush()?;
+        }
+        let points = self.points.is_some();
         drop(self.traj);
         drop(self.events);
         drop(self.contacts);
+        drop(self.points);
         let s = serde_json::to_string_pretty(summary).map_err(std::io::Error::other)?;
         std::fs::write(partial(&self.dir, "summary.json"), s + "\n")?;
         for n in FILES {
-            std::fs::rename(partial(&self.dir, n), self.dir.join(n))?;
+            if n != "contact_points.csv" || points {
+                std::fs::rename(partial(&self.dir, n), self.dir.join(n))?;
+            }
         }
         Ok(())
     }
@@ -313,6 +338,34 @@ fn write_contacts(
     Ok(())
 }
 
+/// Writes one `contact_points.csv` line per contact point of the last step.
+fn write_points(w: &mut impl Write, cs: &ContactState) -> std::io::Result<()> {
+    for p in &cs.points {
+        let (x, n, f) = (&p.point_m, &p.normal_on_b, &p.force_on_b_n);
+        writeln!(
+            w,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            p.t_s,
+            p.a,
+            p.b,
+            if p.compliant { "compliant" } else { "rigid" },
+            x.x,
+            x.y,
+            x.z,
+            n.x,
+            n.y,
+            n.z,
+            p.depth_m,
+            p.normal_force_n,
+            p.normal_impulse_ns,
+            f.x,
+            f.y,
+            f.z
+        )?;
+    }
+    Ok(())
+}
+
 /// Writes the current state as a row (and pending events) now, whatever the step.
 pub fn record_now(world: &mut World) {
     use bevy::ecs::system::RunSystemOnce;
@@ -393,6 +446,13 @@ pub fn record(
 ) {
     let rec = &mut *rec;
     let due = clock.step.is_multiple_of(u64::from(rec.every)) || rec.force_row;
+    // Contact points at full rate; a forced row (start, end of run) repeats no step.
+    if !rec.force_row
+        && let Some(points) = rec.files.as_mut().and_then(|f| f.points.as_mut())
+        && let Err(err) = write_points(points, &cs)
+    {
+        rec.error.get_or_insert(err.to_string());
+    }
     rec.force_row = false;
     if !due {
         if !log.pending.is_empty() {

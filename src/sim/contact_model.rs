@@ -1,0 +1,997 @@
+//! Compliant docking contact (issue 18): the cone–slot contact force computed by rpod from
+//! parry's contact manifolds with the scene's law ([`crate::contact`]), integrated in f64 with
+//! sub-steps only while the docking parts can touch.
+//!
+//! # Why not rapier's soft contacts
+//! rapier 0.35's contact softness is global ([`rp::IntegrationParameters`] carries one natural
+//! frequency and damping ratio for every dynamic pair, relative to the pair's effective mass)
+//! and acts only on the position-correction (bias) pass: the velocity pass still removes the
+//! whole approach speed in one step, so the peak force stays m_eff·v/dt (693 / 3469 / 7910 N at
+//! dt = 10 / 2 / 0.5 ms in `docking_aligned`). A physical stiffness in N/m cannot be mapped
+//! onto it, so in compliant mode rapier does not see the docking pair at all (collision groups),
+//! and this module integrates the two docking bodies itself while their docking parts can touch.
+//!
+//! # One step
+//! 1. Window: for each (chaser docking part, target docking part) pair, the distance at the
+//!    step start (bounding spheres first, then parry's exact distance) against a bound on how
+//!    far the parts can move relative to each other in the step,
+//!    3·(|v_rel| + |ω_a|·R_a + |ω_b|·R_b)·dt + |a_rel|·dt² + 1 mm (the factor 3 allows an
+//!    elastic bounce off another pair within the step). No pair within reach: the bodies fly
+//!    the usual free-flight step (no cost beyond the bound).
+//! 2. Sub-step h = dt/N with N = ⌈dt/h_max⌉: h_max = T/`substeps_per_period`, T = 2π√(m_min/k')
+//!    the period at the stiffest the step can reach (k' = dF/dδ at the depth bound of
+//!    [`Law::depth_bound_m`], m_min the smallest effective mass any contact point of the pair can
+//!    have). The damping needs no bound ([`Law::normal_force_implicit_n`]).
+//! 3. Kick–drift–kick on both bodies (velocity Verlet; the rotation drifts torque-free by
+//!    [`super::rotate_rk4`]), the commanded, magnet and gravity forces held over the step as in
+//!    free flight, the contact wrench evaluated once per sub-step, after the drift, from a fresh
+//!    manifold per pair (never a cached one: parry and rapier both keep old normals while a pose
+//!    changes little), with the half-step velocities and the damping implicit over the second
+//!    half-kick: for the damping, the trapezoidal rule (second order, and stable however stiff
+//!    the damping of a contact that starts at rest, λ = x/v₀ with v₀ at its floor).
+//! 4. Per pair, the manifold's penetrating points give the depth δ (the deepest point, f64 from
+//!    parry's f32 witness points) and the point of application (their depth-weighted centroid);
+//!    the normal force follows the law at that point's closing rate; friction is Coulomb's,
+//!    capped so that its impulse over a half-kick never reverses the slip there.
+//!
+//! The forces act equal and opposite at the same point, so the pair's linear momentum is
+//! conserved to rounding (`tests/val_docking.rs`). A docking body that rapier also holds (a
+//! collision elsewhere, a joint) is rapier's in that step; the model's mean force over the step
+//! is then applied to it as an external force. After the latch the model is off (the joint
+//! holds the bodies).
+
+use super::{BodyState, Part, Physics, Roster, SimBody, Wrench, conv};
+use crate::contact::ContactModelSpec;
+use crate::contact::Law;
+use crate::scene::{LoadedScene, SceneError};
+use bevy::prelude::*;
+use bevy_rapier3d::parry::query::{
+    ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher,
+};
+use bevy_rapier3d::rapier::prelude as rp;
+use nalgebra::{Isometry3, Matrix3, Vector3};
+
+/// Sub-steps are capped at this many per step (a scene whose stiffness would need more is
+/// refused at load time; the cap only guards against a state the load check did not foresee).
+pub const MAX_SUBSTEPS: u32 = 20_000;
+
+/// One part pair the model handles: a docking part of body `a` against one of body `b`
+/// (`a` the lower body index, as in the contact bookkeeping).
+#[derive(Clone)]
+pub struct CompliantPair {
+    /// `body/collider` names (a, b).
+    pub names: (String, String),
+    /// Shapes (a, b).
+    pub shapes: (rp::SharedShape, rp::SharedShape),
+    /// Part poses in their body frames (a, b).
+    pub poses: (Isometry3<f64>, Isometry3<f64>),
+    /// Bounding radii about the part origins, m (a, b).
+    pub radii: (f64, f64),
+    /// Vertices of the shapes in their part frames, m (a, b); see [`shape_vertices`].
+    pub vertices: (Vec<Vector3<f64>>, Vec<Vector3<f64>>),
+    /// In contact at the end of the last sub-step.
+    pub in_contact: bool,
+    /// Normal approach speed when the current contact began, m/s.
+    pub impact_speed_m_s: f64,
+    /// Peak normal force of the current contact, N.
+    pub contact_peak_n: f64,
+    /// When the current contact began (interpolated between sub-steps), s.
+    pub start_s: f64,
+    /// Depth at the end of the last sub-step, m (−∞ when out of the prediction distance).
+    pub last_depth_m: f64,
+    /// Unclamped normal force at the end of the last sub-step, N (−∞ without penetration).
+    pub last_force_n: f64,
+    /// Point of application and normal (on b) at the last sub-step in contact.
+    pub last_contact: Option<(Vector3<f64>, Vector3<f64>)>,
+}
+
+/// What a pair did in one step.
+#[derive(Debug, Clone)]
+pub struct PairStep {
+    /// Index in [`CompliantContact::pairs`].
+    pub pair: usize,
+    /// Impulse on part `b` over the step (normal and friction), world frame, N·s.
+    pub impulse_on_b_ns: Vector3<f64>,
+    /// Largest contact force magnitude on `b` within the step, N.
+    pub peak_force_n: f64,
+    /// In contact at the end of the step.
+    pub in_contact_at_end: bool,
+}
+
+/// One sub-step sample of one touching pair (for `contact_points.csv`).
+#[derive(Debug, Clone)]
+pub struct ForceSample {
+    /// End of the sub-step, s from the start of the step.
+    pub t_in_step_s: f64,
+    /// Pair index.
+    pub pair: usize,
+    /// Point of application, world, m.
+    pub point_m: Vector3<f64>,
+    /// Unit normal, the direction of the normal force on `b`, world.
+    pub normal_on_b: Vector3<f64>,
+    /// Depth, m.
+    pub depth_m: f64,
+    /// Normal force, N.
+    pub normal_force_n: f64,
+    /// Total contact force on `b` (normal and friction), world, N.
+    pub force_on_b_n: Vector3<f64>,
+    /// Duration of the sub-step, s.
+    pub h_s: f64,
+}
+
+/// One completed impact (a contact of one pair from first touch to separation; both times
+/// interpolated linearly in depth between sub-steps).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ImpactRecord {
+    /// First touch, s.
+    pub t_start_s: f64,
+    /// Separation time, s.
+    pub t_end_s: f64,
+    /// Time in contact, s.
+    pub duration_s: f64,
+    /// Pair (`body/part` names).
+    pub a: String,
+    /// Second part.
+    pub b: String,
+    /// Normal approach speed at first touch, m/s.
+    pub approach_m_s: f64,
+    /// Normal separation speed at the last touch, m/s.
+    pub separation_m_s: f64,
+    /// Separation over approach.
+    pub restitution: f64,
+    /// Peak normal force, N.
+    pub peak_normal_force_n: f64,
+}
+
+/// The model's resource.
+#[derive(Resource)]
+pub struct CompliantContact {
+    /// The law.
+    pub law: Law,
+    /// The scene's description of it (for outputs).
+    pub description: String,
+    /// Sub-steps per contact period.
+    pub substeps_per_period: u32,
+    /// Body entities (a, b), a the lower index.
+    pub bodies: (Entity, Entity),
+    /// Body indices (a, b).
+    pub indices: (usize, usize),
+    /// Coulomb coefficient (the average of the two bodies', rapier's default rule).
+    pub mu: f64,
+    /// The part pairs.
+    pub pairs: Vec<CompliantPair>,
+    /// Off after the latch.
+    pub enabled: bool,
+    /// This step: the pairs that touched.
+    pub step: Vec<PairStep>,
+    /// This step: per sub-step samples of touching pairs.
+    pub samples: Vec<ForceSample>,
+    /// This step: per sub-step (duration s, total contact force on body `b`, world N) while
+    /// any pair touched.
+    pub b_force_history: Vec<(f64, Vector3<f64>)>,
+    /// This step: time with any pair in contact, s.
+    pub step_contact_s: f64,
+    /// Impacts completed this step (drained by the docking monitor into events).
+    pub impacts: Vec<ImpactRecord>,
+    /// Run statistics of the sub-stepping.
+    pub stats: SubstepStats,
+    /// Simulated time at the start of the current step, s (set by the physics step).
+    pub t_step_s: f64,
+}
+
+/// How much sub-stepping a run needed.
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+pub struct SubstepStats {
+    /// Steps sub-stepped (a docking pair within reach).
+    pub steps_substepped: u64,
+    /// Sub-steps over the run.
+    pub substeps: u64,
+    /// Most sub-steps in one step.
+    pub max_substeps_per_step: u32,
+    /// Steps whose sub-step count hit [`MAX_SUBSTEPS`].
+    pub capped_steps: u64,
+    /// Steps where a docking body was also held by rapier (a collision elsewhere): the model's
+    /// mean wrench was applied as an external force in rapier's step.
+    pub rapier_held_steps: u64,
+}
+
+/// The new f64 states of the sub-stepped bodies: (body index, state).
+pub type Substepped = Vec<(usize, BodyState)>;
+
+/// Per-body integration data.
+struct Dyn {
+    inv_m: f64,
+    j: Matrix3<f64>,
+    j_inv_body: Matrix3<f64>,
+    com: Vector3<f64>,
+    fixed: bool,
+    lin_mask: Vector3<f64>,
+    rot_mask: Vector3<f64>,
+}
+
+impl Dyn {
+    fn new(b: &SimBody, rb: Option<&rp::RigidBody>) -> Self {
+        let (fixed, locks) = rb.map_or((false, rp::LockedAxes::empty()), |rb| {
+            (!rb.is_dynamic(), rb.locked_axes())
+        });
+        let bit = |f: rp::LockedAxes| if locks.contains(f) { 0.0 } else { 1.0 };
+        Dyn {
+            inv_m: if fixed { 0.0 } else { 1.0 / b.mass_kg },
+            j: b.inertia_kg_m2,
+            j_inv_body: if fixed {
+                Matrix3::zeros()
+            } else {
+                b.inertia_inv
+            },
+            com: b.com_body_m,
+            fixed,
+            lin_mask: Vector3::new(
+                bit(rp::LockedAxes::TRANSLATION_LOCKED_X),
+                bit(rp::LockedAxes::TRANSLATION_LOCKED_Y),
+                bit(rp::LockedAxes::TRANSLATION_LOCKED_Z),
+            ),
+            rot_mask: Vector3::new(
+                bit(rp::LockedAxes::ROTATION_LOCKED_X),
+                bit(rp::LockedAxes::ROTATION_LOCKED_Y),
+                bit(rp::LockedAxes::ROTATION_LOCKED_Z),
+            ),
+        }
+    }
+    /// World inverse inertia, masked by the rotation locks.
+    fn inv_inertia_world(&self, s: &BodyState) -> Matrix3<f64> {
+        let r = s.att.to_rotation_matrix().into_inner();
+        let m = Matrix3::from_diagonal(&self.rot_mask);
+        m * r * self.j_inv_body * r.transpose() * m
+    }
+    /// Largest eigenvalue bound of the inverse inertia (its Frobenius norm), 1/(kg·m²).
+    fn inv_inertia_bound(&self) -> f64 {
+        self.j_inv_body.norm()
+    }
+}
+
+/// Contact geometry of one pair at one configuration.
+#[derive(Debug, Clone, Copy)]
+struct Geometry {
+    point: Vector3<f64>,
+    normal: Vector3<f64>,
+    depth: f64,
+}
+
+/// The contact of a pair at one configuration, from a fresh parry manifold computed with the
+/// given prediction distance: the depth δ of the deepest point (negative: the smallest gap,
+/// when no point penetrates), the point of application (the depth-weighted centroid of the
+/// penetrating points, else the closest point) and the manifold normal (from part `a` to part
+/// `b`); `None` when the parts are farther apart than the prediction distance.
+fn pair_geometry(
+    pair: &CompliantPair,
+    body_a: &Isometry3<f64>,
+    body_b: &Isometry3<f64>,
+    prediction_m: f64,
+) -> Option<Geometry> {
+    let pa = body_a * pair.poses.0;
+    let pb = body_b * pair.poses.1;
+    let rel = pa.inv_mul(&pb);
+    let mut manifold = ContactManifold::<(), ()>::new();
+    DefaultQueryDispatcher
+        .contact_manifold_convex_convex(
+            &conv::pose(&rel),
+            &*pair.shapes.0,
+            &*pair.shapes.1,
+            None,
+            None,
+            prediction_m as f32,
+            &mut manifold,
+        )
+        .ok()?;
+    if manifold.points.is_empty() {
+        return None;
+    }
+    let n = (pa.rotation * conv::na(manifold.local_n1)).normalize();
+    if !n.iter().all(|c| c.is_finite()) {
+        return None;
+    }
+    let (mut wsum, mut wp, mut depth) = (0.0, Vector3::zeros(), f64::NEG_INFINITY);
+    let mut closest = Vector3::zeros();
+    let mut deepest = (Vector3::zeros(), Vector3::zeros());
+    for p in &manifold.points {
+        let p1 = pa.transform_point(&conv::na(p.local_p1).into()).coords;
+        let p2 = pb.transform_point(&conv::na(p.local_p2).into()).coords;
+        // The depth in f64 from parry's f32 witness points (their rounding is fixed to the
+        // material points, so the depth evolves smoothly with the f64 poses).
+        let d = -(p2 - p1).dot(&n);
+        if d > depth {
+            depth = d;
+            closest = (p1 + p2) * 0.5;
+            deepest = (p1, p2);
+        }
+        if d > 0.0 {
+            wsum += d;
+            wp += (p1 + p2) * (0.5 * d);
+        }
+    }
+    if depth > 0.0 {
+        // parry's polygonal features hold at most four vertices, so a face–face manifold (the
+        // cone's 32-sided tip on the back plate) is a subset of the contact polygon and its
+        // centroid can sit centimetres off the centre of pressure. The vertices of either
+        // shape inside the other, weighted by their depth below the other's contact plane
+        // (through the deepest point, normal n), give the whole polygon.
+        let (mut vsum, mut vp) = (0.0, Vector3::zeros());
+        let rel_inv = rel.inverse();
+        for v in &pair.vertices.1 {
+            let in_a = rel * nalgebra::Point3::from(*v);
+            if pair.shapes.0.contains_local_point(conv::v(&in_a.coords)) {
+                let w = pb.transform_point(&(*v).into()).coords;
+                let d = (deepest.0 - w).dot(&n);
+                if d > 0.0 {
+                    vsum += d;
+                    vp += w * d;
+                }
+            }
+        }
+        for u in &pair.vertices.0 {
+            let in_b = rel_inv * nalgebra::Point3::from(*u);
+            if pair.shapes.1.contains_local_point(conv::v(&in_b.coords)) {
+                let w = pa.transform_point(&(*u).into()).coords;
+                let d = (w - deepest.1).dot(&n);
+                if d > 0.0 {
+                    vsum += d;
+                    vp += w * d;
+                }
+            }
+        }
+        if vsum > 0.0 {
+            wsum = vsum;
+            wp = vp;
+        }
+    }
+    Some(Geometry {
+        point: if wsum > 0.0 { wp / wsum } else { closest },
+        normal: n,
+        depth,
+    })
+}
+
+/// The vertices of a shape, in its own frame (convex hulls and boxes; none for round shapes).
+pub fn shape_vertices(shape: &rp::SharedShape) -> Vec<Vector3<f64>> {
+    if let Some(c) = shape.as_convex_polyhedron() {
+        c.points().iter().map(|p| conv::na(*p)).collect()
+    } else if let Some(b) = shape.as_cuboid() {
+        let h = conv::na(b.half_extents);
+        let mut v = Vec::with_capacity(8);
+        for sx in [-1.0, 1.0] {
+            for sy in [-1.0, 1.0] {
+                for sz in [-1.0, 1.0] {
+                    v.push(Vector3::new(sx * h.x, sy * h.y, sz * h.z));
+                }
+            }
+        }
+        v
+    } else {
+        Vec::new()
+    }
+}
+
+/// The effective mass of the two bodies for an impulse along unit `dir` at world point `p`, kg.
+fn effective_mass(
+    d: (&Dyn, &Dyn),
+    s: (&BodyState, &BodyState),
+    ii: (&Matrix3<f64>, &Matrix3<f64>),
+    p: &Vector3<f64>,
+    dir: &Vector3<f64>,
+) -> f64 {
+    let term = |dy: &Dyn, st: &BodyState, i: &Matrix3<f64>| {
+        let lin = dy.inv_m * dir.component_mul(&dy.lin_mask).dot(dir);
+        let rn = (p - st.pos_m).cross(dir);
+        lin + rn.dot(&(i * rn))
+    };
+    let w = term(d.0, s.0, ii.0) + term(d.1, s.1, ii.1);
+    if w > 0.0 { 1.0 / w } else { f64::INFINITY }
+}
+
+/// Velocity of the material point at `p`.
+fn point_vel(s: &BodyState, p: &Vector3<f64>) -> Vector3<f64> {
+    s.vel_m_s + s.omega_rad_s.cross(&(p - s.pos_m))
+}
+
+/// The contact force on `b` of a pair with geometry `g` (N, world), its normal part (N) and
+/// the law's value before the clamp at 0 (N; negative once the surfaces separate).
+#[allow(clippy::too_many_arguments)]
+fn pair_force(
+    law: &Law,
+    mu: f64,
+    pair: &CompliantPair,
+    g: &Geometry,
+    d: (&Dyn, &Dyn),
+    s: (&BodyState, &BodyState),
+    ii: (&Matrix3<f64>, &Matrix3<f64>),
+    half_h: f64,
+) -> (Vector3<f64>, f64, f64) {
+    let v_rel = point_vel(s.1, &g.point) - point_vel(s.0, &g.point);
+    let closing = -v_rel.dot(&g.normal);
+    // The damping implicit over the coming half-kick (stable however stiff it is).
+    let mn = effective_mass(d, s, ii, &g.point, &g.normal);
+    let raw = law.normal_force_implicit_n(g.depth, closing, pair.impact_speed_m_s, mn, half_h);
+    let fnorm = raw.max(0.0);
+    let mut f = g.normal * fnorm;
+    let vt = v_rel - g.normal * v_rel.dot(&g.normal);
+    let slip = vt.norm();
+    if mu > 0.0 && fnorm > 0.0 && slip > 0.0 {
+        let t = vt / slip;
+        let mt = effective_mass(d, s, ii, &g.point, &t);
+        // Coulomb's limit, but never more than stops the slip within the half-kick.
+        let ft = (mu * fnorm).min(mt * slip / half_h);
+        f -= t * ft;
+    }
+    (f, fnorm, raw)
+}
+
+/// Kicks a body's velocities by force `f` and torque `tau` (world) over `h`, masked by its locks.
+fn kick(
+    dy: &Dyn,
+    s: &mut BodyState,
+    ii: &Matrix3<f64>,
+    f: &Vector3<f64>,
+    tau: &Vector3<f64>,
+    h: f64,
+) {
+    if dy.fixed {
+        return;
+    }
+    s.vel_m_s += f.component_mul(&dy.lin_mask) * (dy.inv_m * h);
+    s.omega_rad_s += ii * tau * h;
+}
+
+/// One step's integration context.
+struct Stepper<'a> {
+    law: &'a Law,
+    mu: f64,
+    pairs: &'a mut [CompliantPair],
+    candidates: &'a [usize],
+    d: (&'a Dyn, &'a Dyn),
+    half_h: f64,
+    prediction_m: f64,
+}
+
+/// Forces of one evaluation: per pair (force on b, normal force, unclamped normal force), and
+/// the totals.
+struct Forces {
+    per_pair: Vec<(Vector3<f64>, f64, f64)>,
+    /// Total force on b (a gets the opposite), N.
+    on_b: Vector3<f64>,
+    /// Torques about the centres of mass of a and b, N·m.
+    torque: (Vector3<f64>, Vector3<f64>),
+    /// World inverse inertias used.
+    ii: (Matrix3<f64>, Matrix3<f64>),
+}
+
+impl Stepper<'_> {
+    fn geometry(&self, sa: &BodyState, sb: &BodyState) -> Vec<Option<Geometry>> {
+        let (pa, pb) = (sa.body_pose(&self.d.0.com), sb.body_pose(&self.d.1.com));
+        let mut g = vec![None; self.pairs.len()];
+        for k in self.candidates {
+            g[*k] = pair_geometry(&self.pairs[*k], &pa, &pb, self.prediction_m);
+        }
+        g
+    }
+
+    fn forces(&mut self, geo: &[Option<Geometry>], sa: &BodyState, sb: &BodyState) -> Forces {
+        let ii = (
+            self.d.0.inv_inertia_world(sa),
+            self.d.1.inv_inertia_world(sb),
+        );
+        let mut out = Forces {
+            per_pair: vec![(Vector3::zeros(), 0.0, f64::NEG_INFINITY); self.pairs.len()],
+            on_b: Vector3::zeros(),
+            torque: (Vector3::zeros(), Vector3::zeros()),
+            ii,
+        };
+        for k in self.candidates {
+            let Some(g) = geo[*k].as_ref().filter(|g| g.depth > 0.0) else {
+                continue;
+            };
+            let pair = &mut self.pairs[*k];
+            if !pair.in_contact {
+                // First touch: the approach speed the Lankarani–Nikravesh λ is based on.
+                let v_rel = point_vel(sb, &g.point) - point_vel(sa, &g.point);
+                pair.impact_speed_m_s = (-v_rel.dot(&g.normal)).max(0.0);
+            }
+            let (f, fnorm, raw) = pair_force(
+                self.law,
+                self.mu,
+                pair,
+                g,
+                self.d,
+                (sa, sb),
+                (&out.ii.0, &out.ii.1),
+                self.half_h,
+            );
+            out.per_pair[*k] = (f, fnorm, raw);
+            out.on_b += f;
+            out.torque.0 += (g.point - sa.pos_m).cross(&(-f));
+            out.torque.1 += (g.point - sb.pos_m).cross(&f);
+        }
+        out
+    }
+}
+
+/// Advances a body's position and attitude by `h` at its current velocities (torque-free
+/// rotation).
+fn drift(dy: &Dyn, s: &mut BodyState, h: f64) {
+    if dy.fixed {
+        return;
+    }
+    s.pos_m += s.vel_m_s * h;
+    let (att, om) = super::rotate_rk4(
+        &s.att,
+        &s.omega_rad_s,
+        &Vector3::zeros(),
+        &dy.j,
+        &dy.j_inv_body,
+        h,
+    );
+    s.att = att;
+    s.omega_rad_s = om.component_mul(&dy.rot_mask);
+}
+
+/// Held wrenches of the two bodies: (force a, torque a, force b, torque b).
+type Held = (Vector3<f64>, Vector3<f64>, Vector3<f64>, Vector3<f64>);
+
+/// Half-kicks both bodies with the held wrenches and the contact forces `f`.
+fn kick_both(
+    d: (&Dyn, &Dyn),
+    s: (&mut BodyState, &mut BodyState),
+    held: &Held,
+    f: &Forces,
+    h: f64,
+) {
+    kick(
+        d.0,
+        s.0,
+        &f.ii.0,
+        &(held.0 - f.on_b),
+        &(held.1 + f.torque.0),
+        h,
+    );
+    kick(
+        d.1,
+        s.1,
+        &f.ii.1,
+        &(held.2 + f.on_b),
+        &(held.3 + f.torque.1),
+        h,
+    );
+}
+
+impl CompliantContact {
+    /// The window check and, when a pair can touch within the step, the sub-stepped motion of
+    /// both bodies over `dt`, which the physics step then uses instead of the free-flight update
+    /// (or, if rapier holds one of the bodies this step, discards: the model's mean wrench has
+    /// then been added to rapier's forces). Called after the wrenches were handed to rapier and
+    /// before its step.
+    pub fn pre_step(
+        &mut self,
+        q: &Query<(&SimBody, &mut BodyState, &mut Wrench)>,
+        world: &mut rp::PhysicsWorld,
+        dt: f64,
+    ) -> Option<Substepped> {
+        self.step.clear();
+        self.samples.clear();
+        self.b_force_history.clear();
+        self.impacts.clear();
+        self.step_contact_s = 0.0;
+        if !self.enabled {
+            return None;
+        }
+        let [(ba, sa0, wa), (bb, sb0, wb)] = q.get_many([self.bodies.0, self.bodies.1]).ok()?;
+        let da = Dyn::new(ba, world.bodies.get(ba.handle));
+        let db = Dyn::new(bb, world.bodies.get(bb.handle));
+        let (pose_a, pose_b) = (sa0.body_pose(&da.com), sb0.body_pose(&db.com));
+        let held: Held = (
+            (wa.force_n + wa.gravity_n).component_mul(&da.lin_mask),
+            wa.torque_nm,
+            (wb.force_n + wb.gravity_n).component_mul(&db.lin_mask),
+            wb.torque_nm,
+        );
+        // 1. Window.
+        let v_rel = (sb0.vel_m_s - sa0.vel_m_s).norm();
+        let acc_rel = (held.2 * db.inv_m - held.0 * da.inv_m).norm();
+        let mut candidates: Vec<usize> = Vec::new();
+        let mut r_max: (f64, f64) = (0.0, 0.0);
+        for (k, p) in self.pairs.iter().enumerate() {
+            let ca = pose_a * p.poses.0;
+            let cb = pose_b * p.poses.1;
+            let ra = (ca.translation.vector - sa0.pos_m).norm() + p.radii.0;
+            let rb = (cb.translation.vector - sb0.pos_m).norm() + p.radii.1;
+            let reach =
+                3.0 * (v_rel + sa0.omega_rad_s.norm() * ra + sb0.omega_rad_s.norm() * rb) * dt
+                    + acc_rel * dt * dt
+                    + 1e-3;
+            let lb = (ca.translation.vector - cb.translation.vector).norm() - p.radii.0 - p.radii.1;
+            let near = p.in_contact
+                || (lb <= reach
+                    && super::monitor::shape_distance(&ca, &*p.shapes.0, &cb, &*p.shapes.1)
+                        <= reach);
+            if near {
+                candidates.push(k);
+                r_max = (r_max.0.max(ra), r_max.1.max(rb));
+            }
+        }
+        for (k, p) in self.pairs.iter_mut().enumerate() {
+            if !candidates.contains(&k) {
+                p.last_depth_m = f64::NEG_INFINITY;
+            }
+        }
+        if candidates.is_empty() {
+            return None;
+        }
+        // 2. Sub-step size.
+        let w_red = da.inv_m + db.inv_m;
+        let m_red = if w_red > 0.0 { 1.0 / w_red } else { 1e30 };
+        let m_min = 1.0
+            / (w_red
+                + r_max.0 * r_max.0 * da.inv_inertia_bound()
+                + r_max.1 * r_max.1 * db.inv_inertia_bound())
+            .max(1e-30);
+        let v_bound = v_rel + sa0.omega_rad_s.norm() * r_max.0 + sb0.omega_rad_s.norm() * r_max.1;
+        let depth_now = candidates
+            .iter()
+            .filter(|k| self.pairs[**k].in_contact)
+            .filter_map(|k| pair_geometry(&self.pairs[*k], &pose_a, &pose_b, 0.0))
+            .map(|g| g.depth)
+            .fold(0.0, f64::max);
+        let depth_bound = self
+            .law
+            .depth_bound_m(m_red, v_bound, m_red * acc_rel)
+            .max(2.0 * depth_now);
+        let mut h_max = dt;
+        let k_loc = self.law.local_stiffness_n_m(depth_bound);
+        if k_loc > 0.0 {
+            let period = 2.0 * std::f64::consts::PI * (m_min / k_loc).sqrt();
+            h_max = h_max.min(period / f64::from(self.substeps_per_period));
+        }
+        let mut n = (dt / h_max).ceil().max(1.0);
+        if n.is_nan() || n > f64::from(MAX_SUBSTEPS) {
+            n = f64::from(MAX_SUBSTEPS);
+            self.stats.capped_steps += 1;
+        }
+        let n = n as u32;
+        let h = dt / f64::from(n);
+        self.stats.steps_substepped += 1;
+        self.stats.substeps += u64::from(n);
+        self.stats.max_substeps_per_step = self.stats.max_substeps_per_step.max(n);
+
+        // 3. Kick–drift–kick.
+        let (mut sa, mut sb) = (sa0.clone(), sb0.clone());
+        let npairs = self.pairs.len();
+        let mut impulse = vec![Vector3::zeros(); npairs];
+        let mut peak = vec![0.0f64; npairs];
+        let mut touched = vec![false; npairs];
+        let (mut ang_a, mut ang_b) = (Vector3::zeros(), Vector3::zeros());
+        let t_step = self.t_step_s;
+        let (law, mu) = (self.law, self.mu);
+        let min_impact = law.min_impact_speed_m_s;
+        let mut st = Stepper {
+            law: &law,
+            mu,
+            pairs: &mut self.pairs,
+            candidates: &candidates,
+            d: (&da, &db),
+            half_h: 0.5 * h,
+            // Enough to see each contact coming one sub-step ahead (its start and end are
+            // interpolated from the depths on either side).
+            prediction_m: 2.0 * v_bound * h + 1e-6,
+        };
+        // The force at the start of the step (damping implicit over the first half-kick); then
+        // per sub-step: half-kick with it, drift, the force at the new poses from the half-step
+        // velocities with its damping implicit over the second half-kick, which makes it the
+        // force at the end of the sub-step and the next sub-step's first kick. For the damping
+        // this is the trapezoidal rule (second order, A-stable).
+        let mut geo = st.geometry(&sa, &sb);
+        let mut f0 = st.forces(&geo, &sa, &sb);
+        for i in 0..n {
+            kick_both((&da, &db), (&mut sa, &mut sb), &held, &f0, 0.5 * h);
+            drift(&da, &mut sa, h);
+            drift(&db, &mut sb, h);
+            geo = st.geometry(&sa, &sb);
+            let f1 = st.forces(&geo, &sa, &sb);
+            kick_both((&da, &db), (&mut sa, &mut sb), &held, &f1, 0.5 * h);
+            ang_a += (f0.torque.0 + f1.torque.0) * (0.5 * h);
+            ang_b += (f0.torque.1 + f1.torque.1) * (0.5 * h);
+            for k in &candidates {
+                let j = (f0.per_pair[*k].0 + f1.per_pair[*k].0) * (0.5 * h);
+                impulse[*k] += j;
+                touched[*k] |= j.norm() > 0.0;
+            }
+            f0 = f1;
+            let t_end = f64::from(i + 1) * h;
+            let mut total = Vector3::zeros();
+            let mut any = false;
+            for k in &candidates {
+                let k = *k;
+                let pair = &mut st.pairs[k];
+                let was = pair.in_contact;
+                let d_now = geo[k].as_ref().map_or(f64::NEG_INFINITY, |g| g.depth);
+                let (fv, fnorm, f_raw) = f0.per_pair[k];
+                // In contact: penetrating and pushing (a dashpot's force vanishes before the
+                // depth does: the surfaces separate there).
+                let is_now = d_now > 0.0 && f_raw > 0.0;
+                // Where the contact measure crossed zero within this sub-step (fraction of h):
+                // the unclamped force while both ends penetrate, else the depth.
+                let crossing = |a0: f64, a1: f64| {
+                    if a0.is_finite() && a1.is_finite() && a0 != a1 {
+                        (a0 / (a0 - a1)).clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    }
+                };
+                let frac = if d_now > 0.0 && pair.last_depth_m > 0.0 {
+                    crossing(pair.last_force_n, f_raw)
+                } else {
+                    crossing(pair.last_depth_m, d_now)
+                };
+                if is_now {
+                    let g = geo[k].as_ref().expect("depth from a geometry");
+                    if !was {
+                        pair.start_s = t_step + t_end - h + frac * h;
+                    }
+                    any = true;
+                    touched[k] = true;
+                    total += fv;
+                    peak[k] = peak[k].max(fv.norm());
+                    pair.contact_peak_n = pair.contact_peak_n.max(fnorm);
+                    pair.in_contact = true;
+                    pair.last_contact = Some((g.point, g.normal));
+                    self.samples.push(ForceSample {
+                        t_in_step_s: t_end,
+                        pair: k,
+                        point_m: g.point,
+                        normal_on_b: g.normal,
+                        depth_m: g.depth,
+                        normal_force_n: fnorm,
+                        force_on_b_n: fv,
+                        h_s: h,
+                    });
+                } else if was {
+                    // Separation: the normal speed at the last point of contact.
+                    let t_sep = t_step + t_end - h + frac * h;
+                    let sep = pair
+                        .last_contact
+                        .map(|(p, n)| (point_vel(&sb, &p) - point_vel(&sa, &p)).dot(&n));
+                    let approach = pair.impact_speed_m_s;
+                    // An impact: a contact that began closing at least at the damping's floor
+                    // speed (slower touches of a resting or sliding contact are not listed).
+                    if let Some(sep) = sep.filter(|_| approach >= min_impact) {
+                        self.impacts.push(ImpactRecord {
+                            t_start_s: pair.start_s,
+                            t_end_s: t_sep,
+                            duration_s: t_sep - pair.start_s,
+                            a: pair.names.0.clone(),
+                            b: pair.names.1.clone(),
+                            approach_m_s: approach,
+                            separation_m_s: sep,
+                            restitution: if approach > 0.0 { sep / approach } else { 0.0 },
+                            peak_normal_force_n: pair.contact_peak_n,
+                        });
+                    }
+                    pair.contact_peak_n = 0.0;
+                    pair.in_contact = false;
+                }
+                pair.last_depth_m = d_now;
+                pair.last_force_n = f_raw;
+            }
+            if any {
+                self.step_contact_s += h;
+                self.b_force_history.push((h, total));
+            }
+        }
+        // Per-pair results, and the mean wrench for rapier's step (used only if rapier holds a
+        // docking body this step).
+        let mut mean_f = Vector3::zeros();
+        for k in 0..npairs {
+            if touched[k] {
+                self.step.push(PairStep {
+                    pair: k,
+                    impulse_on_b_ns: impulse[k],
+                    peak_force_n: peak[k],
+                    in_contact_at_end: self.pairs[k].in_contact,
+                });
+                mean_f += impulse[k] / dt;
+            }
+        }
+        if mean_f.norm() > 0.0 {
+            if let Some(rb) = world.bodies.get_mut(ba.handle) {
+                rb.add_force(conv::v(&(-mean_f)), true);
+                rb.add_torque(conv::v(&(ang_a / dt)), true);
+            }
+            if let Some(rb) = world.bodies.get_mut(bb.handle) {
+                rb.add_force(conv::v(&mean_f), true);
+                rb.add_torque(conv::v(&(ang_b / dt)), true);
+            }
+        }
+        Some(vec![(self.indices.0, sa), (self.indices.1, sb)])
+    }
+}
+
+/// Counts a step in which rapier held a body the model had sub-stepped (its result discarded).
+pub fn note_rapier_held(c: Option<&mut CompliantContact>, sub: &Option<Substepped>, index: usize) {
+    if let (Some(c), Some(v)) = (c, sub)
+        && v.iter().any(|(i, _)| *i == index)
+    {
+        c.stats.rapier_held_steps += 1;
+    }
+}
+
+/// Collision groups that keep rapier from seeing the compliant pairs: the first body's
+/// compliant parts and the second body's skip each other and collide with everything else.
+fn collision_groups(first: bool) -> rp::InteractionGroups {
+    let (me, other) = if first {
+        (rp::Group::GROUP_2, rp::Group::GROUP_3)
+    } else {
+        (rp::Group::GROUP_3, rp::Group::GROUP_2)
+    };
+    rp::InteractionGroups::new(me, rp::Group::ALL & !other, rp::InteractionTestMode::And)
+}
+
+/// Installs the model for a scene whose docking interface is compliant: every docking part of
+/// the chaser against every docking part of the target.
+pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
+    let Some(spec) = &loaded.scene.docking else {
+        return Ok(());
+    };
+    let ContactModelSpec::Compliant(c) = &spec.contact else {
+        return Ok(());
+    };
+    let roster = app.world().resource::<Roster>().clone();
+    let idx = |n: &str| {
+        roster
+            .names
+            .iter()
+            .position(|x| x == n)
+            .expect("validated body")
+    };
+    let docking_parts = |bi: usize| -> Vec<String> {
+        roster.parts[bi]
+            .iter()
+            .map(|e| app.world().get::<Part>(*e).expect("part"))
+            .filter(|p| p.role.is_docking())
+            .map(|p| p.name.clone())
+            .collect()
+    };
+    let (ci, ti) = (idx(&spec.chaser), idx(&spec.target));
+    let (pc, pt) = (docking_parts(ci), docking_parts(ti));
+    let pc: Vec<&str> = pc.iter().map(String::as_str).collect();
+    let pt: Vec<&str> = pt.iter().map(String::as_str).collect();
+    install_between(
+        app,
+        c,
+        &crate::contact::describe(&spec.contact),
+        (&spec.chaser, &pc),
+        (&spec.target, &pt),
+    )
+    .map_err(|m| loaded.error_at("docking.contact.law", m))
+}
+
+/// Compliant contact with `spec` between the named parts (collider names) of two bodies, every
+/// part of the first against every part of the second; rapier stops seeing those pairs. The
+/// docking interface uses it for its cone and slot; tests use it for any two parts. Fails when
+/// a name is unknown or the law is too stiff for the step: a 1 m/s head-on impact of the two
+/// bodies' reduced mass must be resolvable within [`MAX_SUBSTEPS`] sub-steps of one step.
+pub fn install_between(
+    app: &mut App,
+    spec: &crate::contact::CompliantSpec,
+    description: &str,
+    first: (&str, &[&str]),
+    second: (&str, &[&str]),
+) -> Result<(), String> {
+    let roster = app.world().resource::<Roster>().clone();
+    let idx = |n: &str| {
+        roster
+            .names
+            .iter()
+            .position(|x| x == n)
+            .ok_or_else(|| format!("no body `{n}`"))
+    };
+    let (i1, i2) = (idx(first.0)?, idx(second.0)?);
+    if i1 == i2 {
+        return Err("compliant contact needs two different bodies".into());
+    }
+    let parts_of = |bi: usize, names: &[&str]| -> Result<Vec<Part>, String> {
+        names
+            .iter()
+            .map(|n| {
+                roster.parts[bi]
+                    .iter()
+                    .map(|e| app.world().get::<Part>(*e).expect("part"))
+                    .find(|p| p.name == *n)
+                    .cloned()
+                    .ok_or_else(|| format!("body `{}` has no part `{n}`", roster.names[bi]))
+            })
+            .collect()
+    };
+    let (p1, p2) = (parts_of(i1, first.1)?, parts_of(i2, second.1)?);
+    // The bookkeeping orders a pair by body index.
+    let ((ia, pa), (ib, pb)) = if i1 < i2 {
+        ((i1, p1), (i2, p2))
+    } else {
+        ((i2, p2), (i1, p1))
+    };
+    let mut pairs = Vec::new();
+    for a in &pa {
+        for b in &pb {
+            pairs.push(CompliantPair {
+                names: (
+                    format!("{}/{}", roster.names[ia], a.name),
+                    format!("{}/{}", roster.names[ib], b.name),
+                ),
+                shapes: (a.shape.clone(), b.shape.clone()),
+                poses: (a.pose_body, b.pose_body),
+                radii: (a.bound_radius_m, b.bound_radius_m),
+                vertices: (shape_vertices(&a.shape), shape_vertices(&b.shape)),
+                in_contact: false,
+                impact_speed_m_s: 0.0,
+                contact_peak_n: 0.0,
+                start_s: 0.0,
+                last_depth_m: f64::NEG_INFINITY,
+                last_force_n: f64::NEG_INFINITY,
+                last_contact: None,
+            });
+        }
+    }
+    let law = Law::from_spec(spec);
+    let body = |i: usize| {
+        app.world()
+            .get::<SimBody>(roster.bodies[i])
+            .expect("body")
+            .clone()
+    };
+    let (ba, bb) = (body(ia), body(ib));
+    let dt = app.world().resource::<super::Clock>().dt_s;
+    let m_red = ba.mass_kg * bb.mass_kg / (ba.mass_kg + bb.mass_kg);
+    let d = law.depth_bound_m(m_red, 1.0, 0.0);
+    let period = 2.0 * std::f64::consts::PI * (m_red / law.local_stiffness_n_m(d)).sqrt();
+    let needed = dt * f64::from(spec.substeps_per_period) / period;
+    if needed.is_nan() || needed > f64::from(MAX_SUBSTEPS) {
+        return Err(format!(
+            "too stiff for dt_s = {dt} s: a 1 m/s impact of the two bodies oscillates with a period of {period:.3e} s and would need {needed:.0} sub-steps per step (at most {MAX_SUBSTEPS}); lower the stiffness or dt_s"
+        ));
+    }
+    let friction = |i: usize| {
+        app.world()
+            .resource::<Physics>()
+            .world
+            .bodies
+            .get(body(i).handle)
+            .and_then(|rb| rb.colliders().first().copied())
+            .and_then(|h| app.world().resource::<Physics>().world.colliders.get(h))
+            .map_or(0.0, |c| f64::from(c.friction()))
+    };
+    let mu = 0.5 * (friction(ia) + friction(ib));
+    {
+        let mut phys = app.world_mut().resource_mut::<Physics>();
+        for (parts, first_side) in [(&pa, true), (&pb, false)] {
+            for p in parts {
+                if let Some(c) = phys.world.colliders.get_mut(p.collider) {
+                    c.set_collision_groups(collision_groups(first_side));
+                }
+            }
+        }
+    }
+    app.insert_resource(CompliantContact {
+        law,
+        description: description.to_string(),
+        substeps_per_period: spec.substeps_per_period,
+        bodies: (roster.bodies[ia], roster.bodies[ib]),
+        indices: (ia, ib),
+        mu,
+        pairs,
+        enabled: true,
+        step: Vec::new(),
+        samples: Vec::new(),
+        b_force_history: Vec::new(),
+        step_contact_s: 0.0,
+        impacts: Vec::new(),
+        stats: SubstepStats::default(),
+        t_step_s: 0.0,
+    });
+    Ok(())
+}

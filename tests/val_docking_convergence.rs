@@ -1,0 +1,173 @@
+//! Docking loads converge with the step (issue 18).
+//!
+//! - `docking_aligned`'s peak contact force at dt = 2, 1 and 0.5 ms agrees within 10 % (the
+//!   issue's criterion; rigid contact spreads over 2.3× there), and agrees within 2 % with the
+//!   peak of an independent 1-D f64 integration of the same law, face on face (RK4 at 1 µs,
+//!   written here): it is the mechanism's load, not the step's.
+//! - The capture envelope (`scenes/trials/capture_envelope.ron`, 35 trials) gives the same
+//!   outcome in every trial at dt = 10, 5 and 2 ms.
+
+use rpod::contact::{ContactModelSpec, Law};
+use rpod::scene::load_scene_file;
+use rpod::sim::Simulation;
+use rpod::sim::docking::Docking;
+
+/// Peak axial load (N) of docking_aligned at `dt` s, and what it latched.
+fn aligned_peak(dt: f64, rigid: bool) -> (f64, f64, bool) {
+    let mut set = vec![format!("dt_s={dt}")];
+    if rigid {
+        set.push("docking.contact=Rigid".into());
+    }
+    let loaded = load_scene_file("scenes/docking_aligned.ron".as_ref(), &set).unwrap();
+    let mut s = Simulation::new(&loaded).unwrap();
+    s.step(s.steps_for(26.0));
+    let d = s.app.world().resource::<Docking>();
+    (
+        d.loads.peak_axial_load_n,
+        d.loads.impulse_ns,
+        d.t_latch_s.is_some(),
+    )
+}
+
+/// Peak contact force of the aligned impact from a 1-D integration: the reduced system
+/// (k_m = 1/300 + 1/800 per newton) arriving on the back plate at the speed the magnet gives it
+/// (RK4 at 1 µs from the start), the law F = k·δ^{3/2}(1 + λ·δ̇) face on face, the magnet on.
+fn reference_peak() -> f64 {
+    let loaded = load_scene_file("scenes/docking_aligned.ron".as_ref(), &[]).unwrap();
+    let spec = loaded.scene.docking.clone().unwrap();
+    let ContactModelSpec::Compliant(c) = &spec.contact else {
+        panic!("compliant")
+    };
+    let law = Law::from_spec(c);
+    let m = &spec.magnet;
+    let km = 1.0 / 300.0 + 1.0 / 800.0;
+    let (mut x, mut v, h) = (0.5f64, -0.02f64, 1e-6);
+    let (mut on, mut v0, mut peak) = (false, f64::NAN, 0.0f64);
+    let acc = |x: f64, v: f64, on: bool, v0: f64| {
+        let mag = if on {
+            (m.f0_n / (1.0 + x.abs() / m.g0_m).powi(2)).min(m.max_force_n)
+        } else {
+            0.0
+        };
+        let f = if x < 0.0 {
+            law.normal_force_n(-x, -v, v0)
+        } else {
+            0.0
+        };
+        (km * (f - mag), f)
+    };
+    for _ in 0..30_000_000u64 {
+        if !on && x.abs() < m.activation_distance_m {
+            on = true;
+        }
+        if x < 0.0 && v0.is_nan() {
+            v0 = -v;
+        }
+        if !v0.is_nan() && x >= 0.0 && v > 0.0 {
+            break;
+        }
+        let (k1v, f) = acc(x, v, on, v0);
+        peak = peak.max(f);
+        let k1x = v;
+        let (k2v, _) = acc(x + k1x * h / 2.0, v + k1v * h / 2.0, on, v0);
+        let k2x = v + k1v * h / 2.0;
+        let (k3v, _) = acc(x + k2x * h / 2.0, v + k2v * h / 2.0, on, v0);
+        let k3x = v + k2v * h / 2.0;
+        let (k4v, _) = acc(x + k3x * h, v + k3v * h, on, v0);
+        let k4x = v + k3v * h;
+        x += (k1x + 2.0 * k2x + 2.0 * k3x + k4x) * h / 6.0;
+        v += (k1v + 2.0 * k2v + 2.0 * k3v + k4v) * h / 6.0;
+    }
+    peak
+}
+
+#[test]
+fn val_docking_peak_force_converges_with_dt() {
+    let reference = reference_peak();
+    let mut peaks = Vec::new();
+    for dt in [0.002, 0.001, 0.0005] {
+        let (p, j, latched) = aligned_peak(dt, false);
+        let (pr, jr, _) = aligned_peak(dt, true);
+        println!(
+            "dt {dt} s: compliant peak {p:.1} N (impulse {j:.3} N·s, latched {latched}); rigid peak {pr:.1} N (impulse {jr:.3} N·s)"
+        );
+        assert!(latched, "dt {dt}: no latch");
+        peaks.push(p);
+    }
+    let (lo, hi) = peaks
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(l, h), p| (l.min(*p), h.max(*p)));
+    println!(
+        "compliant spread {:.3} %, 1-D reference {reference:.1} N",
+        (hi / lo - 1.0) * 100.0
+    );
+    assert!(
+        hi / lo - 1.0 < 0.10,
+        "peaks {peaks:?} spread over {}",
+        hi / lo
+    );
+    for p in &peaks {
+        assert!(
+            (p / reference - 1.0).abs() < 0.02,
+            "peak {p} N vs the 1-D reference {reference} N"
+        );
+    }
+}
+
+/// The envelope's outcomes at three steps. A trial whose run ends with the cone still in the
+/// funnel would be judged on a transient state; the bundled mechanism resolves every trial within
+/// the 50 s (checked: no CONTACT, SOFT_CAPTURE or ATTRACTING at the end).
+#[test]
+fn val_capture_envelope_outcomes_do_not_change_with_dt() {
+    let dir = std::env::temp_dir().join(format!("rpod_envelope_dt_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let base = std::fs::read_to_string("scenes/docking_aligned.ron").unwrap();
+    let trials = rpod::trials::load("scenes/trials/capture_envelope.ron".as_ref()).unwrap();
+    let mut outcomes: Vec<Vec<String>> = Vec::new();
+    for dt in [0.01, 0.005, 0.002] {
+        assert!(base.contains("dt_s: 0.01,"));
+        let scene = dir.join(format!("aligned_{dt}.ron"));
+        std::fs::write(&scene, base.replace("dt_s: 0.01,", &format!("dt_s: {dt},"))).unwrap();
+        let c = rpod::trials::Campaign {
+            spec: trials.spec.clone(),
+            scene_path: scene,
+        };
+        let n = c.spec.count;
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let results = std::sync::Mutex::new(vec![String::new(); n]);
+        std::thread::scope(|s| {
+            for _ in 0..2 {
+                s.spawn(|| {
+                    loop {
+                        let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        if k >= n {
+                            break;
+                        }
+                        let r = rpod::trials::run_trial(&c, k);
+                        results.lock().unwrap()[k] = r.outcome;
+                    }
+                });
+            }
+        });
+        let r = results.into_inner().unwrap();
+        println!("dt {dt} s: {r:?}");
+        for (k, o) in r.iter().enumerate() {
+            assert!(
+                !matches!(
+                    o.as_str(),
+                    "CONTACT" | "SOFT_CAPTURE" | "ATTRACTING" | "ERROR"
+                ),
+                "dt {dt}: trial {k} ends unresolved ({o})"
+            );
+        }
+        outcomes.push(r);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    for k in 0..outcomes[0].len() {
+        assert!(
+            outcomes.iter().all(|o| o[k] == outcomes[0][k]),
+            "trial {k}: {:?}",
+            outcomes.iter().map(|o| &o[k]).collect::<Vec<_>>()
+        );
+    }
+}
