@@ -53,12 +53,16 @@
 //!   settles on `x ≈ S(0)/k1` (the chaser brakes within ~0.5 s and stays ~44 m from `r_d`).
 //!   The disturbance torque also enters the translation rows through `ω̇×r_b`
 //!   (`m|r_b||J⁻¹d_τ| ≈ 0.8 N > k4`), which the proof's condition `k4 > ‖d‖` ignores.
-//! - `k2/h²` matters only for `h ≲ √k2 ≈ 0.14 m²`, a layer a few mm thick near the wall: with
-//!   the paper's gains k2 = 0.02 and k2 = 0 give the same trajectory (both stay inside); with
-//!   a reaching gain that makes S → 0, the straight-line sliding motion leaves the corridor at
-//!   a 0.01 s step with or without the barrier. In continuous time the barrier holds only by
-//!   demanding unbounded force (βẋ = S − k1x is continuous, so the approach speed must vanish
-//!   inside that mm-thick layer); at 1 ms and 0.1 ms steps it is crossed with 1e7–1e10 N spikes.
+//! - `k2/h²` matters only for `h ≲ √k2 ≈ 0.14 m²`, a sub-millimetre layer at the wall: with
+//!   the paper's gains k2 = 0.02 and k2 = 0 give the same trajectory (both stay inside). β is
+//!   a scalar on the whole error velocity: it slows the chaser, it cannot steer it. With a
+//!   reaching gain that makes S → 0, the law sampled at 100 Hz leaves the corridor with or
+//!   without the barrier (the held command carries the chaser through the layer; 1 ms and
+//!   0.1 ms periods give 1e8–1e10 N spikes). In continuous time (`reproduce::guo2016_ct`,
+//!   adaptive stiff integration with an event on h = 0) the body-frame motion stops at the
+//!   wall with a finite peak force (~3e6 N); with a fixed desired attitude the corridor then
+//!   holds, with the paper's σ_d(t) the turning reference carries the body-fixed line of sight
+//!   across the wall ~10 ms later.
 //! - The corridor guarantee concerns the centre-of-mass point only.
 //!
 //! # In the full simulation (`sim::laws::guo2016`, `rpod reproduce guo2016`)
