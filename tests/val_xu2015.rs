@@ -502,8 +502,9 @@ fn val_xu2015_lower_bound_at_110kg() {
     assert!(x_error_lower_bound(90.0, 200.0, 5.0).bound_m < 1e-5);
 }
 
-/// The tuned PD: in the f64 model it is at least as accurate as the golden-section gains and
-/// keeps its RMS thrust within 1 % of ACCM's (the paper's "comparable force").
+/// The tuned PD: in the f64 model at 100 kg it is at least as accurate as the golden-section
+/// gains and keeps its RMS thrust within 1 % of ACCM's (the paper's "comparable force"); its
+/// worst RMS over 100 and 90 kg is the tuning's.
 #[test]
 fn val_xu2015_tuned_pd_is_a_fair_baseline() {
     use rpod::control::xu2015::Xu2015Law;
@@ -513,11 +514,12 @@ fn val_xu2015_tuned_pd_is_a_fair_baseline() {
     p.kp_s2 = t.kp_s2;
     p.kd_s = t.kd_s;
     let (rms, _, thr) = relative_model_terminal_with(Xu2015Law::Pd, &p, 100.0, 200.0);
+    let rms90 = relative_model_terminal_with(Xu2015Law::Pd, &p, 90.0, 200.0).0;
     eprintln!(
         "tuned PD: ω_n {:.3} ζ {:.3}: {rms:.3e} m RMS (golden {:.3e}), {thr:.3} N RMS (budget {:.3} N)",
         t.omega_n_rad_s, t.zeta, t.golden_rms_m, t.thrust_budget_n
     );
-    assert_eq!(rms, t.rms_m);
+    assert_eq!(rms.max(rms90), t.rms_m);
     assert!(rms <= t.golden_rms_m);
     assert!(thr <= 1.01 * t.thrust_budget_n);
 }

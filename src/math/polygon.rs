@@ -106,6 +106,18 @@ impl ConvexPolygon {
         }
     }
 
+    /// Minkowski sum with the segment [−d, d].
+    pub fn minkowski_segment(&self, d: &Vector2<f64>) -> Self {
+        let mut all = Vec::with_capacity(2 * self.pts.len());
+        for p in &self.pts {
+            all.push(p - d);
+            all.push(p + d);
+        }
+        Self {
+            pts: convex_hull(all),
+        }
+    }
+
     /// Intersection with the half-plane {z : n·z ≤ c}.
     pub fn clip(&self, n: &Vector2<f64>, c: f64) -> Self {
         let m = self.pts.len();
@@ -159,6 +171,9 @@ mod tests {
         // Minkowski sum of a 2×1 rectangle with [−½, ½]²: a 3×2 rectangle.
         let m = r.minkowski_rect(0.5, 0.5);
         assert!((m.area() - 6.0).abs() < 1e-15 && m.pts.len() == 4);
+        // With the segment [−(1, 0), (1, 0)]: a 4×1 rectangle; with [−(0, 1), (0, 1)]: 2×3.
+        assert!((r.minkowski_segment(&Vector2::new(1.0, 0.0)).area() - 4.0).abs() < 1e-15);
+        assert!((r.minkowski_segment(&Vector2::new(0.0, 1.0)).area() - 6.0).abs() < 1e-15);
         // Clip x ≤ 1 keeps half; x + y ≤ 1 on the unit square keeps a triangle of area ½.
         assert!((r.clip(&Vector2::new(1.0, 0.0), 1.0).area() - 1.0).abs() < 1e-15);
         let u = ConvexPolygon::rect(0.0, 1.0, 0.0, 1.0);

@@ -1076,8 +1076,9 @@ fn build_report(
          100 Hz as in the scenes, the errors converge (|r_e| = {:.1e} m, |σ_e| = {:.1e} at \
          {REACHING_DURATION_S} s) but the chaser leaves the corridor at t = {} (k2 = 0.02, at \
          r1 = {}) and at t = {} (k2 = 0): between two samples the held command carries it \
-         through the sub-millimetre layer (largest |F| {:.3e} N). That exit is a property of \
-         the sampling, as the continuous-time runs show.\n\n\
+         through the sub-millimetre layer (largest |F| {:.3e} N). Crossing the layer is a \
+         property of the sampling: in continuous time the law stops the chaser at the wall \
+         (next paragraph).\n\n\
          **The law in continuous time** (same law, exact state at every evaluation, adaptive \
          L-stable Rosenbrock steps with an event on h = 0, {} steps): the chaser reaches the \
          wall at t ≈ 0.51 s and its body-frame motion stops there (|r_e| = {:.2} m, \
