@@ -1037,7 +1037,12 @@ fn build_report(
     rep.heading("Choices where the paper is silent");
     rep.paragraph(
         "- tan θ = 5 (θ ≈ 78.7°): r0 read in the target frame is inside the corridor only for \
-         tan θ > 4.265; 5 puts it 1.31 m inside (h(r0) = 642 m²).\n\
+         tan θ > 4.265; 5 puts it 1.31 m inside (h(r0) = 642 m²). Sensitivity: tan θ = 4.3 \
+         (claims table).\n\
+         - Control period: the law runs every 10 ms step with its command held (the paper \
+         gives no period). Sensitivity: 1 ms, 0.1 ms and continuous time (below).\n\
+         - σ_d(t) is taken relative to D0, fixed to the target (at rest here), so the desired \
+         frame turns at |ω_d| ≈ 1.4e-4 rad/s. Sensitivity: σ_d ≡ 0.\n\
          - r_b = target − chaser (line of sight) in chaser axes, so r_d = [2, 0, 0] m puts the \
          target 2 m ahead of the chaser's docking cone; attitude relative to the docking frame \
          D0 = target frame turned by π about z; at zero error the chaser sits on the target's \

@@ -1091,7 +1091,8 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
          **Ghost obstacle.** Without the prism body (the law still avoids the superquadric it \
          knows) the path is the real run's until the first obstacle contact (largest \
          difference {:.1e} m simulation, {:.1e} m experiment), then up to {:.3} m / {:.3} m \
-         apart: that is what the contacts changed. The ghost runs end {} / {}.\n\n\
+         apart: that is what the contacts changed. The ghost runs end {} / {}, latched at {} / {} \
+         against {} / {} with the prism.\n\n\
          **Attitude and inertia.** The paper attributes its attitude lead to a measured I_z \
          slightly *below* the true one. A larger true inertia makes the same torque turn the \
          chaser more slowly, so that explanation predicts a lag, not a lead. The experiment \
@@ -1109,6 +1110,10 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
         de.1,
         r.simulation_ghost.dock_state,
         r.experiment_ghost.dock_state,
+        fmt_opt(r.simulation_ghost.t_latch_s),
+        fmt_opt(r.experiment_ghost.t_latch_s),
+        fmt_opt(r.simulation.t_latch_s),
+        fmt_opt(r.experiment.t_latch_s),
         lag_s(&r.experiment, &r.simulation, 0),
         lag_s(&r.experiment, &r.simulation, 1),
         lag_s(&r.experiment_tuned_iz, &r.simulation, 0),
