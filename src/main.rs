@@ -585,6 +585,14 @@ fn reproduce(name: Option<String>, out: &std::path::Path) -> ExitCode {
             );
         }
     }
+    // INDEX.md at the top of the output folder, rebuilt from the claims.json files there.
+    match rpod::reproduce::write_index(out) {
+        Ok(p) => out!("wrote {}", p.display()),
+        Err(e) => {
+            eprintln!("error: {e}");
+            failed = true;
+        }
+    }
     if failed {
         ExitCode::from(1)
     } else {

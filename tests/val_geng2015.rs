@@ -357,21 +357,60 @@ fn val_geng2015_m1_vs_t1_position() {
 }
 
 #[test]
+fn val_geng2015_chaser_body_frame_series() {
+    // The paper's translational figures are in the chaser body frame F_bs. The series in F_bs
+    // against two independent readings of the recorded Hill series: a rotation keeps the
+    // length (|ρ_bs| = |ρ_Hill| at every sample), and the rate seen in F_bs is the time
+    // derivative of ρ_bs's components (central differences over the 50 ms samples; the
+    // truncation ρ⃛·dt²/6 with |ρ⃛| ≲ ω_t³|ρ| + … is below 1e-4 of |ρ̇| here).
+    for law in [T2, M2] {
+        let r = run(law, true);
+        let s = &r.series;
+        for k in 0..s.t.len() {
+            let (h, b) = (s.trans[k], s.trans_bs[k]);
+            let (nh, nb) = (h.fixed_rows::<3>(0).norm(), b.fixed_rows::<3>(0).norm());
+            assert!((nh - nb).abs() <= 1e-12 * nh.max(1e-9), "{law:?} k {k}");
+        }
+        let mut worst: f64 = 0.0;
+        let mut scale: f64 = 0.0;
+        for k in 1..s.t.len() - 1 {
+            let dt = s.t[k + 1] - s.t[k - 1];
+            let fd =
+                (s.trans_bs[k + 1].fixed_rows::<3>(0) - s.trans_bs[k - 1].fixed_rows::<3>(0)) / dt;
+            worst = worst.max((fd - s.trans_bs[k].fixed_rows::<3>(3)).norm());
+            scale = scale.max(s.trans_bs[k].fixed_rows::<3>(3).norm());
+        }
+        println!(
+            "{law:?}: rate in F_bs vs central difference: worst {worst:.3e} m/s (peak {scale:.3e})"
+        );
+        assert!(worst < 2e-3 * scale, "{worst} vs {scale}");
+    }
+}
+
+#[test]
 fn val_geng2015_m2_vs_t2() {
-    // Claim "M2 better than T2": holds along-track (y) in position and velocity, and on every
-    // rotation channel, in both cases; it does NOT hold on x and z position (ratio T2/M2 ≈ 1.0
-    // with the linear a_d, 0.44–0.49 with the periodic one): claims.json records held = false.
+    // Claim "M2 better than T2 in every column", read in F_bs (the paper's frame): M2 wins
+    // every position and velocity column with the linear a_d and 11 of 12 with the periodic
+    // one, where the normal position ties (T2/M2 = 0.98): claims.json records held = false.
+    // In the target Hill frame (the sensitivity) it fails on x and z position (ratio ≈ 1.0
+    // with the linear a_d, 0.44–0.49 with the periodic one). Every rotation channel: M2 wins.
     for linear in [true, false] {
         let (t2, m2) = (run(T2, linear), run(M2, linear));
-        let r: Vec<f64> = (0..6).map(|i| t2.accuracy[i] / m2.accuracy[i]).collect();
-        println!("linear={linear} T2/M2 [ρ; V] {r:.2?}");
-        assert!(r[1] > 1.0 && r[4] > 1.0, "along-track {r:?}");
+        let r: Vec<f64> = (0..6)
+            .map(|i| t2.accuracy_bs[i] / m2.accuracy_bs[i])
+            .collect();
+        let rh: Vec<f64> = (0..6).map(|i| t2.accuracy[i] / m2.accuracy[i]).collect();
+        println!("linear={linear} T2/M2 [ρ; V] F_bs {r:.2?}, Hill {rh:.2?}");
         for i in 9..12 {
             assert!(m2.accuracy[i] < t2.accuracy[i], "ω_r[{}]", i - 9);
         }
-        if !linear {
-            // The refutation, measured: T2 beats M2 on radial and normal position.
-            assert!(r[0] < 1.0 && r[2] < 1.0, "{r:?}");
+        if linear {
+            assert!(r.iter().all(|x| *x > 1.0), "{r:?}");
+        } else {
+            assert!(r.iter().filter(|x| **x > 1.0).count() == 5, "{r:?}");
+            assert!(r[2] < 1.0 && r[2] > 0.9, "{r:?}");
+            // Hill reading: T2 beats M2 on radial and normal position.
+            assert!(rh[0] < 1.0 && rh[2] < 1.0, "{rh:?}");
         }
     }
 }
@@ -391,10 +430,11 @@ fn val_geng2015_m1_vs_m2() {
 
 #[test]
 fn val_geng2015_chattering() {
-    // Claim: markedly less chattering for M. Total variation of the applied command per second
-    // over the accuracy window: M1 ≥ 5× below T1 on every channel; M2 ≥ 5× below T2 on the
-    // torques but only 1.2–4.5× on the forces (claims.json: held = false for "every channel").
-    // Sign changes per second are not lower on every channel (held = false as well).
+    // Claim: M "far superior" in eliminating chattering (the 5× threshold is ours). Total
+    // variation of the applied command per second over the accuracy window: M1 ≥ 5× below T1
+    // on every channel; M2 ≥ 5× below T2 on the torques but only 1.2–4.5× on the forces
+    // (claims.json: held = false for "every channel"); below T2 on every channel (the
+    // sensitivity reading "any reduction": held).
     for linear in [true, false] {
         let (t1, m1, t2, m2) = (
             run(T1, linear),
@@ -409,13 +449,11 @@ fn val_geng2015_chattering() {
                 assert!(m2.tv_per_s[i] * 5.0 <= t2.tv_per_s[i], "TV M2 vs T2 [{i}]");
             }
         }
-        let fewer = |a: &CaseResult, b: &CaseResult| {
-            (0..6).all(|i| b.sign_changes_per_s[i] < a.sign_changes_per_s[i])
-        };
-        assert!(
-            !(fewer(t1, m1) && fewer(t2, m2)),
-            "sign changes now lower everywhere: update the claim"
-        );
+        // Sign changes are not a claim: at the 50 ms control period a channel changes sign at
+        // most 20 times per second (the closed-form cap of `invariant_geng2015_metrics_closed_form`).
+        for r in [t1, m1, t2, m2] {
+            assert!(r.sign_changes_per_s.iter().all(|x| *x <= 20.0 + 1e-9));
+        }
     }
 }
 
@@ -490,6 +528,38 @@ fn val_geng2015_full_geometry_collides_before_the_ports_meet() {
             assert!(r.closest.as_ref().unwrap().0 > 0.0);
         }
     }
+}
+
+#[test]
+fn val_geng2015_seated_pair_touches_only_docking_parts() {
+    // Geometry (issue 20): seated (ports coincident, q_r = 1) the chaser's bus face, where the
+    // cone stands, must clear the slot rim axially. Cone 0.20 m long on the bus face at
+    // x = −0.55 m; slot 0.18 m deep from P_t = 0.50 m: the face is 0.20 − 0.18 = 0.02 m
+    // outside the rim plane. Placed 1 cm short of seated (so the cone tip does not rest on the
+    // back plate), the smallest clearance between parts that are not both docking parts is the
+    // bus face to the rim, 0.02 + 0.01 = 0.03 m (closed form; facets move it by < 1 mm).
+    let loaded = load_scene_file(
+        &scene_file(M2, "linear", None),
+        &[
+            "bodies.chaser.initial.pos_m=(1.26, 0.0, 0.0)".into(),
+            "bodies.chaser.initial.vel_m_s=(0.0, 0.0, 0.0)".into(),
+            "bodies.chaser.initial.attitude=Quat(w: 1.0, x: 0.0, y: 0.0, z: 0.0)".into(),
+            "bodies.chaser.initial.rate_body_deg_s=(0.0, 0.0, 0.0)".into(),
+            "bodies.target.initial.rate_body_deg_s=(0.0, 0.0, 0.0)".into(),
+        ],
+    )
+    .unwrap();
+    let mut sim = Simulation::new(&loaded).unwrap();
+    sim.step(1);
+    let mon = sim.monitor();
+    let clear = mon
+        .min_clearance_per_pair
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    println!("seated − 1 cm: smallest non-docking clearance {clear:.4} m");
+    assert!((clear - 0.03).abs() < 1e-3, "{clear}");
+    assert!(sim.contacts().collisions.is_empty());
 }
 
 #[test]
@@ -609,7 +679,8 @@ fn val_geng2015_inertia_scenes() {
 fn val_geng2015_reproduce_report_and_claims() {
     // `rpod reproduce geng2015` end to end (all 32 scenes plus the 50 ms truth-step runs,
     // ≈ 10 s in release): REPORT.md, the figures and claims.json exist; claims.json follows the
-    // contract (array of {id, claim, paper, measured, held}) and its verdicts agree with what
+    // contract (array of {id, claim, kind, paper, threshold_source, measured, held,
+    // sensitivity}) and its verdicts agree with what
     // the tests above measure on the representative runs.
     let dir = std::env::temp_dir().join(format!("rpod_geng2015_{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -639,11 +710,24 @@ fn val_geng2015_reproduce_report_and_claims() {
     assert!(held("m1_vs_t1_position"));
     assert!(!held("m2_vs_t2"));
     assert!(held("m1_m2_position_velocity"));
+    assert!(held("t1_m1_match_table3"));
+    assert!(!held("t2_m2_match_table3"));
     assert!(!held("chattering_total_variation"));
-    assert!(!held("chattering_sign_changes"));
     assert!(held("inertia_robustness"));
     assert!(!held("ports_meet_no_collision"));
     assert!(held("eq10_bound"));
-    assert_eq!(arr.len(), 8);
+    assert_eq!(arr.len(), 9);
+    for c in arr {
+        let src = c["threshold_source"].as_str().unwrap();
+        assert!(
+            src.starts_with("paper: ") || src.starts_with("ours: "),
+            "{c}"
+        );
+    }
+    let kind = |id: &str| arr.iter().find(|c| c["id"] == id).unwrap()["kind"].clone();
+    assert_eq!(kind("ports_meet_no_collision"), "beyond the paper");
+    assert_eq!(kind("m2_vs_t2"), "paper");
+    assert!(report.contains("How far the testbed's Table 3 is from the printed one"));
+    assert!(report.contains("at most 20"));
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -395,10 +395,11 @@ fn regress_xu2015_scene_errors() {
 }
 
 /// `rpod reproduce xu2015` output contract: claims.json is a JSON array of objects with exactly
-/// `id, claim, paper, measured, held`, unique ids; the held flags are the ones the tests above
-/// establish (ACCM better than PD at 90/100 kg overall and per axis, thrust ≤ 5 N, authority
-/// at 90/100 kg hold; the 110 kg accuracy and the real-geometry clearance do not); REPORT.md
-/// and every case's outputs exist.
+/// `id, claim, kind, paper, threshold_source, measured, held, sensitivity`, unique ids; the held
+/// flags are the ones the tests above establish (ACCM better than PD at 90/100 kg overall and
+/// per axis, thrust ≤ 5 N, authority at 90/100 kg hold; the 110 kg accuracy, either reading of
+/// "±10 % mass" and the real-geometry clearance do not; the thrust-limited bound exceeds the
+/// 1 cm goal at 110 kg); REPORT.md and every case's outputs exist.
 #[test]
 fn regress_xu2015_reproduce_outputs() {
     let dir = std::env::temp_dir().join(format!("rpod-xu2015-repro-{}", std::process::id()));
@@ -412,7 +413,20 @@ fn regress_xu2015_reproduce_outputs() {
     for c in arr {
         let mut keys: Vec<&String> = c.as_object().unwrap().keys().collect();
         keys.sort();
-        assert_eq!(keys, ["claim", "held", "id", "measured", "paper"], "{c}");
+        assert_eq!(
+            keys,
+            [
+                "claim",
+                "held",
+                "id",
+                "kind",
+                "measured",
+                "paper",
+                "sensitivity",
+                "threshold_source"
+            ],
+            "{c}"
+        );
         assert!(ids.insert(c["id"].as_str().unwrap().to_string()));
     }
     let held = |id: &str| {
@@ -430,10 +444,80 @@ fn regress_xu2015_reproduce_outputs() {
         assert!(held(id), "{id}");
     }
     assert!(!held("m110-keeps-accuracy"));
+    assert!(!held("target-mass-pm10-keeps-accuracy"));
+    assert!(held("m110-bound-exceeds-goal"));
     assert!(!held("m110-real-geometry-clear"));
+    // Against the PD tuned at comparable force ACCM is still more accurate.
+    for id in ["accm-beats-tuned-pd-100kg", "accm-beats-tuned-pd-90kg"] {
+        assert!(held(id), "{id}");
+    }
     assert!(dir.join("REPORT.md").exists());
     for case in ["accm_100kg", "pd_110kg_point_mass"] {
         assert!(dir.join("cases").join(case).join("trajectory.csv").exists());
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The thrust-limited lower bound (the LP of `reproduce::xu2015::x_error_lower_bound`) against
+/// a closed form: a constant deficit δ = a_t − a over a window T forces ë = −δ whatever the law,
+/// e is then a parabola of spread δT²/8 and the best any law can hold is max|e| = δT²/16
+/// (free initial state). The reachable-set test at b = 0.99·δT²/16 must fail, at 1.01× pass;
+/// the single-peak chord bound gives the same δT²/16.
+#[test]
+fn val_xu2015_lower_bound_closed_form() {
+    use rpod::reproduce::xu2015::{single_peak_bound_m, tube_feasible};
+    let (a, delta, t_win, h): (f64, f64, f64, f64) = (0.04, 0.002, 20.0, 0.1);
+    let a_t = |_t: f64| a + delta;
+    let exact = delta * t_win * t_win / 16.0;
+    let n = (t_win / h).round() as usize;
+    assert!(!tube_feasible(&a_t, a, 0.99 * exact, 0.0, h, n, 20.0));
+    assert!(tube_feasible(&a_t, a, 1.01 * exact, 0.0, h, n, 20.0));
+    let sp = single_peak_bound_m(&a_t, a, 0.0, t_win);
+    assert!((sp - exact).abs() < 2e-3 * exact, "{sp} vs {exact}");
+    // No deficit: any b > 0 is feasible.
+    assert!(tube_feasible(&|_t: f64| 0.9 * a, a, 1e-6, 0.0, h, n, 20.0));
+}
+
+/// At 110 kg: the LP bound is at least the single-peak closed form (a relaxation of the same
+/// problem), above the 1 cm goal, and below what both laws actually hold (their largest x error
+/// over the last 100 s, point-mass variant) — no law can beat it.
+#[test]
+fn val_xu2015_lower_bound_at_110kg() {
+    use rpod::reproduce::xu2015::x_error_lower_bound;
+    let b = x_error_lower_bound(110.0, 200.0, 5.0);
+    eprintln!(
+        "110 kg: bound {:.4} m, single peak {:.4} m, inflation {:.2e} m/s²",
+        b.bound_m, b.single_peak_m, b.inflation_m_s2
+    );
+    assert!(b.bound_m >= b.single_peak_m - 1e-9);
+    assert!(b.bound_m > 0.01 && b.bound_m < 1.0);
+    assert!(b.inflation_m_s2 < 1e-4 * b.a_max_m_s2);
+    for f in ["xu2015_accm_m110.ron", "xu2015_pd_m110.ron"] {
+        let r = run_case(f, &POINT_MASS_OVERRIDES, None).unwrap();
+        assert!(r.terminal_max_axis_m().x >= b.bound_m, "{f}");
+    }
+    // With authority to spare (90 kg) nothing is forced.
+    assert!(x_error_lower_bound(90.0, 200.0, 5.0).bound_m < 1e-5);
+}
+
+/// The tuned PD: in the f64 model at 100 kg it is at least as accurate as the golden-section
+/// gains and keeps its RMS thrust within 1 % of ACCM's (the paper's "comparable force"); its
+/// worst RMS over 100 and 90 kg is the tuning's.
+#[test]
+fn val_xu2015_tuned_pd_is_a_fair_baseline() {
+    use rpod::control::xu2015::Xu2015Law;
+    use rpod::reproduce::xu2015::{relative_model_terminal_with, tune_pd};
+    let t = tune_pd(true);
+    let mut p = PdParams::paper();
+    p.kp_s2 = t.kp_s2;
+    p.kd_s = t.kd_s;
+    let (rms, _, thr) = relative_model_terminal_with(Xu2015Law::Pd, &p, 100.0, 200.0);
+    let rms90 = relative_model_terminal_with(Xu2015Law::Pd, &p, 90.0, 200.0).0;
+    eprintln!(
+        "tuned PD: ω_n {:.3} ζ {:.3}: {rms:.3e} m RMS (golden {:.3e}), {thr:.3} N RMS (budget {:.3} N)",
+        t.omega_n_rad_s, t.zeta, t.golden_rms_m, t.thrust_budget_n
+    );
+    assert_eq!(rms.max(rms90), t.rms_m);
+    assert!(rms <= t.golden_rms_m);
+    assert!(thr <= 1.01 * t.thrust_budget_n);
 }

@@ -13,6 +13,10 @@
 //!   distances stay positive during the free approach; the goal is reached within 1 cm and
 //!   2°; the monitor reports the chaser's cone touching the obstacle prism (a collision the
 //!   centre-of-mass constraint cannot see) — the claims.json entries carry these numbers.
+//! - Variants: with the law kept active after the magnet the simulation case latches well
+//!   inside 2° (the 2.03° of the default is the law switched off plus contact); with the
+//!   obstacle body removed (the law keeping its obstacle parameters) the path is bit-identical
+//!   to the real run until the first obstacle contact, which is what the contacts change.
 //! - Determinism: the same scene gives bit-identical states.
 
 use nalgebra::{Vector2, Vector3};
@@ -172,6 +176,37 @@ fn val_xu2019_fig13_claims() {
     }
     // The paper's lag claim holds on the twin.
     assert!(held("experiment-lags-in-x-and-y"));
+    // The 2° goal tolerance is ours and the simulation case fails it only when the law is
+    // switched off at the magnet: kept active, it latches inside 0.5°.
+    assert!(!held("simulation-reaches-goal-and-latches"));
+    assert!(held("simulation-law-kept-active-reaches-goal-and-latches"));
+    assert!(r.simulation_active.final_angle_err_deg < 0.5);
+    assert!(
+        r.simulation.final_angle_err_deg < 3.0,
+        "within the latch's own tolerance"
+    );
+    for c in &cl {
+        assert!(
+            c.threshold_source.starts_with("paper: ") || c.threshold_source.starts_with("ours: ")
+        );
+    }
+    // Ghost obstacle: identical until the first obstacle contact of the real run, and the
+    // approach without the prism latches.
+    for (run, _, ghost) in r.variants() {
+        let t_hit = run.obstacle_collisions.first().expect("contact").0;
+        let (before, after) = rpod::reproduce::xu2019::path_deviation_m(run, ghost, t_hit);
+        eprintln!(
+            "{}: ghost vs real before {t_hit:.2} s: {before:.1e} m, after: {after:.3} m",
+            run.name
+        );
+        assert_eq!(before, 0.0);
+        assert!(after > 1e-3);
+        assert!(ghost.obstacle_collisions.is_empty());
+        assert!(held(&format!(
+            "{}-ghost-obstacle-reaches-goal-and-latches",
+            run.name
+        )));
+    }
     for run in [&r.simulation, &r.experiment] {
         // During the free approach (before the magnet takes over) the radial distances stay
         // positive, in both forms.

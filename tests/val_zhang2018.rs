@@ -25,7 +25,12 @@
 //! 6. `val_zhang2018_fig3_thrust_reverses`: P's optimal thrust on the barrier path starts along
 //!    the line of sight and reverses over backward time (Fig. 3).
 //! 7. `regress_zhang2018_reproduce_claims`: `rpod reproduce zhang2018` writes the claims with
-//!    the held values established by 2–4 and 6, the PNG figures, and the typo corrections.
+//!    the held values established by 2–4, 6 and 8, each with its kind and threshold source,
+//!    the PNG figures, the typo corrections and the paper's contradiction on H's sign.
+//! 8. `val_zhang2018_fig2_gravity_free_closed_form`: Fig. 2 as the paper computed it (orbital
+//!    gravity neglected): along straight lines eq (12) is H = ½(−ρ̇ − 2F/M) in closed form
+//!    (ρ̇ = ρ·w/|ρ|, ρ = ρ0 + w t), its zero is where ρ̇ = −2F/M (found by bisection on the
+//!    closed form), and the closest approach is |ρ0 − (ρ0·ŵ)ŵ|.
 //!
 //! Speed: dt = 10 s (the scenes' step: the 1 km avoidance margin must exceed the per-step
 //! change of the predicted miss, ≈ t_ca·(F/M)·dt ≈ 0.17 km at engagement); the 10-day
@@ -355,11 +360,36 @@ fn regress_zhang2018_reproduce_claims() {
             .iter()
             .find(|c| c["id"] == id)
             .unwrap_or_else(|| panic!("claim {id} missing"));
-        for k in ["claim", "paper", "measured", "held"] {
+        for k in [
+            "claim",
+            "kind",
+            "paper",
+            "threshold_source",
+            "measured",
+            "held",
+            "sensitivity",
+        ] {
             assert!(c.get(k).is_some(), "{id}: no `{k}`");
         }
+        let src = c["threshold_source"].as_str().unwrap();
+        assert!(
+            src.starts_with("paper: ") || src.starts_with("ours: "),
+            "{id}: {src}"
+        );
         c["held"].as_bool().unwrap()
     };
+    let kind = |id: &str| {
+        claims.iter().find(|c| c["id"] == id).unwrap()["kind"]
+            .as_str()
+            .unwrap()
+            .to_string()
+    };
+    assert!(held("zhang2018-fig2-gravity-free-h-both-signs"));
+    assert_eq!(kind("zhang2018-fig2-gravity-free-h-both-signs"), "paper");
+    assert_eq!(
+        kind("zhang2018-reconfiguration-keeps-l"),
+        "beyond the paper"
+    );
     assert!(held("zhang2018-h-both-signs"));
     assert!(!held("zhang2018-h-sign-marks-collision"));
     assert!(held("zhang2018-fig3-reversals"));
@@ -383,6 +413,8 @@ fn regress_zhang2018_reproduce_claims() {
         "V_ye*(0) = s3",
         "sin(s5)·Y_p",
         "½ everywhere",
+        "contradicts itself on what H's sign means",
+        "Gravity-free, as the paper computed Fig. 2",
     ] {
         assert!(
             report.contains(correction),
@@ -390,4 +422,57 @@ fn regress_zhang2018_reproduce_claims() {
         );
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn val_zhang2018_fig2_gravity_free_closed_form() {
+    // Fig. 2 as the paper computed it: "the orbital gravity … can be neglected". With the μ
+    // terms gone, eq (12) is H = ½(−ρ̇ − 2F/M) along the straight lines ρ(t) = ρ0 + w t.
+    let mut p = Zhang2018Params::paper();
+    p.drift = Drift::ForceFree;
+    let x0 = paper_initial_state_l2c();
+    let (pp, ee) = (p_state(&x0), e_state(&x0));
+    let rho0 = Vector2::new(pp[0] - ee[0], pp[1] - ee[1]);
+    let w = Vector2::new(pp[2] - ee[2], pp[3] - ee[3]);
+    let a = 2.0 * p.thrust_p_n / p.mass_p_kg;
+    let rho_dot = |t: f64| {
+        let r = rho0 + w * t;
+        r.dot(&w) / r.norm()
+    };
+    let h_closed = |t: f64| 0.5 * (-rho_dot(t) - a);
+    let dt = 60.0;
+    let hist = boundary_value_history(&p, &x0, PursuerRole::PaperCooperative, dt, 20 * 1440);
+    let mut worst: f64 = 0.0;
+    for (t, bv) in &hist {
+        worst = worst.max((bv.h - h_closed(*t)).abs());
+    }
+    eprintln!("gravity-free H vs closed form: worst |ΔH| = {worst:.3e}");
+    assert!(worst < 1e-9, "{worst}");
+    // Zero of the closed form by bisection (ρ̇ increases through −2F/M once, at the encounter).
+    let (mut lo, mut hi) = (0.0, 20.0 * 86_400.0);
+    assert!(h_closed(lo) > 0.0 && h_closed(hi) < 0.0);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if h_closed(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let zeros: Vec<f64> = (1..hist.len())
+        .filter(|&k| hist[k - 1].1.h * hist[k].1.h <= 0.0)
+        .map(|k| {
+            let (h0, h1) = (hist[k - 1].1.h, hist[k].1.h);
+            hist[k - 1].0 + dt * h0 / (h0 - h1)
+        })
+        .collect();
+    eprintln!("gravity-free sign change at {zeros:?} s, closed form {lo:.1} s");
+    assert_eq!(zeros.len(), 1);
+    assert!((zeros[0] - lo).abs() < 1.0, "{} vs {lo}", zeros[0]);
+    // Closest approach of the straight lines, closed form, against the library's.
+    let wh = w.normalize();
+    let miss = (rho0 - wh * rho0.dot(&wh)).norm();
+    let ca = rpod::control::zhang2018::closest_approach(&x0);
+    assert!((ca.miss_m - miss).abs() < 1e-6 * miss);
+    assert!(miss > 5000.0, "the pair passes outside l: {miss} m");
 }

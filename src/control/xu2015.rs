@@ -75,7 +75,7 @@
 //!
 //! # In the simulation
 //! [`SceneSpec`] (bottom of this file) is how a scene flies either law; the ECS wiring
-//! (`crate::sim::laws::xu2015`) measures ξ in the reference orbit's target orbital frame,
+//! (the controller at the end of this file) measures ξ in the reference orbit's target orbital frame,
 //! applies the target's maneuver and registers the thrust-authority margins. The bundled
 //! scenes `scenes/xu2015_*.ron` reproduce the numbers above to a few 1e−6 (relative) at 90
 //! and 100 kg (`tests/val_xu2015.rs`, `rpod reproduce xu2015`).
@@ -554,7 +554,7 @@ impl Pd {
 // ---------------------------------------------------------------------------------------------
 // Scene wiring, Bevy-free part: what a scene asks for, the target maneuver, the measurement
 // noise, the target orbital frame and the thrust-authority margin. The ECS systems that use
-// them are in `crate::sim::laws::xu2015`.
+// them are in the controller at the end of this file.
 
 /// Which of the paper's two controllers flies the chaser.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -636,7 +636,7 @@ impl Default for SensorSpec {
 /// How a scene asks for this law (`controllers: [Xu2015((body: "chaser", target: "target",
 /// law: Accm, ...))]`). The controlled relative position is, in the target orbital frame of
 /// the reference orbit, ξ = C_tofᵀ (r_chaser − r_target) − `aim_offset_tof_m` (centres of
-/// mass, world frame); see `crate::sim::laws::xu2015` for the frame choice.
+/// mass, world frame); see the controller at the end of this file for the frame choice.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneSpec {

@@ -25,7 +25,7 @@
 //!   [`simulate_reconfiguration`], [`collision_course_plan`].
 //! * How a scene asks for the law → [`SceneSpec`] (fixed thrust, planned maneuver in `rot`,
 //!   avoidance on/off, l, margin); the ECS wiring (floating origin at the formation centre,
-//!   capture guarantee) is `sim::laws::zhang2018`.
+//!   capture guarantee) is at the end of this file.
 //!
 //! # Corrections of the printed text (typos and inconsistencies)
 //! * ∂D parametrisation: printed Y_e(t̃) = s2 + l **cos** s5; corrected to s2 + l sin s5

@@ -1,8 +1,19 @@
 //! `claims.json`: one JSON object per claim a reproduction checks.
 //!
-//! Contract (design notes, "Outputs"): a JSON array; each object has exactly the keys
-//! `id` (short slug), `claim` (one sentence), `paper` (the paper's value or statement, or
-//! `null`), `measured` (what this run measured, with units) and `held` (`true`/`false`).
+//! Contract (design notes, "Outputs", extended by issue 20): a JSON array; each object has
+//! exactly the keys, in this order,
+//! - `id` (short slug),
+//! - `claim` (one sentence),
+//! - `kind`: `"paper"` (a claim the paper makes) or `"beyond the paper"` (a question the
+//!   testbed asks that the paper does not: full geometry, an added term, a campaign),
+//! - `paper` (the paper's value or statement, or `null`),
+//! - `threshold_source`: where the number the verdict is judged against comes from —
+//!   `"paper: <where>"` or `"ours: <why this value>"`,
+//! - `measured` (what this run measured, with units),
+//! - `held` (`true`/`false`),
+//! - `sensitivity`: the verdict under the other plausible choice where the paper leaves one
+//!   open (a reading, a tolerance, a frame), or `null` where no such choice matters.
+//!
 //! A claim the testbed refutes stays in the file with `held: false` and the numbers.
 
 use std::io;
@@ -11,6 +22,31 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::fsio::{with_path, write_atomic};
+
+/// Whether a claim is the paper's or a question beyond it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum ClaimKind {
+    /// A claim the paper makes (its figures, tables or text), checked as stated.
+    #[serde(rename = "paper")]
+    Paper,
+    /// A question the paper does not ask (full geometry, an added term, a campaign, a
+    /// feasibility bound).
+    #[serde(rename = "beyond the paper")]
+    BeyondThePaper,
+}
+
+impl ClaimKind {
+    /// Both kinds, in report order.
+    pub const ALL: [ClaimKind; 2] = [ClaimKind::Paper, ClaimKind::BeyondThePaper];
+
+    /// The JSON spelling (`"paper"`, `"beyond the paper"`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ClaimKind::Paper => "paper",
+            ClaimKind::BeyondThePaper => "beyond the paper",
+        }
+    }
+}
 
 /// One claim of a paper and what this run measured for it.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -21,35 +57,68 @@ pub struct Claim {
     pub id: String,
     /// The claim in one sentence.
     pub claim: String,
+    /// The paper's claim or a question beyond it.
+    pub kind: ClaimKind,
     /// The paper's value or statement (with units), or `None` (JSON `null`) when the paper
     /// gives none.
     pub paper: Option<String>,
+    /// Where the threshold of the verdict comes from: `"paper: <where>"` or
+    /// `"ours: <why this value>"` (checked by [`validate_claims`]).
+    pub threshold_source: String,
     /// What this run measured, with units.
     pub measured: String,
     /// Whether the claim held in this run.
     pub held: bool,
+    /// The verdict under the other plausible choice the paper leaves open, with its numbers,
+    /// or `None` where the verdict depends on no such choice.
+    pub sensitivity: Option<String>,
 }
 
 impl Claim {
-    /// Builds a claim; `paper` is `None` when the paper states no value.
+    /// Builds a claim; `paper` is `None` when the paper states no value;
+    /// `threshold_source` starts with `paper: ` or `ours: `.
     pub fn new(
         id: impl Into<String>,
+        kind: ClaimKind,
         claim: impl Into<String>,
         paper: Option<&str>,
+        threshold_source: impl Into<String>,
         measured: impl Into<String>,
         held: bool,
     ) -> Self {
         Self {
             id: id.into(),
             claim: claim.into(),
+            kind,
             paper: paper.map(str::to_owned),
+            threshold_source: threshold_source.into(),
             measured: measured.into(),
             held,
+            sensitivity: None,
         }
+    }
+
+    /// The same claim with the verdict under the other plausible choice (see
+    /// [`Claim::sensitivity`]).
+    pub fn with_sensitivity(mut self, text: impl Into<String>) -> Self {
+        self.sensitivity = Some(text.into());
+        self
     }
 }
 
-/// Checks that every id is a non-empty slug (`[a-z0-9._-]+`) and that ids are unique.
+/// Claims held and in all, per kind, in [`ClaimKind::ALL`] order: `[(held, total); 2]`.
+pub fn tally(claims: &[Claim]) -> [(usize, usize); 2] {
+    let mut t = [(0, 0); 2];
+    for c in claims {
+        let i = usize::from(c.kind == ClaimKind::BeyondThePaper);
+        t[i].1 += 1;
+        t[i].0 += usize::from(c.held);
+    }
+    t
+}
+
+/// Checks that every id is a non-empty slug (`[a-z0-9._-]+`), that ids are unique and that
+/// every `threshold_source` starts with `paper: ` or `ours: ` and says something after it.
 /// Errors are `InvalidInput` and name the offending id.
 pub fn validate_claims(claims: &[Claim]) -> io::Result<()> {
     let mut seen = std::collections::BTreeSet::new();
@@ -70,12 +139,26 @@ pub fn validate_claims(claims: &[Claim]) -> io::Result<()> {
                 format!("claim id {:?} appears twice", c.id),
             ));
         }
+        let src_ok = ["paper: ", "ours: "].iter().any(|p| {
+            c.threshold_source
+                .strip_prefix(p)
+                .is_some_and(|rest| !rest.trim().is_empty())
+        });
+        if !src_ok {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!(
+                    "claim {:?}: threshold_source {:?} must start with \"paper: \" or \"ours: \" and say where or why",
+                    c.id, c.threshold_source
+                ),
+            ));
+        }
     }
     Ok(())
 }
 
 /// Serialises `claims` as the `claims.json` text: a pretty-printed JSON array in the given
-/// order, keys in the order `id, claim, paper, measured, held`, ending with a newline.
+/// order, keys in the order of the module docs, ending with a newline.
 pub fn claims_to_json(claims: &[Claim]) -> String {
     // Serialising plain strings and bools cannot fail.
     let mut s = serde_json::to_string_pretty(claims).unwrap_or_else(|_| "[]".to_owned());
@@ -109,25 +192,31 @@ mod tests {
         vec![
             Claim::new(
                 "capture-time",
+                ClaimKind::Paper,
                 "The chaser captures the target within 100 s.",
                 Some("86 s"),
+                "paper: Fig. 4",
                 "91.3 s",
                 true,
             ),
             Claim::new(
                 "no-collision",
+                ClaimKind::BeyondThePaper,
                 "The minimum distance stays above 0.5 m.",
                 None,
+                "ours: half the panel span",
                 "min distance 0.41 m at t = 52.0 s",
                 false,
-            ),
+            )
+            .with_sensitivity("with 0.4 m: held"),
         ]
     }
 
-    /// Reference: the contract in the design notes — exactly five keys, `paper` may be null,
-    /// `held` a JSON boolean; and serde round trip gives back the same values.
+    /// Reference: the contract in the module docs — exactly eight keys in their order,
+    /// `paper` and `sensitivity` may be null, `kind` one of two strings, `held` a JSON boolean;
+    /// and serde round trip gives back the same values.
     #[test]
-    fn invariant_claims_json_has_exactly_the_five_keys_and_round_trips() {
+    fn invariant_claims_json_has_exactly_the_eight_keys_and_round_trips() {
         let d = scratch("claims");
         let p = d.join("claims.json");
         let claims = sample();
@@ -140,24 +229,64 @@ mod tests {
             let obj = obj.as_object().unwrap();
             let mut keys: Vec<&str> = obj.keys().map(String::as_str).collect();
             keys.sort_unstable();
-            assert_eq!(keys, ["claim", "held", "id", "measured", "paper"]);
+            assert_eq!(
+                keys,
+                [
+                    "claim",
+                    "held",
+                    "id",
+                    "kind",
+                    "measured",
+                    "paper",
+                    "sensitivity",
+                    "threshold_source"
+                ]
+            );
             assert!(obj["held"].is_boolean());
         }
         assert!(arr[1]["paper"].is_null());
+        assert!(arr[0]["sensitivity"].is_null());
         assert_eq!(arr[0]["paper"], "86 s");
+        assert_eq!(arr[0]["kind"], "paper");
+        assert_eq!(arr[1]["kind"], "beyond the paper");
+        assert_eq!(arr[1]["sensitivity"], "with 0.4 m: held");
         assert_eq!(read_claims_json(&p).unwrap(), claims);
         // Key order in the file follows the contract.
         let i: Vec<usize> = [
             "\"id\"",
             "\"claim\"",
+            "\"kind\"",
             "\"paper\"",
+            "\"threshold_source\"",
             "\"measured\"",
             "\"held\"",
+            "\"sensitivity\"",
         ]
         .iter()
         .map(|k| text.find(k).unwrap())
         .collect();
         assert!(i.windows(2).all(|w| w[0] < w[1]), "{i:?}");
+        assert_eq!(tally(&claims), [(1, 1), (0, 1)]);
+    }
+
+    #[test]
+    fn regress_threshold_source_must_say_paper_or_ours() {
+        let d = scratch("claims-src");
+        let p = d.join("claims.json");
+        for bad in ["", "paper:", "ours:   ", "Paper: Fig. 2", "we chose 5"] {
+            let mut c = sample();
+            c[0].threshold_source = bad.into();
+            let e = write_claims_json(&p, &c).unwrap_err();
+            assert!(e.to_string().contains("threshold_source"), "{bad:?}: {e}");
+            assert!(!p.exists());
+        }
+        // An unknown kind is rejected on reading.
+        std::fs::write(
+            &p,
+            r#"[{"id":"a","claim":"c","kind":"ours","paper":null,"threshold_source":"ours: x","measured":"m","held":true,"sensitivity":null}]"#,
+        )
+        .unwrap();
+        assert!(read_claims_json(&p).is_err());
     }
 
     #[test]
@@ -174,7 +303,7 @@ mod tests {
         // Unknown keys are rejected on reading.
         std::fs::write(
             &p,
-            r#"[{"id":"a","claim":"c","paper":null,"measured":"m","held":true,"x":1}]"#,
+            r#"[{"id":"a","claim":"c","kind":"paper","paper":null,"threshold_source":"ours: x","measured":"m","held":true,"sensitivity":null,"x":1}]"#,
         )
         .unwrap();
         assert!(read_claims_json(&p).is_err());

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::io;
 use std::path::{Path, PathBuf};
 
-use super::claims::{Claim, validate_claims, write_claims_json};
+use super::claims::{Claim, ClaimKind, tally, validate_claims, write_claims_json};
 use super::fsio::{with_path, write_atomic};
 use super::plot::Figure;
 
@@ -118,9 +118,9 @@ impl ReportBuilder {
         self
     }
 
-    /// The claims table (`id | claim | paper | measured | held`, held as "✔ held" or
-    /// "✘ NOT held", a missing paper value as "—") preceded by a "K of N claims held" line;
-    /// [`Self::write`] also writes them to `claims.json`. Calling it again replaces the claims.
+    /// The claims tables of [`claims_markdown`] (the paper's claims, then those beyond the
+    /// paper); [`Self::write`] also writes them to `claims.json`. Calling it again replaces
+    /// the claims.
     pub fn claims(&mut self, claims: &[Claim]) -> &mut Self {
         if self.claims.is_none() {
             self.blocks.push(Block::Claims);
@@ -191,27 +191,7 @@ impl ReportBuilder {
                     write_table(&mut md, headers, rows);
                 }
                 Block::Claims => {
-                    let claims = self.claims.as_deref().unwrap_or(&[]);
-                    validate_claims(claims)?;
-                    let held = claims.iter().filter(|c| c.held).count();
-                    let _ = writeln!(md, "{held} of {} claims held.\n", claims.len());
-                    let headers: Vec<String> = ["id", "claim", "paper", "measured", "held"]
-                        .iter()
-                        .map(|s| s.to_string())
-                        .collect();
-                    let rows: Vec<Vec<String>> = claims
-                        .iter()
-                        .map(|c| {
-                            vec![
-                                format!("`{}`", c.id),
-                                c.claim.clone(),
-                                c.paper.clone().unwrap_or_else(|| "—".into()),
-                                c.measured.clone(),
-                                if c.held { "✔ held" } else { "✘ NOT held" }.into(),
-                            ]
-                        })
-                        .collect();
-                    write_table(&mut md, &headers, &rows);
+                    md.push_str(&claims_markdown(self.claims.as_deref().unwrap_or(&[]))?);
                 }
                 Block::Image { alt, rel_path } => {
                     check_rel_path(rel_path)?;
@@ -249,6 +229,66 @@ impl ReportBuilder {
     }
 }
 
+/// Markdown of a claims list: a "K of N claims held" line with the count per kind, then one
+/// table per kind that has claims — "Claims of the paper", then "Beyond the paper" — with the
+/// columns `id | claim | paper | threshold (source) | measured | held | sensitivity`; held as
+/// "✔ held" or "✘ NOT held", a missing paper value or sensitivity as "—". Errors
+/// (`InvalidInput`) on claims that [`validate_claims`] refuses.
+pub fn claims_markdown(claims: &[Claim]) -> io::Result<String> {
+    validate_claims(claims)?;
+    let t = tally(claims);
+    let held = t[0].0 + t[1].0;
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "{held} of {} claims held: {} of {} claims of the paper, {} of {} beyond the paper.",
+        claims.len(),
+        t[0].0,
+        t[0].1,
+        t[1].0,
+        t[1].1
+    );
+    let headers: Vec<String> = [
+        "id",
+        "claim",
+        "paper",
+        "threshold (source)",
+        "measured",
+        "held",
+        "sensitivity (the other plausible choice)",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    for (k, kind) in ClaimKind::ALL.iter().enumerate() {
+        let rows: Vec<Vec<String>> = claims
+            .iter()
+            .filter(|c| c.kind == *kind)
+            .map(|c| {
+                vec![
+                    format!("`{}`", c.id),
+                    c.claim.clone(),
+                    c.paper.clone().unwrap_or_else(|| "—".into()),
+                    c.threshold_source.clone(),
+                    c.measured.clone(),
+                    if c.held { "✔ held" } else { "✘ NOT held" }.into(),
+                    c.sensitivity.clone().unwrap_or_else(|| "—".into()),
+                ]
+            })
+            .collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let title = match kind {
+            ClaimKind::Paper => "Claims of the paper",
+            ClaimKind::BeyondThePaper => "Beyond the paper",
+        };
+        let _ = writeln!(md, "\n### {title} ({} of {} held)\n", t[k].0, t[k].1);
+        write_table(&mut md, &headers, &rows);
+    }
+    Ok(md)
+}
+
 fn write_table(md: &mut String, headers: &[String], rows: &[Vec<String>]) {
     let line = |cells: &mut dyn Iterator<Item = String>| {
         let v: Vec<String> = cells.collect();
@@ -271,18 +311,23 @@ mod tests {
         let claims = vec![
             Claim::new(
                 "t-cap",
+                ClaimKind::Paper,
                 "Capture within 100 s.",
                 Some("86 s"),
+                "paper: Fig. 4",
                 "91.3 s",
                 true,
             ),
             Claim::new(
                 "d-min",
+                ClaimKind::BeyondThePaper,
                 "Distance stays above 0.5 m.",
                 None,
+                "ours: half a panel",
                 "0.41 m",
                 false,
-            ),
+            )
+            .with_sensitivity("0.4 m: held"),
         ];
         let fig = Figure::new("x(t)").plot(
             Plot::new("")
@@ -314,11 +359,21 @@ mod tests {
         assert!(md.starts_with("# guo2016 — reproduction\n"));
         assert!(md.contains("| case | t_capture [s] |\n| --- | --- |\n| nominal | 91.3 |\n"));
         assert!(md.contains("| a\\|b | 7 |\n"), "pipe escaped");
-        assert!(md.contains("1 of 2 claims held."));
-        assert!(md.contains("| `t-cap` | Capture within 100 s. | 86 s | 91.3 s | ✔ held |\n"));
         assert!(
-            md.contains("| `d-min` | Distance stays above 0.5 m. | — | 0.41 m | ✘ NOT held |\n")
+            md.contains("1 of 2 claims held: 1 of 1 claims of the paper, 0 of 1 beyond the paper.")
         );
+        let (pa, be) = (
+            md.find("### Claims of the paper (1 of 1 held)").unwrap(),
+            md.find("### Beyond the paper (0 of 1 held)").unwrap(),
+        );
+        let (ti, di) = (md.find("`t-cap`").unwrap(), md.find("`d-min`").unwrap());
+        assert!(pa < ti && ti < be && be < di, "kinds in separate tables");
+        assert!(md.contains(
+            "| `t-cap` | Capture within 100 s. | 86 s | paper: Fig. 4 | 91.3 s | ✔ held | — |\n"
+        ));
+        assert!(md.contains(
+            "| `d-min` | Distance stays above 0.5 m. | — | ours: half a panel | 0.41 m | ✘ NOT held | 0.4 m: held |\n"
+        ));
         assert!(md.contains("![x over time](x_t.png)\n"));
         assert!(d.join("x_t.png").is_file());
         assert!(!d.join("x_t.svg").exists());

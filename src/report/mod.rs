@@ -8,7 +8,8 @@
 //!   polygons, categorical outcome maps) and [`Figure`] (a grid of plots with a title), written
 //!   as SVG (text as SVG `<text>`) and PNG (rasterised by `resvg` with the bundled DejaVu Sans,
 //!   so no system font and no download is ever needed).
-//! - [`claims`]: [`Claim`] and [`write_claims_json`] — the `claims.json` contract.
+//! - [`claims`]: [`Claim`] (with its [`ClaimKind`] and threshold source) and
+//!   [`write_claims_json`] — the `claims.json` contract.
 //! - [`markdown`]: [`ReportBuilder`] — `REPORT.md` with paragraphs, tables, a claims table and
 //!   figures, plus the figure files and `claims.json`, in one call.
 //! - [`write_atomic`]: every file is written to a temporary name in its directory, flushed, and
@@ -28,9 +29,9 @@ mod raster;
 mod svg;
 mod ticks;
 
-pub use claims::{Claim, read_claims_json, write_claims_json};
+pub use claims::{Claim, ClaimKind, read_claims_json, tally, write_claims_json};
 pub use fsio::write_atomic;
-pub use markdown::ReportBuilder;
+pub use markdown::{ReportBuilder, claims_markdown};
 pub use plot::{Color, Dash, Figure, Legend, LineStyle, PALETTE, Plot};
 pub use raster::svg_to_png;
 

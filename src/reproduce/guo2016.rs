@@ -9,11 +9,17 @@
 //! - **campaign, beyond the paper**: [`CAMPAIGN_RUNS`] seeded start positions and velocities
 //!   inside the corridor, reaching variant, k2 = 0.02, [`CAMPAIGN_DURATION_S`] each: how often
 //!   the point-mass corridor held while the chaser's full geometry came within
-//!   [`PANEL_CLEARANCE_M`] of a target solar-wing part (panel or boom).
+//!   [`PANEL_CLEARANCE_M`] of a target solar-wing part (panel or boom);
+//! - **continuous time and sampled, in a Bevy-free plant** ([`super::guo2016_ct`]): the law
+//!   evaluated continuously (adaptive stiff integration, event on h = 0) and sampled at
+//!   [`SAMPLING_PERIODS_S`], so what the law does is told apart from what the 100 Hz control
+//!   period does; with the desired attitude held fixed (σ_d ≡ 0) and with the narrowest
+//!   corridor holding r0 (tan θ = [`NARROW_TAN_THETA`]) as the sensitivities.
 //!
 //! [`compute`] runs everything and returns the numbers; [`run`] also writes `REPORT.md`, the
 //! plots and `claims.json`. Tests use [`run_case`] with shortened horizons.
 
+use super::guo2016_ct::{CtRun, CtSetup, run_continuous, run_sampled};
 use crate::control::guo2016::{Guo2016Instance, SceneSpec};
 use crate::geometry::cissoid::Cissoid;
 use crate::scene::{AttitudeSpec, LoadedScene, PartRole, load_scene_str};
@@ -471,6 +477,55 @@ pub struct Results {
     pub campaign: Vec<CampaignRun>,
     /// The corridor (target body frame).
     pub corridor_shape: Cissoid,
+    /// The law in continuous time (Bevy-free plant, [`super::guo2016_ct`]): paper gains,
+    /// k2 = 0.02, [`PAPER_DURATION_S`].
+    pub ct_paper: CtRun,
+    /// Continuous time, reaching variant, k2 = 0.02, [`REACHING_DURATION_S`].
+    pub ct_reaching: CtRun,
+    /// Continuous time, reaching variant, k2 = 0.
+    pub ct_reaching_k2_0: CtRun,
+    /// The reaching variant (k2 = 0.02) sampled at each of [`SAMPLING_PERIODS_S`] in the same
+    /// plant, [`SAMPLED_DURATION_S`].
+    pub sampled: Vec<CtRun>,
+    /// Paper gains in continuous time with the narrowest corridor that holds r0,
+    /// tan θ = [`NARROW_TAN_THETA`]: (k2 = 0.02, k2 = 0).
+    pub ct_narrow: (CtRun, CtRun),
+    /// Barrier layer thickness √k2/|∇h| where the continuous-time reaching run stalls, m.
+    pub barrier_layer_m: f64,
+    /// Continuous time, reaching variant, k2 = 0.02, with the desired attitude held fixed
+    /// (σ_d ≡ 0): the same law without the rotating reference.
+    pub ct_fixed_reference: CtRun,
+    /// The same (σ_d ≡ 0) sampled at 100 Hz in the plant.
+    pub sampled_fixed_reference: CtRun,
+    /// |ω_d| of the desired attitude at the continuous-time exit, rad/s.
+    pub omega_d_at_exit_rad_s: f64,
+}
+
+/// Control periods of the sampled runs in the Bevy-free plant, s (100 Hz, 1 kHz, 10 kHz).
+pub const SAMPLING_PERIODS_S: [f64; 3] = [0.01, 0.001, 0.0001];
+/// Horizon of the sampled runs in the plant, s (the 100 Hz law leaves at 0.51 s).
+pub const SAMPLED_DURATION_S: f64 = 1.0;
+/// tan θ of the narrow-corridor sensitivity: r0 is inside only for tan θ > 4.265.
+pub const NARROW_TAN_THETA: f64 = 4.3;
+
+/// |ω_d| of the desired attitude σ_d(t) relative to D0 at `t_s`: |G(σ_d)⁻¹ σ̇_d|, rad/s.
+pub fn omega_d_rad_s(p: &crate::control::guo2016::Guo2016Params, t_s: f64) -> f64 {
+    let (sd, sd_dot, _) = p.sigma_d(t_s);
+    (crate::math::mrp::mrp_g_inv(&sd) * sd_dot).norm()
+}
+
+/// Barrier layer thickness √k2/|∇h| at r1 (central differences of the closed-form h), m:
+/// where k2/h² exceeds k3 = 1, i.e. where the barrier changes β by more than itself.
+pub fn barrier_layer_m(c: &Cissoid, k2_m4: f64, r1: &Vector3<f64>) -> f64 {
+    let e = 1e-6;
+    let g = Vector3::from_fn(|i, _| {
+        let mut a = *r1;
+        let mut b = *r1;
+        a[i] += e;
+        b[i] -= e;
+        (c.h(&a) - c.h(&b)) / (2.0 * e)
+    });
+    k2_m4.sqrt() / g.norm()
 }
 
 /// Runs every case and the campaign.
@@ -509,6 +564,91 @@ pub fn compute() -> Result<Results, String> {
     let corridor_shape = spec_of(&load_bundled("scenes/guo2016_corridor.ron")?)
         .params(1.0, nalgebra::Matrix3::identity())
         .corridor();
+    let setup = |l: &LoadedScene| CtSetup::from_scene(l);
+    let paper_setup = setup(&load_bundled("scenes/guo2016_corridor.ron")?)?;
+    let reach = setup(&reaching_variant("scenes/guo2016_corridor.ron")?)?;
+    let reach0 = setup(&reaching_variant("scenes/guo2016_no_avoidance.ron")?)?;
+    let clock = std::time::Instant::now();
+    let tick = |what: &str| eprintln!("guo2016: {what} ({:.1} s)", clock.elapsed().as_secs_f64());
+    let ct_paper = run_continuous(
+        &paper_setup,
+        "continuous time, paper gains, k2 = 0.02",
+        PAPER_DURATION_S,
+        0.05,
+    );
+    let ct_reaching = run_continuous(
+        &reach,
+        "continuous time, k_r = 1/s, k2 = 0.02",
+        REACHING_DURATION_S,
+        0.005,
+    );
+    let ct_reaching_k2_0 = run_continuous(
+        &reach0,
+        "continuous time, k_r = 1/s, k2 = 0",
+        REACHING_DURATION_S,
+        0.005,
+    );
+    tick("continuous time, paper gains and reaching variant");
+    let sampled = SAMPLING_PERIODS_S
+        .iter()
+        .map(|&p| {
+            run_sampled(
+                &reach,
+                &format!("sampled every {} ms, k_r = 1/s, k2 = 0.02", p * 1e3),
+                p,
+                SAMPLED_DURATION_S,
+                0.005,
+            )
+        })
+        .collect();
+    tick("sampled runs");
+    let narrow = |file: &str| -> Result<CtSetup, String> {
+        let mut l = load_bundled(file)?;
+        spec_mut(&mut l)
+            .ok_or("no Guo2016 controller")?
+            .corridor_tan_theta = NARROW_TAN_THETA;
+        setup(&l)
+    };
+    let ct_narrow = (
+        run_continuous(
+            &narrow("scenes/guo2016_corridor.ron")?,
+            "continuous time, tan θ = 4.3, k2 = 0.02",
+            PAPER_DURATION_S,
+            0.05,
+        ),
+        run_continuous(
+            &narrow("scenes/guo2016_no_avoidance.ron")?,
+            "continuous time, tan θ = 4.3, k2 = 0",
+            PAPER_DURATION_S,
+            0.05,
+        ),
+    );
+    tick("narrow corridor");
+    let fixed = {
+        let mut l = reaching_variant("scenes/guo2016_corridor.ron")?;
+        *spec_mut(&mut l)
+            .ok_or("no Guo2016 controller")?
+            .sigma_d_amplitude = [0.0; 3];
+        setup(&l)?
+    };
+    let ct_fixed_reference = run_continuous(
+        &fixed,
+        "continuous time, k_r = 1/s, k2 = 0.02, σ_d ≡ 0",
+        REACHING_DURATION_S,
+        0.005,
+    );
+    let sampled_fixed_reference = run_sampled(
+        &fixed,
+        "sampled every 10 ms, k_r = 1/s, k2 = 0.02, σ_d ≡ 0",
+        0.01,
+        SAMPLED_DURATION_S,
+        0.005,
+    );
+    tick("fixed reference");
+    let omega_d_at_exit_rad_s = omega_d_rad_s(&reach.params, ct_reaching.t_end_s);
+    let barrier_layer_m = ct_reaching.samples.last().map_or(f64::NAN, |s| {
+        barrier_layer_m(&corridor_shape, reach.params.k2_m4, &s.r1_m)
+    });
     Ok(Results {
         corridor,
         no_avoidance,
@@ -517,6 +657,15 @@ pub fn compute() -> Result<Results, String> {
         max_path_difference_m,
         campaign,
         corridor_shape,
+        ct_paper,
+        ct_reaching,
+        ct_reaching_k2_0,
+        sampled,
+        ct_narrow,
+        barrier_layer_m,
+        ct_fixed_reference,
+        sampled_fixed_reference,
+        omega_d_at_exit_rad_s,
     })
 }
 
@@ -544,18 +693,62 @@ fn geometry_sentence(r: &CaseRun) -> String {
     )
 }
 
-/// The claims of issue 5 as measured.
+fn held_word(h: bool) -> &'static str {
+    if h { "held" } else { "NOT held" }
+}
+
+/// One line on a plant run: how it ended and its numbers.
+pub fn ct_sentence(r: &CtRun) -> String {
+    let end = match (r.period_s, r.first_outside_s, r.first_exit_at_sample_s) {
+        (None, Some(t), _) => format!("reached the wall (event h = 0) at t = {t:.4} s"),
+        (None, None, _) => format!("inside the corridor to t = {:.1} s", r.t_end_s),
+        (Some(_), out, smp) => format!(
+            "law outside at a sample from {}, between samples from {}",
+            opt_s(smp),
+            opt_s(out)
+        ),
+    };
+    format!(
+        "{}: {end}; min h {:.3e} m², final h {:.3e} m², final |r_e| {:.3} m; peak |F| {:.3e} N; {} accepted steps",
+        r.label, r.min_h_m2, r.final_h_m2, r.final_r_e_m, r.peak_force_n, r.stats.accepted
+    )
+}
+
+/// The claims as measured.
 pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
     use crate::report::Claim;
+    use crate::report::ClaimKind::{BeyondThePaper, Paper};
     let c = &r.corridor;
     let z = &r.no_avoidance;
     let counts = campaign_counts(&r.campaign);
     let ran = r.campaign.iter().filter(|c| c.run.is_some()).count();
+    let (nw, nw0) = (&r.ct_narrow.0, &r.ct_narrow.1);
+    let ct_held = |x: &CtRun| x.first_outside_s.is_none() && x.min_h_m2 > 0.0;
+    let conv_src = "ours: |r_e| < 1 cm and |σ_e| < 1e-4 — the paper says 'converge to zero' without a \
+                    number; 1 cm and 1e-4 are over three orders below the initial errors (41 m, 0.1)";
+    let h_src = "paper: h > 0 at every instant (the corridor guarantee, eqs (31)–(35), Remark 3)";
+    let ct = &r.ct_reaching;
+    let ct0 = &r.ct_reaching_k2_0;
+    let zoh = |k: usize| r.sampled.get(k);
+    let zoh_text = |k: usize| {
+        zoh(k).map_or("—".to_string(), |x| {
+            format!(
+                "{} ms: outside at a sample from {} (between samples from {}) over {SAMPLED_DURATION_S} s, final |r_e| {:.1} m, peak |F| {:.2e} N",
+                x.period_s.unwrap_or(f64::NAN) * 1e3,
+                opt_s(x.first_exit_at_sample_s),
+                opt_s(x.first_outside_s),
+                x.final_r_e_m,
+                x.peak_force_n
+            )
+        })
+    };
     vec![
         Claim::new(
             "guo2016-corridor-held",
+            Paper,
             "With k2 = 0.02 the chaser's centre of mass stays inside the corridor (h > 0) for the whole run.",
             Some("the corridor is never left (h > 0 throughout)"),
+            h_src,
             format!(
                 "min h = {:.2} m², min distance to the corridor wall {:.3} m, first exit: {} (t = 0–{PAPER_DURATION_S} s)",
                 c.min_h_m2,
@@ -563,28 +756,40 @@ pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
                 opt_s(c.first_exit_s)
             ),
             c.corridor_held && c.min_corridor_margin_m > 0.0,
-        ),
+        )
+        .with_sensitivity(format!(
+            "tan θ (not given) = {NARROW_TAN_THETA}, the narrowest corridor holding r0 (continuous time): {} (min h {:.3e} m²); tan θ = 5, continuous time: {}",
+            held_word(ct_held(nw)),
+            nw.min_h_m2,
+            held_word(ct_held(&r.ct_paper))
+        )),
         Claim::new(
             "guo2016-errors-converge",
+            Paper,
             "With k2 = 0.02 the position and attitude errors converge: final |r_e| < 1 cm and |σ_e| < 1e-4.",
             Some("position and attitude errors converge to zero"),
+            conv_src,
             format!(
-                "at t = {PAPER_DURATION_S} s: |r_e| = {:.3} m, |σ_e| = {:.3e}",
-                c.final_r_e_m, c.final_sigma_e
+                "at t = {PAPER_DURATION_S} s: |r_e| = {:.3} m, |σ_e| = {:.3e} (continuous time, Bevy-free plant: |r_e| = {:.3} m, |σ_e| = {:.3e})",
+                c.final_r_e_m, c.final_sigma_e, r.ct_paper.final_r_e_m, r.ct_paper.final_sigma_e
             ),
             c.final_r_e_m < 0.01 && c.final_sigma_e < 1e-4,
         ),
         Claim::new(
             "guo2016-no-collision",
+            BeyondThePaper,
             "With k2 = 0.02 no part of the chaser touches the target.",
             None,
+            "ours: any contact between a chaser part and a target part (the paper models no geometry)",
             geometry_sentence(c),
             c.first_contact_s.is_none(),
         ),
         Claim::new(
             "guo2016-k2-0-leaves-corridor",
+            Paper,
             "With k2 = 0 the chaser leaves the corridor.",
             Some("without the corridor term the chaser leaves the corridor"),
+            "paper: §5 comparison run — h ≤ 0 at some instant",
             format!(
                 "min h = {:.2} m², first exit: {}; {}",
                 z.min_h_m2,
@@ -592,49 +797,112 @@ pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
                 geometry_sentence(z)
             ),
             !z.corridor_held,
-        ),
+        )
+        .with_sensitivity(format!(
+            "tan θ (not given) = {NARROW_TAN_THETA}, continuous time: k2 = 0 {} ({}): {}; k2 = 0.02 {} ({})",
+            if ct_held(nw0) { "stays inside" } else { "leaves" },
+            nw0.first_outside_s.map_or("no exit".into(), |t| format!("at {t:.4} s")),
+            held_word(!ct_held(nw0)),
+            if ct_held(nw) { "stays inside" } else { "leaves too" },
+            nw.first_outside_s.map_or("no exit".into(), |t| format!("at {t:.4} s"))
+        )),
         Claim::new(
             "guo2016-k2-changes-path",
+            Paper,
             "The corridor term changes the path: k2 = 0.02 and k2 = 0 differ by more than 1 cm.",
             Some("the paths with and without the corridor term differ"),
+            "ours: 1 cm, far above the f64 differences of two runs and far below any visible difference in the paper's figures",
             format!(
                 "largest position difference {:.2e} m over {PAPER_DURATION_S} s",
                 r.max_path_difference_m
             ),
             r.max_path_difference_m > 0.01,
-        ),
+        )
+        .with_sensitivity(format!(
+            "tan θ = {NARROW_TAN_THETA} (continuous time): {}",
+            if ct_held(nw) != ct_held(nw0) {
+                "the two runs differ (one leaves, one stays): held"
+            } else {
+                "NOT held"
+            }
+        )),
         Claim::new(
             "guo2016-reaching-converges",
-            "Not in the paper: with an added reaching term k_r = 1/s the errors converge (|r_e| < 1 cm, |σ_e| < 1e-4).",
+            BeyondThePaper,
+            "Not in the paper: with an added reaching term k_r = 1/s the errors converge (|r_e| < 1 cm, |σ_e| < 1e-4), law sampled at 100 Hz.",
             None,
+            conv_src,
             format!(
-                "at t = {REACHING_DURATION_S} s: |r_e| = {:.2e} m, |σ_e| = {:.2e}",
+                "at t = {REACHING_DURATION_S} s: |r_e| = {:.2e} m, |σ_e| = {:.2e} (the path leaves the corridor on the way)",
                 r.reaching.final_r_e_m, r.reaching.final_sigma_e
             ),
             r.reaching.final_r_e_m < 0.01 && r.reaching.final_sigma_e < 1e-4,
-        ),
+        )
+        .with_sensitivity(format!(
+            "continuous time: the run ends where the chaser leaves the corridor at t = {:.4} s with |r_e| = {:.2} m (the law is undefined outside): NOT held; continuous time with σ_d ≡ 0: |r_e| = {:.1e} m, |σ_e| = {:.1e} at {REACHING_DURATION_S} s: {}",
+            ct.t_end_s,
+            ct.final_r_e_m,
+            r.ct_fixed_reference.final_r_e_m,
+            r.ct_fixed_reference.final_sigma_e,
+            held_word(r.ct_fixed_reference.final_r_e_m < 0.01 && r.ct_fixed_reference.final_sigma_e < 1e-4)
+        )),
         Claim::new(
-            "guo2016-reaching-corridor-held",
-            "Not in the paper: with k_r = 1/s and k2 = 0.02 the corridor still holds.",
+            "guo2016-reaching-corridor-held-continuous",
+            BeyondThePaper,
+            "Not in the paper: with k_r = 1/s and k2 = 0.02, the law in continuous time keeps the chaser inside the corridor (h > 0).",
             None,
+            h_src,
             format!(
-                "first exit {}, min h = {:.2} m², min distance to the wall {:.3} m; largest |F| {:.3e} N; {}",
+                "{}; at the last point |ṙ_e| = {:.1e} m/s, ḣ = {:.3} m²/s: the chaser's body-frame motion has stopped, the desired attitude σ_d(t) still turns (its rate {:.2e} rad/s carries the body-fixed line of sight across the wall). With k2 = 0 the continuous-time law {}",
+                ct_sentence(ct),
+                ct.samples.last().map_or(f64::NAN, |s| s.r_e_dot_m_s),
+                ct.samples.last().map_or(f64::NAN, |s| s.h_dot_m2_s),
+                r.omega_d_at_exit_rad_s,
+                ct0.first_outside_s
+                    .map_or("stays inside".into(), |t| format!("reaches the wall at t = {t:.4} s"))
+            ),
+            ct_held(ct),
+        )
+        .with_sensitivity(format!(
+            "σ_d(t) is the paper's; with the desired attitude held fixed (σ_d ≡ 0): {} — {}",
+            held_word(ct_held(&r.ct_fixed_reference)),
+            ct_sentence(&r.ct_fixed_reference)
+        )),
+        Claim::new(
+            "guo2016-reaching-corridor-held-100hz",
+            BeyondThePaper,
+            "Not in the paper: with k_r = 1/s and k2 = 0.02, the law sampled at 100 Hz (the scenes' control period) keeps the chaser inside the corridor.",
+            None,
+            h_src,
+            format!(
+                "ECS: first exit {}, min h = {:.2} m², min distance to the wall {:.3} m; largest |F| {:.3e} N; {}. Bevy-free plant: {}",
                 opt_s(r.reaching.first_exit_s),
                 r.reaching.min_h_m2,
                 r.reaching.min_corridor_margin_m,
                 r.reaching.max_force_n,
-                geometry_sentence(&r.reaching)
+                geometry_sentence(&r.reaching),
+                zoh_text(0)
             ),
             r.reaching.corridor_held,
-        ),
+        )
+        .with_sensitivity(format!(
+            "the control period is ours (the paper's is not given): {}; {}; continuous time: {}; σ_d ≡ 0 at 100 Hz: outside at a sample from {} (continuous time with σ_d ≡ 0: {})",
+            zoh_text(1),
+            zoh_text(2),
+            held_word(ct_held(ct)),
+            opt_s(r.sampled_fixed_reference.first_exit_at_sample_s),
+            held_word(ct_held(&r.ct_fixed_reference))
+        )),
         Claim::new(
             "guo2016-campaign-corridor-keeps-wings-clear",
+            BeyondThePaper,
             format!(
                 "Beyond the paper: whenever the point-mass corridor held, the chaser's full geometry stayed more than {PANEL_CLEARANCE_M} m from every target solar-wing part."
             ),
             None,
+            "ours: 0.5 m, half the chaser bus size (a margin a docking approach would keep)",
             format!(
-                "{ran} runs (k_r = 1/s, k2 = 0.02, seed {CAMPAIGN_SEED}): corridor held and wings clear {}, corridor held but a wing part within {PANEL_CLEARANCE_M} m {}, corridor left {}; {} starts refused (overlap at t = 0)",
+                "{ran} runs (k_r = 1/s, k2 = 0.02, 100 Hz, seed {CAMPAIGN_SEED}): corridor held and wings clear {}, corridor held but a wing part within {PANEL_CLEARANCE_M} m {}, corridor left {}; {} starts refused (overlap at t = 0)",
                 counts[0],
                 counts[1],
                 counts[2] + counts[3],
@@ -764,7 +1032,12 @@ fn build_report(
     rep.heading("Choices where the paper is silent");
     rep.paragraph(
         "- tan θ = 5 (θ ≈ 78.7°): r0 read in the target frame is inside the corridor only for \
-         tan θ > 4.265; 5 puts it 1.31 m inside (h(r0) = 642 m²).\n\
+         tan θ > 4.265; 5 puts it 1.31 m inside (h(r0) = 642 m²). Sensitivity: tan θ = 4.3 \
+         (claims table).\n\
+         - Control period: the law runs every 10 ms step with its command held (the paper \
+         gives no period). Sensitivity: 1 ms, 0.1 ms and continuous time (below).\n\
+         - σ_d(t) is taken relative to D0, fixed to the target (at rest here), so the desired \
+         frame turns at |ω_d| ≈ 1.4e-4 rad/s. Sensitivity: σ_d ≡ 0.\n\
          - r_b = target − chaser (line of sight) in chaser axes, so r_d = [2, 0, 0] m puts the \
          target 2 m ahead of the chaser's docking cone; attitude relative to the docking frame \
          D0 = target frame turned by π about z; at zero error the chaser sits on the target's \
@@ -780,29 +1053,44 @@ fn build_report(
     );
 
     rep.heading("Findings");
+    let ct = &r.ct_reaching;
+    let ctf = &r.ct_fixed_reference;
+    let last = ct.samples.last();
     rep.paragraph(format!(
         "**The paper's gains do not converge.** The chaser brakes within ~0.5 s (|ṙ1| from \
          {:.3} m/s to {:.4} m/s at t = 0.5 s) and then drifts at {:.4} m/s where the sliding \
          variable put it: final |r_e| = {:.3} m, |σ_e| = {:.3e} \
-         (k2 = 0.02, t = {PAPER_DURATION_S} s). The reaching term k4‖B2‖sat(S/ε) can change each \
+         (k2 = 0.02, t = {PAPER_DURATION_S} s; the law in continuous time in an independent \
+         Bevy-free plant: |r_e| = {:.3} m). The reaching term k4‖B2‖sat(S/ε) can change each \
          translational S component by at most β·k4·‖B2‖/m ≈ 2e-4 m/s² while |S(0)| ≈ 393 m/s, \
          so S stays near S(0) and x settles near S(0)/k1. The disturbance torque also enters the \
          translation rows through ω̇ × r_b (m·|r_b|·|J⁻¹d_τ| ≈ 0.8 N ≫ k4), which the proof's \
          condition k4 > ‖d‖ does not cover.\n\n\
          **k2 = 0 does not leave the corridor either**: the two runs differ by at most {:.2e} m. \
-         The barrier k2/h² only matters for h ≲ √k2 ≈ 0.14 m² (a layer millimetres thick at the \
-         wall); here min h = {:.1} m² (k2 = 0.02) and {:.1} m² (k2 = 0). Against the full geometry \
-         nothing happens in either run: {} (k2 = 0.02); {} (k2 = 0).\n\n\
-         **With a reaching term that makes S → 0 (k_r = 1/s, not in the paper)** the errors do \
-         converge (|r_e| = {:.1e} m, |σ_e| = {:.1e} at {REACHING_DURATION_S} s), but on S = 0 the \
-         motion ẋ = −k1x/β keeps the direction of x: the path is the straight line r0 → r_d, \
-         which crosses the corridor wall for tan θ = 5 (h ≈ −65 m² at its midpoint). The chaser \
-         left the corridor at t = {} with k2 = 0.02 (at r1 = {}) and at t = {} with k2 = 0. \
-         In continuous \
-         time the barrier can only hold by demanding unbounded force (βẋ = S − k1x is \
-         continuous, so the approach speed must vanish inside the mm-thick layer); at \
-         dt = 0.01 s it is jumped over (largest |F| {:.3e} N). Against the full geometry: \
-         {}.\n\n\
+         The barrier k2/h² changes β by more than k3 only for h < √k2 ≈ 0.14 m², a layer \
+         √k2/|∇h| = {:.2} mm thick where the chaser meets the wall (sub-millimetre); here min \
+         h = {:.1} m² (k2 = 0.02) and {:.1} m² (k2 = 0). β is a scalar multiplying the whole \
+         error velocity ẋ = [σ̇_e; ṙ_e]: it can slow the chaser down, never steer it. Against \
+         the full geometry nothing happens in either run: {} (k2 = 0.02); {} (k2 = 0).\n\n\
+         **With a reaching term that makes S → 0 (k_r = 1/s, not in the paper)**, sampled at \
+         100 Hz as in the scenes, the errors converge (|r_e| = {:.1e} m, |σ_e| = {:.1e} at \
+         {REACHING_DURATION_S} s) but the chaser leaves the corridor at t = {} (k2 = 0.02, at \
+         r1 = {}) and at t = {} (k2 = 0): between two samples the held command carries it \
+         through the sub-millimetre layer (largest |F| {:.3e} N). Crossing the layer is a \
+         property of the sampling: in continuous time the law stops the chaser at the wall \
+         (next paragraph).\n\n\
+         **The law in continuous time** (same law, exact state at every evaluation, adaptive \
+         L-stable Rosenbrock steps with an event on h = 0, {} steps): the chaser reaches the \
+         wall at t ≈ 0.51 s and its body-frame motion stops there (|r_e| = {:.2} m, \
+         |ṙ_e| = {:.1e} m/s at the end, peak |F| {:.3e} N — finite). With the paper's \
+         σ_d(t) it still leaves, at t = {:.4} s: β slows the error rates, but the desired \
+         attitude keeps turning (|ω_d| = {:.2e} rad/s) and carries the line of sight, fixed \
+         in the chaser body, across the wall at ḣ = {:.3} m²/s — a property of the law with a \
+         moving attitude reference, not of the step. With the desired attitude held fixed \
+         (σ_d ≡ 0) the continuous-time law keeps h > 0 for the whole {REACHING_DURATION_S} s \
+         (min h {:.2e} m², it bounces off the wall and slides along it) and converges \
+         (|r_e| = {:.1e} m at {REACHING_DURATION_S} s, peak |F| {:.3e} N), while the same law \
+         sampled at 100 Hz leaves at t = {}. Against the full geometry (100 Hz run): {}.\n\n\
          The corridor guarantee concerns the centre of mass only; the monitor's full-geometry \
          distances are what say whether a panel was met.",
         speed_at(c, 0.0),
@@ -810,7 +1098,9 @@ fn build_report(
         speed_at(c, PAPER_DURATION_S),
         c.final_r_e_m,
         c.final_sigma_e,
+        r.ct_paper.final_r_e_m,
         r.max_path_difference_m,
+        r.barrier_layer_m * 1e3,
         c.min_h_m2,
         z.min_h_m2,
         geometry_sentence(c),
@@ -829,8 +1119,105 @@ fn build_report(
             )),
         opt_s(r.reaching_no_avoidance.first_exit_s),
         r.reaching.max_force_n,
+        ct.stats.accepted,
+        ct.final_r_e_m,
+        last.map_or(f64::NAN, |s| s.r_e_dot_m_s),
+        ct.peak_force_n,
+        ct.t_end_s,
+        r.omega_d_at_exit_rad_s,
+        last.map_or(f64::NAN, |s| s.h_dot_m2_s),
+        ctf.min_h_m2,
+        ctf.final_r_e_m,
+        ctf.peak_force_n,
+        opt_s(r.sampled_fixed_reference.first_exit_at_sample_s),
         geometry_sentence(&r.reaching),
     ));
+    rep.heading("Continuous time and sampled, side by side (Bevy-free plant)");
+    rep.paragraph(
+        "The same law in an independent f64 plant (`src/reproduce/guo2016_ct.rs`: target orbit \
+         and relative motion in inertial axes with two-body + J2 gravity, quaternion attitude, \
+         Euler's equations, the paper's d_τ), integrated by the adaptive linearly implicit \
+         Rosenbrock method of `src/math/ode.rs` (rtol 1e-9, atol 1e-10 m on the relative \
+         motion; the sliding variable's dynamics become stiff near the wall, rate ∝ k2/h²). \
+         Continuous time: the law at every evaluation, a terminal event on h = 0 located to \
+         1e-9 s. Sampled: the law every period, the command held. Reaching variant (k_r = 1/s), \
+         k2 = 0.02 unless noted.",
+    );
+    let mut rows: Vec<Vec<String>> = Vec::new();
+    let row = |x: &CtRun| {
+        vec![
+            x.label.clone(),
+            match (x.period_s, x.first_outside_s, x.first_exit_at_sample_s) {
+                (None, Some(t), _) => format!("left at {t:.4} s (event h = 0)"),
+                (None, None, _) => format!("inside to {:.1} s", x.t_end_s),
+                (Some(_), _, Some(t)) => format!("left, seen at the sample at {t:.2} s"),
+                (Some(_), _, None) => format!("inside to {:.1} s", x.t_end_s),
+            },
+            if x.min_h_m2 == f64::NEG_INFINITY {
+                "−∞ (beyond the plane x = 2a)".to_string()
+            } else {
+                format!("{:.3e}", x.min_h_m2)
+            },
+            format!("{:.3}", x.final_r_e_m),
+            format!("{:.3e}", x.peak_force_n),
+            x.stats.accepted.to_string(),
+        ]
+    };
+    for x in [ct, &r.ct_reaching_k2_0, ctf]
+        .into_iter()
+        .chain(r.sampled.iter())
+        .chain([&r.sampled_fixed_reference])
+        .chain([&r.ct_paper, &r.ct_narrow.0, &r.ct_narrow.1])
+    {
+        rows.push(row(x));
+    }
+    rep.table(
+        &[
+            "run",
+            "corridor",
+            "min h at the accepted points (m²)",
+            "final |r_e| (m)",
+            "peak |F| (N)",
+            "accepted steps",
+        ],
+        &rows,
+    );
+    let h_plot = |title: &str, runs: &[&CtRun], t_min: f64, t_max: f64| {
+        let mut p = Plot::new(title)
+            .x_label("t (s)")
+            .y_label("h (m²), log")
+            .log_y()
+            .x_range(t_min, t_max);
+        for x in runs {
+            p = p.line(
+                x.label.clone(),
+                x.samples
+                    .iter()
+                    .filter(|s| s.t_s >= t_min && s.t_s <= t_max && s.h_m2 > 0.0)
+                    .map(|s| (s.t_s, s.h_m2)),
+            );
+        }
+        p
+    };
+    rep.figure(
+        "continuous_vs_sampled",
+        "corridor function h(t), continuous time and sampled",
+        Figure::new("Corridor function h along the reaching variant: continuous time vs sampled")
+            .cols(2)
+            .size_px(1400, 560)
+            .plot(h_plot(
+                "near the wall (0.45–0.65 s)",
+                &[ct, ctf, &r.sampled[0], &r.sampled[1]],
+                0.45,
+                0.65,
+            ))
+            .plot(h_plot(
+                &format!("whole run (0–{REACHING_DURATION_S} s)"),
+                &[ct, ctf, &r.sampled[0]],
+                0.0,
+                REACHING_DURATION_S,
+            )),
+    );
 
     // Paths in the meridian plane of the target frame.
     let shape = &r.corridor_shape;

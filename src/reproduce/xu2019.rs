@@ -8,6 +8,14 @@
 //!   25 Hz vision with noise and one frame of latency, differenced velocity, true
 //!   I_z = 0.055 kg·m² (the paper says its measured 0.05 is slightly low).
 //!
+//! Variants of both cases (same scenes, one change each):
+//! - **law kept active** (`release_on_magnet: false`): the paper does not say the law stops
+//!   at the magnet; the scenes' default switches it off there;
+//! - **ghost obstacle**: the obstacle body removed from the scene, the law keeping its
+//!   obstacle parameters — the approach without the contacts the prism causes;
+//! - **experiment, I_z as tuned** (0.05 kg·m²): separates the inertia effect from the
+//!   nozzles in the attitude comparison.
+//!
 //! Writes `REPORT.md`, `path.png`, `states.png`, `distances.png`, `valves.png`, `claims.json`
 //! and each case's `trajectory.csv`, `events.jsonl`, `summary.json` under `OUT/<case>/`.
 
@@ -28,8 +36,16 @@ pub const EXPERIMENT_SCENE: &str = include_str!("../../scenes/xu2019_experiment.
 
 /// Goal tolerance of the claims: position, m.
 pub const GOAL_POS_TOL_M: f64 = 0.01;
-/// Goal tolerance of the claims: attitude, deg.
+/// Goal tolerance of the claims: attitude, deg. Ours: the paper shows the attitude converging
+/// (Fig. 13d) without a tolerance; 2° is a round value below the mechanism's 3° latch
+/// tolerance. [`LATCH_ANGLE_TOL_DEG`] is the sensitivity.
 pub const GOAL_ANGLE_TOL_DEG: f64 = 2.0;
+/// The scenes' latch angle tolerance, deg: the other plausible goal tolerance.
+pub const LATCH_ANGLE_TOL_DEG: f64 = 3.0;
+/// Override that keeps the law commanding after the magnet switches on.
+pub const LAW_KEPT_ACTIVE: &str = "controllers.0.0.release_on_magnet=false";
+/// Override that gives the experiment's chaser the I_z the law was tuned with.
+pub const EXPERIMENT_TUNED_IZ: &str = "bodies.chaser.inertia_kg_m2.zz=0.05";
 /// Sampling period of the recorded series, s.
 pub const SAMPLE_S: f64 = 0.1;
 
@@ -124,6 +140,34 @@ pub struct Results {
     /// A diagnostic when the simulation case did not latch: the case restarted at each of
     /// [`RESTART_S`] from its own recorded state (fresh world, law and sensor state).
     pub restarts: Vec<(f64, CaseRun)>,
+    /// The simulation case with the law kept active after the magnet ([`LAW_KEPT_ACTIVE`]).
+    pub simulation_active: CaseRun,
+    /// The experiment case with the law kept active after the magnet.
+    pub experiment_active: CaseRun,
+    /// The simulation case with a ghost obstacle ([`ghost_obstacle`]).
+    pub simulation_ghost: CaseRun,
+    /// The experiment case with a ghost obstacle.
+    pub experiment_ghost: CaseRun,
+    /// The experiment case with the chaser's true I_z = 0.05 kg·m² ([`EXPERIMENT_TUNED_IZ`]).
+    pub experiment_tuned_iz: CaseRun,
+}
+
+impl Results {
+    /// The (case, law kept active, ghost obstacle) runs of both cases, simulation first.
+    pub fn variants(&self) -> [(&CaseRun, &CaseRun, &CaseRun); 2] {
+        [
+            (
+                &self.simulation,
+                &self.simulation_active,
+                &self.simulation_ghost,
+            ),
+            (
+                &self.experiment,
+                &self.experiment_active,
+                &self.experiment_ghost,
+            ),
+        ]
+    }
 }
 
 /// Restart times of the diagnostic runs, s (after the obstacle episode, before the magnet).
@@ -174,7 +218,33 @@ pub fn run_case_with(
     out: Option<&Path>,
 ) -> Result<CaseRun, String> {
     let loaded = load_scene_str(text, file, overrides).map_err(|e| e.to_string())?;
-    let mut sim = Simulation::new(&loaded).map_err(|e| e.to_string())?;
+    run_loaded(name, &loaded, duration_s, out)
+}
+
+/// The loaded scene with its obstacle made a ghost: the `obstacle` body (and its anchoring)
+/// removed, the law unchanged (it keeps its own obstacle parameters, `Xu2019Params`).
+pub fn ghost_obstacle(loaded: &crate::scene::LoadedScene) -> crate::scene::LoadedScene {
+    let mut l = loaded.clone();
+    l.scene.bodies.retain(|b| b.name != "obstacle");
+    if let crate::scene::Environment::AirBearing(ab) = &mut l.scene.environment {
+        ab.anchored.retain(|n| n != "obstacle");
+    }
+    l
+}
+
+/// [`run_case`] on a loaded (possibly modified) scene.
+pub fn run_loaded(
+    name: &str,
+    loaded: &crate::scene::LoadedScene,
+    duration_s: Option<f64>,
+    out: Option<&Path>,
+) -> Result<CaseRun, String> {
+    let mut sim = Simulation::new(loaded).map_err(|e| e.to_string())?;
+    let obstacle = loaded
+        .scene
+        .bodies
+        .iter()
+        .position(|b| b.name == "obstacle");
     if let Some(dir) = out {
         sim.record_to(dir)
             .map_err(|e| format!("cannot write {}: {e}", dir.display()))?;
@@ -225,7 +295,7 @@ pub fn run_case_with(
         let d = mon
             .pairs
             .iter()
-            .find(|q| q.a == 0 && q.b == 2)
+            .find(|q| q.a == 0 && Some(q.b) == obstacle)
             .map_or(f64::NAN, |q| q.distance_m);
         run.geometry_obstacle_m.push(d);
         run.open_nozzles.push(open_mean);
@@ -274,14 +344,17 @@ pub fn run_case_with(
         })
         .map(|(t, _)| *t);
     let mon = sim.monitor();
-    if let Some(i) = mon.pairs.iter().position(|q| q.a == 0 && q.b == 2) {
+    run.min_geometry_obstacle = (f64::NAN, "no obstacle body".into(), f64::NAN);
+    if let Some(b) = obstacle
+        && let Some(i) = mon.pairs.iter().position(|q| q.a == 0 && q.b == b)
+    {
         let m = &mon.min_per_pair[i];
         run.min_geometry_obstacle = (
             m.distance_m,
             format!(
                 "{} | {}",
                 mon.part_name(0, m.part_a),
-                mon.part_name(2, m.part_b)
+                mon.part_name(b, m.part_b)
             ),
             m.t_s,
         );
@@ -360,10 +433,32 @@ pub fn compute(out: Option<&Path>) -> Result<Results, String> {
             restarts.push((t0, r));
         }
     }
+    let case = |name: &str, text: &str, file: &str, ov: &[String]| {
+        run_case_with(name, text, file, ov, None, None)
+    };
+    let ghost = |name: &str, text: &str, file: &str| {
+        let loaded = load_scene_str(text, file, &[]).map_err(|e| e.to_string())?;
+        run_loaded(name, &ghost_obstacle(&loaded), None, None)
+    };
+    let (sf, ef) = (
+        "scenes/xu2019_simulation.ron",
+        "scenes/xu2019_experiment.ron",
+    );
+    let active = [LAW_KEPT_ACTIVE.to_string()];
     Ok(Results {
         simulation,
         experiment,
         restarts,
+        simulation_active: case("simulation, law kept active", SIMULATION_SCENE, sf, &active)?,
+        experiment_active: case("experiment, law kept active", EXPERIMENT_SCENE, ef, &active)?,
+        simulation_ghost: ghost("simulation, ghost obstacle", SIMULATION_SCENE, sf)?,
+        experiment_ghost: ghost("experiment, ghost obstacle", EXPERIMENT_SCENE, ef)?,
+        experiment_tuned_iz: case(
+            "experiment, I_z = 0.05",
+            EXPERIMENT_SCENE,
+            ef,
+            &[EXPERIMENT_TUNED_IZ.to_string()],
+        )?,
     })
 }
 
@@ -391,32 +486,96 @@ pub fn settling(run: &CaseRun) -> [[Option<f64>; 2]; 3] {
     out
 }
 
+/// Whether a run latched and ended within `angle_tol_deg` and [`GOAL_POS_TOL_M`] of the goal.
+fn at_goal_and_latched(run: &CaseRun, angle_tol_deg: f64) -> bool {
+    run.dock_state == DockState::Latched.name()
+        && run.final_pos_err_m < GOAL_POS_TOL_M
+        && run.final_angle_err_deg < angle_tol_deg
+}
+
+fn goal_text(run: &CaseRun) -> String {
+    format!(
+        "final |Δp| {:.4} m, |Δθ| {:.2}°; first within 1 cm & 2° at {}; docking {} ({}); latch {}",
+        run.final_pos_err_m,
+        run.final_angle_err_deg,
+        fmt_opt(run.first_at_goal_s),
+        run.dock_state,
+        run.dock_reason,
+        fmt_opt(run.t_latch_s)
+    )
+}
+
+/// Largest distance between two runs' centre-of-mass paths at their common samples with
+/// t < `before_s` and with t ≥ `before_s`, m.
+pub fn path_deviation_m(a: &CaseRun, b: &CaseRun, before_s: f64) -> (f64, f64) {
+    let mut d = (0.0f64, 0.0f64);
+    for k in 0..a.t_s.len().min(b.t_s.len()) {
+        let e = (a.x_m[k] - b.x_m[k]).hypot(a.y_m[k] - b.y_m[k]);
+        if a.t_s[k] < before_s {
+            d.0 = d.0.max(e);
+        } else {
+            d.1 = d.1.max(e);
+        }
+    }
+    d
+}
+
+/// θ settling lag of run `a` behind run `b` at 50 % (`j` = 0) or 90 % (`j` = 1) of the
+/// change, as "+x.x s" (or "n/a").
+fn lag_s(a: &CaseRun, b: &CaseRun, j: usize) -> String {
+    match (settling(a)[2][j], settling(b)[2][j]) {
+        (Some(x), Some(y)) => format!("{:+.1} s", x - y),
+        _ => "n/a".into(),
+    }
+}
+
 /// The claims of the issue, measured.
 pub fn claims(r: &Results) -> Vec<Claim> {
+    use crate::report::ClaimKind::{BeyondThePaper, Paper};
+    let tol_src = "ours: 1 cm and 2° — the paper shows x, y, θ converging (Fig. 13b–d) without \
+                   a tolerance; 2° is a round value below the mechanism's 3° latch tolerance";
     let mut v = Vec::new();
-    for run in [&r.simulation, &r.experiment] {
-        let latched = run.dock_state == DockState::Latched.name();
-        let held = latched
-            && run.final_pos_err_m < GOAL_POS_TOL_M
-            && run.final_angle_err_deg < GOAL_ANGLE_TOL_DEG;
-        v.push(Claim::new(
-            format!("{}-reaches-goal-and-latches", run.name),
-            format!(
-                "The {} case reaches the goal (0.25 m, 1.4 m, 90°) within 1 cm and 2° and the chaser latches to the target simulator.",
-                run.name
-            ),
-            Some("Fig. 13b–d: both reach (0.25 m, 1.4 m, 90°); the docking mechanism locks"),
-            format!(
-                "final |Δp| {:.4} m, |Δθ| {:.2}°; first within 1 cm & 2° at {}; docking {} ({}); latch {}",
-                run.final_pos_err_m,
-                run.final_angle_err_deg,
-                fmt_opt(run.first_at_goal_s),
-                run.dock_state,
-                run.dock_reason,
-                fmt_opt(run.t_latch_s)
-            ),
-            held,
-        ));
+    for (run, active, _) in r.variants() {
+        let held = at_goal_and_latched(run, GOAL_ANGLE_TOL_DEG);
+        v.push(
+            Claim::new(
+                format!("{}-reaches-goal-and-latches", run.name),
+                Paper,
+                format!(
+                    "The {} case reaches the goal (0.25 m, 1.4 m, 90°) within 1 cm and 2° and the chaser latches to the target simulator (law switched off when the magnet switches on, the scenes' default).",
+                    run.name
+                ),
+                Some("Fig. 13b–d: both reach (0.25 m, 1.4 m, 90°); the docking mechanism locks"),
+                tol_src,
+                goal_text(run),
+                held,
+            )
+            .with_sensitivity(format!(
+                "with the latch's own {LATCH_ANGLE_TOL_DEG}° tolerance: {}; with the law kept active after the magnet (the paper does not say it stops): {} (|Δθ| {:.2}°)",
+                if at_goal_and_latched(run, LATCH_ANGLE_TOL_DEG) { "held" } else { "NOT held" },
+                if at_goal_and_latched(active, GOAL_ANGLE_TOL_DEG) { "held" } else { "NOT held" },
+                active.final_angle_err_deg
+            )),
+        );
+        v.push(
+            Claim::new(
+                format!("{}-law-kept-active-reaches-goal-and-latches", run.name),
+                Paper,
+                format!(
+                    "The {} case with the law kept active after the magnet switches on (`release_on_magnet: false`) reaches the goal within 1 cm and 2° and latches.",
+                    run.name
+                ),
+                Some("Fig. 13b–d: both reach (0.25 m, 1.4 m, 90°); the docking mechanism locks"),
+                tol_src,
+                goal_text(active),
+                at_goal_and_latched(active, GOAL_ANGLE_TOL_DEG),
+            )
+            .with_sensitivity(format!(
+                "law switched off at the magnet (scenes' default): {} (|Δθ| {:.2}°)",
+                if held { "held" } else { "NOT held" },
+                run.final_angle_err_deg
+            )),
+        );
     }
     for run in [&r.simulation, &r.experiment] {
         let n = run.approach_end() + 1;
@@ -427,11 +586,13 @@ pub fn claims(r: &Results) -> Vec<Claim> {
         let mo_all = CaseRun::min(&run.radial_obstacle_exact_m);
         v.push(Claim::new(
             format!("{}-radial-distances-positive", run.name),
+            Paper,
             format!(
                 "In the {} case the chaser centre of mass keeps positive radial distances to the obstacle and to the heart keep-out throughout the controlled approach (until the law hands over to the docking magnet).",
                 run.name
             ),
             Some("Fig. 13a: both radial Euclidean distances > 0 throughout, no collision"),
+            "paper: Fig. 13a, radial distance > 0",
             format!(
                 "until the hand-over at {}: min obstacle radial {m8:.4} m (eq 8) / {me:.4} m (exact), min heart radial {mh:.4} m; over the whole run (approach, capture and after): obstacle {mo_all:.4} m, heart {mh_all:.4} m (sampled every {SAMPLE_S} s)",
                 fmt_opt(run.magnet_on_s)
@@ -444,11 +605,13 @@ pub fn claims(r: &Results) -> Vec<Claim> {
         let first = run.obstacle_collisions.first();
         v.push(Claim::new(
             format!("{}-no-obstacle-collision", run.name),
+            BeyondThePaper,
             format!(
                 "In the {} case the chaser's full geometry (body and docking cone) never touches the obstacle prism.",
                 run.name
             ),
             Some("no collision during the whole rendezvous (judged on the centre of mass only)"),
+            "ours: any contact between a chaser part and the prism (the paper judges the centre of mass only)",
             match first {
                 None => format!("min full-geometry distance {d:.4} m ({parts}) at {t:.2} s; no collision"),
                 Some((tc, a, b)) => format!(
@@ -459,40 +622,90 @@ pub fn claims(r: &Results) -> Vec<Claim> {
             first.is_none() && *d > 0.0,
         ));
     }
+    for (run, _, ghost) in r.variants() {
+        let t_hit = run
+            .obstacle_collisions
+            .first()
+            .map_or(f64::INFINITY, |c| c.0);
+        let (before, after) = path_deviation_m(run, ghost, t_hit);
+        v.push(Claim::new(
+            format!("{}-ghost-obstacle-reaches-goal-and-latches", run.name),
+            BeyondThePaper,
+            format!(
+                "With the obstacle not physical (body removed, the law keeping its obstacle parameters) the {} case reaches the goal within 1 cm and 2° and latches: what the approach does without the contacts.",
+                run.name
+            ),
+            None,
+            tol_src,
+            format!(
+                "{}; path identical to the real run until its first obstacle contact at {} (largest difference {before:.1e} m), up to {after:.3} m apart afterwards",
+                goal_text(ghost),
+                fmt_opt(run.obstacle_collisions.first().map(|c| c.0))
+            ),
+            at_goal_and_latched(ghost, GOAL_ANGLE_TOL_DEG),
+        ));
+    }
     let ss = settling(&r.simulation);
     let se = settling(&r.experiment);
-    let lag = |k: usize, j: usize| match (se[k][j], ss[k][j]) {
-        (Some(a), Some(b)) => Some(a - b),
+    let si = settling(&r.experiment_tuned_iz);
+    let diff = |a: &[[Option<f64>; 2]; 3], b: &[[Option<f64>; 2]; 3], k: usize, j: usize| match (
+        a[k][j], b[k][j],
+    ) {
+        (Some(x), Some(y)) => Some(x - y),
         _ => None,
     };
+    let lag = |k: usize, j: usize| diff(&se, &ss, k, j);
     let f = |x: Option<f64>| x.map_or("n/a".into(), |x| format!("{x:+.1} s"));
     let held = lag(0, 0).is_some_and(|l| l > 0.0) && lag(1, 0).is_some_and(|l| l > 0.0);
-    v.push(Claim::new(
-        "experiment-lags-in-x-and-y",
-        "The experiment (0.05 N nozzles through PWPF) lags the simulation in x and y.",
-        Some(
-            "x and y displacements of the experiment lag the simulation (thrust capped at 0.05 N)",
-        ),
-        format!(
-            "time to 50 % of the change, experiment − simulation: x {}, y {}; to 90 %: x {}, y {}",
-            f(lag(0, 0)),
-            f(lag(1, 0)),
-            f(lag(0, 1)),
-            f(lag(1, 1))
-        ),
-        held,
-    ));
-    v.push(Claim::new(
-        "experiment-attitude-leads",
-        "The experiment's attitude slightly leads the simulation's.",
-        Some("attitude slightly ahead, attributed to a measured I_z slightly below the true one"),
-        format!(
-            "time to 50 % of the change in θ, experiment − simulation: {}; to 90 %: {}",
-            f(lag(2, 0)),
-            f(lag(2, 1))
-        ),
-        lag(2, 0).is_some_and(|l| l < 0.0),
-    ));
+    let held90 = lag(0, 1).is_some_and(|l| l > 0.0) && lag(1, 1).is_some_and(|l| l > 0.0);
+    v.push(
+        Claim::new(
+            "experiment-lags-in-x-and-y",
+            Paper,
+            "The experiment (0.05 N nozzles through PWPF) lags the simulation in x and y.",
+            Some(
+                "x and y displacements of the experiment lag the simulation (thrust capped at 0.05 N)",
+            ),
+            "ours: 'lags' read as a later time to 50 % of the change from start to goal, in x and in y (the paper gives no measure)",
+            format!(
+                "time to 50 % of the change, experiment − simulation: x {}, y {}; to 90 %: x {}, y {}",
+                f(lag(0, 0)),
+                f(lag(1, 0)),
+                f(lag(0, 1)),
+                f(lag(1, 1))
+            ),
+            held,
+        )
+        .with_sensitivity(format!(
+            "at 90 % of the change: {}",
+            if held90 { "held" } else { "NOT held" }
+        )),
+    );
+    v.push(
+        Claim::new(
+            "experiment-attitude-leads",
+            Paper,
+            "The experiment's attitude slightly leads the simulation's.",
+            Some("attitude slightly ahead, attributed to a measured I_z slightly below the true one"),
+            "ours: 'leads' read as an earlier time to 50 % of the change in θ (the paper gives no measure)",
+            format!(
+                "time to 50 % of the change in θ, experiment − simulation: {}; to 90 %: {}. The paper's own explanation predicts the opposite: a true I_z above the measured one turns the chaser more slowly under the same torque (the law does not use I_z). With the experiment's I_z set to the tuned 0.05 kg·m²: {} / {} (the lag is the nozzles and the vision, not the inertia)",
+                f(lag(2, 0)),
+                f(lag(2, 1)),
+                f(diff(&si, &ss, 2, 0)),
+                f(diff(&si, &ss, 2, 1)),
+            ),
+            lag(2, 0).is_some_and(|l| l < 0.0),
+        )
+        .with_sensitivity(format!(
+            "at 90 % of the change: {}",
+            if lag(2, 1).is_some_and(|l| l < 0.0) {
+                "held"
+            } else {
+                "NOT held"
+            }
+        )),
+    );
     v
 }
 
@@ -603,6 +816,14 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
             "start (0.809, 0.224) m / goal (0.25, 1.4) m",
             [(0.809, 0.224), (p.goal_pos_lab_m[0], p.goal_pos_lab_m[1])],
         );
+    path = path.line_styled(
+        "simulation, ghost obstacle (no prism body)",
+        pts(
+            &on_table(&r.simulation_ghost).x_m,
+            &on_table(&r.simulation_ghost).y_m,
+        ),
+        dashed,
+    );
     if let Some((t0, rs)) = r.restarts.last() {
         path = path.line_styled(
             format!("simulation restarted at {t0} s (diagnostic)"),
@@ -719,7 +940,9 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
          velocity differenced from successive poses and low-passed (0.1 s), and a true \
          I_z = 0.055 kg·m² (10 % above the measured value the law's gains were tuned with; the \
          law itself does not use I_z). Both: when the cone is 3 cm from its seat the \
-         electromagnet switches on and the law stops commanding (the mechanism does the rest).",
+         electromagnet switches on and the law stops commanding (the mechanism does the rest) — \
+         our choice: the paper does not say the law stops, so every goal claim is also judged \
+         with the law kept active (`release_on_magnet: false`).",
     );
     rep.claims(claims);
     rep.heading("Figures");
@@ -818,6 +1041,88 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
             ],
         ],
     );
+    rep.heading("Variants: law kept active, ghost obstacle, tuned inertia");
+    let variant_row = |label: &str, run: &CaseRun| {
+        vec![
+            label.to_string(),
+            format!(
+                "{:.4} m / {:.2}°",
+                run.final_pos_err_m, run.final_angle_err_deg
+            ),
+            format!("{}: {}", run.dock_state, run.dock_reason),
+            fmt_opt(run.t_latch_s),
+            run.obstacle_collisions.len().to_string(),
+            run.collisions.to_string(),
+        ]
+    };
+    rep.table(
+        &[
+            "run",
+            "final |Δp| / |Δθ|",
+            "docking",
+            "latch",
+            "obstacle collisions",
+            "collisions (all pairs)",
+        ],
+        &[
+            variant_row("simulation (law off at the magnet)", &r.simulation),
+            variant_row("simulation, law kept active", &r.simulation_active),
+            variant_row("simulation, ghost obstacle", &r.simulation_ghost),
+            variant_row("experiment (law off at the magnet)", &r.experiment),
+            variant_row("experiment, law kept active", &r.experiment_active),
+            variant_row("experiment, ghost obstacle", &r.experiment_ghost),
+            variant_row(
+                "experiment, I_z = 0.05 kg·m² (tuned value)",
+                &r.experiment_tuned_iz,
+            ),
+        ],
+    );
+    let dev = |a: &CaseRun, b: &CaseRun| {
+        let t = a.obstacle_collisions.first().map_or(f64::INFINITY, |c| c.0);
+        path_deviation_m(a, b, t)
+    };
+    let (ds, de) = (
+        dev(&r.simulation, &r.simulation_ghost),
+        dev(&r.experiment, &r.experiment_ghost),
+    );
+    rep.paragraph(format!(
+        "**Law kept active.** With the law switched off at the magnet, contact and the \
+         magnet's pull turn the chaser after the hand-over and it latches at the angle it \
+         has then ({:.2}° simulation, {:.2}° experiment); with the law kept active the \
+         attitude loop keeps acting while seated and it latches at {:.2}° / {:.2}°. The 2° \
+         goal verdict of the simulation case depends on that choice, which the paper does not \
+         make.\n\n\
+         **Ghost obstacle.** Without the prism body (the law still avoids the superquadric it \
+         knows) the path is the real run's until the first obstacle contact (largest \
+         difference {:.1e} m simulation, {:.1e} m experiment), then up to {:.3} m / {:.3} m \
+         apart: that is what the contacts changed. The ghost runs end {} / {}, latched at {} / {} \
+         against {} / {} with the prism.\n\n\
+         **Attitude and inertia.** The paper attributes its attitude lead to a measured I_z \
+         slightly *below* the true one. A larger true inertia makes the same torque turn the \
+         chaser more slowly, so that explanation predicts a lag, not a lead. The experiment \
+         case (true I_z = 0.055 kg·m²) lags by {} / {} (50 % / 90 % of the change in θ); with \
+         its I_z set to the tuned 0.05 kg·m² it lags by {} / {}: on the twin the attitude \
+         timing is set by the nozzles and the vision, not by the inertia error (claim \
+         `experiment-attitude-leads`).",
+        r.simulation.final_angle_err_deg,
+        r.experiment.final_angle_err_deg,
+        r.simulation_active.final_angle_err_deg,
+        r.experiment_active.final_angle_err_deg,
+        ds.0,
+        de.0,
+        ds.1,
+        de.1,
+        r.simulation_ghost.dock_state,
+        r.experiment_ghost.dock_state,
+        fmt_opt(r.simulation_ghost.t_latch_s),
+        fmt_opt(r.experiment_ghost.t_latch_s),
+        fmt_opt(r.simulation.t_latch_s),
+        fmt_opt(r.experiment.t_latch_s),
+        lag_s(&r.experiment, &r.simulation, 0),
+        lag_s(&r.experiment, &r.simulation, 1),
+        lag_s(&r.experiment_tuned_iz, &r.simulation, 0),
+        lag_s(&r.experiment_tuned_iz, &r.simulation, 1),
+    ));
     rep.heading("Choices where the paper is silent");
     rep.paragraph(
         "Geometry: both simulators are cylinders of radius 0.1 m (the nozzle lever arm 0.09 m \

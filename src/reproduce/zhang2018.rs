@@ -197,6 +197,15 @@ pub struct Results {
     pub h_sign_changes_s: Vec<f64>,
     /// Zeros of H (Bevy-free), linearly interpolated between samples, s.
     pub h_zero_s: Vec<f64>,
+    /// Fig. 2 gravity-free, as the paper's Section 3 says it was computed ("the orbital
+    /// gravity can be neglected"): (t s, H of eq (12), separation m) along the straight-line
+    /// thrust-free motion from the Section 3 states, every 60 s for 20 d.
+    pub fig2_free: Vec<(f64, f64, f64)>,
+    /// Zeros of the gravity-free H, linearly interpolated, s.
+    pub h_zero_free_s: Vec<f64>,
+    /// Closest approach of the gravity-free straight-line motion (separation m, time s),
+    /// closed form.
+    pub closest_free: (f64, f64),
     /// Sign changes of H (ECS), s.
     pub h_sign_changes_ecs_s: Vec<f64>,
     /// Closest approach of the thrust-free scenario (separation m, time s).
@@ -268,6 +277,25 @@ pub fn compute() -> Result<Results, String> {
         .filter(|&k| h2[k - 1] * h2[k] <= 0.0)
         .map(|k| t2[k - 1] + dt2 * h2[k - 1] / (h2[k - 1] - h2[k]))
         .collect();
+
+    // Fig. 2 gravity-free (the paper's stated setting): straight lines, μ terms of eq (12) zero.
+    let mut pf = p.clone();
+    pf.drift = Drift::ForceFree;
+    let hist_free = boundary_value_history(&pf, &x0, PursuerRole::PaperCooperative, dt2, 20 * 1440);
+    let fig2_free: Vec<(f64, f64, f64)> = hist_free
+        .iter()
+        .map(|(t, bv)| {
+            let d = rel_pos_m(&x0) + crate::control::zhang2018::rel_vel_m_s(&x0) * *t;
+            (*t, bv.h, d.norm())
+        })
+        .collect();
+    let hf: Vec<f64> = fig2_free.iter().map(|r| r.1).collect();
+    let h_zero_free_s: Vec<f64> = (1..hf.len())
+        .filter(|&k| hf[k - 1] * hf[k] <= 0.0)
+        .map(|k| t2[k - 1] + dt2 * hf[k - 1] / (hf[k - 1] - hf[k]))
+        .collect();
+    let cf = crate::control::zhang2018::closest_approach(&x0);
+    let closest_free = (cf.miss_m, cf.t_ca_s);
 
     // Fig. 2 in the ECS world, 10 days thrust-free at dt = 60 s, and its fidelity.
     let pair = scene_path("zhang2018_pair.ron");
@@ -362,6 +390,9 @@ pub fn compute() -> Result<Results, String> {
         fig2_ecs,
         h_sign_changes_s,
         h_zero_s,
+        fig2_free,
+        h_zero_free_s,
+        closest_free,
         h_sign_changes_ecs_s,
         closest_approach: ca,
         ecs_vs_rk4_m,
@@ -455,12 +486,51 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
     }
 
     // ---------------------------------------------------------------- claims
+    use crate::report::ClaimKind::{BeyondThePaper, Paper};
+    let h_free_both =
+        r.fig2_free.iter().any(|x| x.1 > 0.0) && r.fig2_free.iter().any(|x| x.1 < 0.0);
+    let t_sign_free = r.h_zero_free_s.first().copied().unwrap_or(f64::NAN);
+    let h_sign_text = |zeros: &[f64]| {
+        zeros
+            .iter()
+            .map(|t| format!("{:.3} d", t / day))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
     let claims = vec![
         Claim::new(
+            "zhang2018-fig2-gravity-free-h-both-signs",
+            Paper,
+            "Along the paper's scenario computed as its Section 3 says (orbital gravity \
+             neglected: both spacecraft on straight lines from the Section 3 states), the \
+             Hamiltonian of eq (12) takes both signs (Fig. 2).",
+            Some("Fig. 2: H > 0, = 0 and < 0 (\"the orbital gravity … can be neglected\")"),
+            "paper: Fig. 2 and its text — H > 0, H = 0 and H < 0 all occur",
+            format!(
+                "H(0) = {:.4} (m/s² with the paper's implicit 1 s scale); sign changes at {} \
+                 (every 60 s, zero interpolated); H(20 d) = {:.4}; straight-line closest approach \
+                 {:.1} km at {:.3} d",
+                r.fig2_free[0].1,
+                h_sign_text(&r.h_zero_free_s),
+                r.fig2_free.last().map_or(f64::NAN, |x| x.1),
+                r.closest_free.0 / 1e3,
+                r.closest_free.1 / day
+            ),
+            h_free_both,
+        )
+        .with_sensitivity(format!(
+            "with the Sun–EMB gravity of eq (1) (L2 model): {} (sign change at {})",
+            if h_has_both { "held" } else { "NOT held" },
+            h_sign_text(&r.h_zero_s)
+        )),
+        Claim::new(
             "zhang2018-h-both-signs",
-            "Along the paper's scenario (both spacecraft thrust-free from the Section 3 states) \
-             the Hamiltonian of eq (12) takes both signs (Fig. 2).",
+            Paper,
+            "Along the paper's scenario in the L2 model (both spacecraft thrust-free under the \
+             Sun–EMB gravity from the Section 3 states) the Hamiltonian of eq (12) takes both \
+             signs.",
             Some("Fig. 2: H > 0, = 0 and < 0"),
+            "paper: Fig. 2 and its text — H > 0, H = 0 and H < 0 all occur",
             format!(
                 "H(0) = {:.4} (m/s² with the paper's implicit 1 s scale); one sign change, at \
                  {:.3} d (Bevy-free RK4, 60 s) and {:.3} d (ECS world, 60 s); H(20 d) = {:.4}",
@@ -473,25 +543,46 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
         ),
         Claim::new(
             "zhang2018-h-sign-marks-collision",
+            Paper,
             "The regions where H < 0 along the scenario are the pair's collision region \
-             (the paper's reading of Fig. 2).",
-            Some("H > 0, = 0, < 0: non-collision region, barrier, collision region"),
+             (the paper's Section 3 reading of Fig. 2).",
+            Some("§3: H > 0, = 0, < 0: non-collision region, barrier, collision region; §2 case 1: H > 0 (NUP) = collision region"),
+            "paper: the target set, separation ≤ l = 5 km (§3), entered where H < 0",
             format!(
                 "H turns negative at {:.3} d, {:.0} s before the closest approach of {:.1} km at \
                  {:.3} d; the pair never comes within l = 5 km (H tracks the range rate against \
-                 2F/M, not capture)",
+                 2F/M, not capture). Gravity-free: H < 0 from {:.3} d, closest approach {:.1} km",
                 t_sign / day,
                 r.closest_approach.1 - t_sign,
                 r.closest_approach.0 / 1e3,
-                r.closest_approach.1 / day
+                r.closest_approach.1 / day,
+                t_sign_free / day,
+                r.closest_free.0 / 1e3
             ),
             r.closest_approach.0 <= l,
-        ),
+        )
+        .with_sensitivity(format!(
+            "the paper contradicts itself on the sign: under its §2 reading (case 1, H > 0 ⇔ \
+             sin(s5 + a) > (F_p/M_p + F_e/M_e)/Q: \"NUP … the whole game space is the \
+             collision region\") the collision region is H > 0, i.e. t < {:.3} d (L2 model) / \
+             {:.3} d (gravity-free); the pair is at least {:.1} km apart there: NOT held either",
+            t_sign / day,
+            t_sign_free / day,
+            r.fig2
+                .iter()
+                .filter(|x| x.1 > 0.0)
+                .map(|x| x.2)
+                .fold(f64::INFINITY, f64::min)
+                / 1e3
+        )),
         Claim::new(
             "zhang2018-fig3-reversals",
+            Paper,
             "P's optimal thrust on the barrier path varies over backward time with reversals \
              of direction (Fig. 3).",
             Some("F_p rises and falls cyclically with reversals (Fig. 3)"),
+            "ours: 'reversals' read as at least one sign change of F_p cos v* within 365 d of \
+             backward time (the paper gives no horizon)",
             format!(
                 "over 365 d backward: v* turns from {:.1}° to {:.1}°; F_p cos v* changes sign {} \
                  times",
@@ -503,9 +594,12 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
         ),
         Claim::new(
             "zhang2018-eq17-circle",
+            Paper,
             "In the force-free game the barrier from the BUP with zero relative velocity is \
              the circle of radius l (eq (17)).",
             Some("eq (17): (X_e − X_p)² + (Y_e − Y_p)² = l²"),
+            "ours: 1e-6 m, about 70× the f64 spacing at the 9e7 m positions (1.5e-8 m): a \
+             numerical tolerance, the paper's statement is exact",
             format!(
                 "largest | |ρ| − l | over 8 BUP angles × 33.3 h backward: {:.2e} m",
                 r.eq17_circle_err_m
@@ -514,9 +608,11 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
         ),
         Claim::new(
             "zhang2018-avoidance-keeps-l",
+            Paper,
             "With the barrier-based avoidance law the separation stays above l = 5 km while P \
              flies a reconfiguration through E (paper's initial states, ECS world).",
             Some("the barrier construction keeps the spacecraft from colliding"),
+            "paper: capture radius l = 5 km (§3)",
             format!(
                 "minimum separation {min_on:.1} m at {:.2} h (refined inside the 10 s steps); \
                  capture guarantee {} (worst margin {:.1} m); E engaged at {:.0} s for {engaged_s:.0} s; \
@@ -531,9 +627,11 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
         ),
         Claim::new(
             "zhang2018-unprotected-enters-capture",
+            BeyondThePaper,
             "Without the avoidance law the same maneuver enters the capture region (separation \
              ≤ l).",
             None,
+            "paper: capture radius l = 5 km (§3)",
             format!(
                 "minimum separation {min_off:.3} m at {:.2} h; capture guarantee {} first at \
                  {:.0} s; Bevy-free {:.3} m",
@@ -546,9 +644,11 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
         ),
         Claim::new(
             "zhang2018-reconfiguration-keeps-l",
+            BeyondThePaper,
             "In a three-spacecraft reconfiguration whose planned transfer passes within l of \
              the chief, the avoidance law keeps every pair above l.",
             None,
+            "paper: capture radius l = 5 km (§3)",
             format!(
                 "smallest pair separation with avoidance {reconf_min_on:.1} m; without: {}",
                 if reconf_off_entered.is_empty() {
@@ -577,48 +677,69 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
         });
     let t_end2 = r.fig2.last().map_or(0.0, |x| x.0) / day;
     let ts = t_sign / day;
-    let fig2 = Figure::new("Fig. 2 — eq (12) along the paper's scenario (thrust-free, L2 model)")
-        .plot(
-            Plot::new("H over time with its sign regions")
-                .x_label("t [d]")
-                .y_label("H (eq 12, cooperative) [m/s², 1 s scale]")
-                .polygon_styled(
-                    "H > 0",
-                    [(0.0, hmin), (ts, hmin), (ts, hmax), (0.0, hmax)],
-                    region(PALETTE[2]),
-                )
-                .polygon_styled(
-                    "H < 0",
-                    [(ts, hmin), (t_end2, hmin), (t_end2, hmax), (ts, hmax)],
-                    region(PALETTE[5]),
-                )
-                .line(
-                    "Bevy-free RK4 (60 s)",
-                    r.fig2.iter().map(|x| (x.0 / day, x.1)),
-                )
-                .scatter(
-                    "ECS world (60 s), every 6 h",
-                    r.fig2_ecs.iter().map(|x| (x.0 / day, x.1)),
-                )
-                .hline_styled(
-                    0.0,
-                    "H = 0 (barrier)",
-                    LineStyle {
-                        color: Some(Color::DARK_GRAY),
-                        width_px: 1.0,
-                        dash: Dash::Dashed,
-                    },
-                )
-                .vline(ts, "sign change"),
-        )
-        .plot(
-            Plot::new("Separation of the thrust-free pair")
-                .x_label("t [d]")
-                .y_label("|r_e − r_p| [km]")
-                .line("separation", r.fig2.iter().map(|x| (x.0 / day, x.2 / 1e3)))
-                .hline(l / 1e3, "l = 5 km")
-                .vline(r.closest_approach.1 / day, "closest approach"),
-        );
+    let fig2 = Figure::new(
+        "Fig. 2 — eq (12) along the paper's scenario (thrust-free; L2 model and gravity-free)",
+    )
+    .plot(
+        Plot::new("H over time with its sign regions")
+            .x_label("t [d]")
+            .y_label("H (eq 12, cooperative) [m/s², 1 s scale]")
+            .polygon_styled(
+                "H > 0",
+                [(0.0, hmin), (ts, hmin), (ts, hmax), (0.0, hmax)],
+                region(PALETTE[2]),
+            )
+            .polygon_styled(
+                "H < 0",
+                [(ts, hmin), (t_end2, hmin), (t_end2, hmax), (ts, hmax)],
+                region(PALETTE[5]),
+            )
+            .line(
+                "Bevy-free RK4 (60 s)",
+                r.fig2.iter().map(|x| (x.0 / day, x.1)),
+            )
+            .scatter(
+                "ECS world (60 s), every 6 h",
+                r.fig2_ecs.iter().map(|x| (x.0 / day, x.1)),
+            )
+            .line_styled(
+                "gravity-free (the paper's §3 setting)",
+                r.fig2_free.iter().map(|x| (x.0 / day, x.1)),
+                LineStyle {
+                    dash: Dash::Dashed,
+                    ..LineStyle::default()
+                },
+            )
+            .hline_styled(
+                0.0,
+                "H = 0 (barrier)",
+                LineStyle {
+                    color: Some(Color::DARK_GRAY),
+                    width_px: 1.0,
+                    dash: Dash::Dashed,
+                },
+            )
+            .vline(ts, "sign change"),
+    )
+    .plot(
+        Plot::new("Separation of the thrust-free pair")
+            .x_label("t [d]")
+            .y_label("|r_e − r_p| [km]")
+            .line(
+                "separation, L2 model",
+                r.fig2.iter().map(|x| (x.0 / day, x.2 / 1e3)),
+            )
+            .line_styled(
+                "separation, gravity-free",
+                r.fig2_free.iter().map(|x| (x.0 / day, x.2 / 1e3)),
+                LineStyle {
+                    dash: Dash::Dashed,
+                    ..LineStyle::default()
+                },
+            )
+            .hline(l / 1e3, "l = 5 km")
+            .vline(r.closest_approach.1 / day, "closest approach"),
+    );
     let fig3 = Figure::new(
         "Fig. 3 — P's optimal thrust over backward time on the barrier path (adversarial, L2)",
     )
@@ -781,6 +902,33 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
         r.closest_approach.1 / day,
         r.ecs_vs_rk4_m * 1e3
     ));
+    rep.paragraph(format!(
+        "**Gravity-free, as the paper computed Fig. 2.** Section 3 says that, the spacecraft \
+         being close, \"the orbital gravity, solar pressure and other perturbations can be \
+         neglected\" for Fig. 2. With the μ terms of eq (12) zero, Q sin(s5 + a) = −ρ̇ exactly \
+         and H = ½(−ρ̇ − 2F/M) along straight lines: H(0) = {:.4}, sign changes at {} (closed \
+         form: where ρ̇ = −2F/M = −1e-3 m/s), straight-line closest approach {:.1} km at {:.3} d. \
+         The sign change moves by {:.3} d from the L2 model's; the verdicts of both Fig. 2 \
+         claims are the same under either model.",
+        r.fig2_free[0].1,
+        h_sign_text(&r.h_zero_free_s),
+        r.closest_free.0 / 1e3,
+        r.closest_free.1 / day,
+        (t_sign_free - t_sign).abs() / day
+    ));
+    rep.paragraph(
+        "**The paper contradicts itself on what H's sign means.** Section 2 classifies ∂D by \
+         the sign of sin(s5 + a) − (F_p/M_p + F_e/M_e)/Q, i.e. of H of eq (12): case 1 (H > 0) \
+         \"∂D is NUP, no barrier, P and E can always collide, the whole game space is the \
+         collision region\"; case 2 (H < 0) \"UP … can always avoid collision, the whole game \
+         space is the avoidance region\". Section 3 reads Fig. 2 the other way round: \"H > 0, \
+         = 0, < 0 … the non-collision region, the barrier and the collision region\". The two \
+         readings cannot both hold. Neither matches this scenario: H changes sign once, and \
+         the pair is never within l = 5 km on either side of the change (claim \
+         `zhang2018-h-sign-marks-collision` and its sensitivity). In Isaacs' usage the usable \
+         part (UP) is where the pursuer can force capture — §2's labels are swapped relative \
+         to it (corrections table above).",
+    );
     rep.figure(
         "fig2_hamiltonian",
         "Fig. 2: H over time with its sign regions",
