@@ -26,8 +26,8 @@
 pub mod airbearing;
 pub mod broadphase;
 pub mod build;
-pub mod controllers;
 pub mod contact_model;
+pub mod controllers;
 pub mod docking;
 pub mod environment;
 pub mod monitor;

@@ -403,8 +403,16 @@ fn write_step(
         return;
     }
     if let Some(files) = rec.files.as_mut()
-        && let Err(err) =
-            write_row(&mut files.traj, t, states, &rec.pair_columns, mon, g, diag, orbit)
+        && let Err(err) = write_row(
+            &mut files.traj,
+            t,
+            states,
+            &rec.pair_columns,
+            mon,
+            g,
+            diag,
+            orbit,
+        )
     {
         rec.error.get_or_insert(err.to_string());
     }
