@@ -6,11 +6,41 @@ use clap::{Parser, Subcommand};
 use std::io::Write;
 use std::path::PathBuf;
 
-/// println! that does not panic when stdout is closed (e.g. piped into `head`).
+/// How much to print: 0 errors only (`-q`, or `RUST_LOG=error`/`warn`/`off`), 1 the results
+/// (default), 2 also provenance and progress details (`-v`, or `RUST_LOG=info`/`debug`/`trace`).
+static LEVEL: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(1);
+
+fn level() -> u8 {
+    LEVEL.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// println! that does not panic when stdout is closed (e.g. piped into `head`); silent with -q.
 macro_rules! out {
     ($($t:tt)*) => {{
-        let _ = writeln!(std::io::stdout().lock(), $($t)*);
+        if level() >= 1 {
+            let _ = writeln!(std::io::stdout().lock(), $($t)*);
+        }
     }};
+}
+
+/// Details printed with -v.
+macro_rules! info {
+    ($($t:tt)*) => {{
+        if level() >= 2 {
+            let _ = writeln!(std::io::stdout().lock(), $($t)*);
+        }
+    }};
+}
+
+/// A progress bar, hidden with -q (indicatif also hides it when stderr is not a terminal).
+fn progress_bar(len: u64, template: &str) -> indicatif::ProgressBar {
+    let bar = if level() == 0 {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new(len)
+    };
+    bar.set_style(indicatif::ProgressStyle::with_template(template).expect("template"));
+    bar
 }
 use std::process::ExitCode;
 
@@ -23,6 +53,12 @@ use std::process::ExitCode;
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
+    /// Print nothing but errors (no results, no progress bars).
+    #[arg(short, long, global = true)]
+    quiet: bool,
+    /// Print more: provenance (version, commit, scene hash, overrides) and details.
+    #[arg(short, long, global = true)]
+    verbose: bool,
 }
 
 #[derive(Subcommand)]
@@ -53,6 +89,14 @@ enum Cmd {
         /// Override a scene field (applies to every scene).
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
+    },
+    /// Draw the standard figures of a recorded run (PNG, SVG and the data as CSV).
+    Plot {
+        /// Run directory (trajectory.csv, contacts.csv, summary.json).
+        run_dir: PathBuf,
+        /// Output directory (default: RUN_DIR/plots).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Run a trials campaign (or `trials merge` shard outputs).
     Trials(TrialsCmd),
@@ -188,6 +232,10 @@ struct TrialsCmd {
     /// Output directory (default: out/trials/<campaign name>).
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Keep each trial's trajectory.csv, events.jsonl, contacts.csv and summary.json in
+    /// OUT/runs/NNNNNN/.
+    #[arg(long)]
+    keep_runs: bool,
 }
 
 #[derive(Subcommand)]
@@ -202,11 +250,29 @@ enum TrialsSub {
         /// Merged output directory.
         #[arg(long)]
         out: PathBuf,
+        /// Merge even if some trials are in no shard (the summary lists them).
+        #[arg(long)]
+        allow_partial: bool,
     },
 }
 
+fn trials_exit(e: &rpod::trials::TrialsError) -> ExitCode {
+    eprintln!("error: {e}");
+    ExitCode::from(match e {
+        rpod::trials::TrialsError::Refused(_) => 2,
+        rpod::trials::TrialsError::FolderInUse(_) => rpod::sim::output::EXIT_FOLDER_IN_USE,
+        rpod::trials::TrialsError::Io(_) => 1,
+    })
+}
+
 fn trials(cmd: TrialsCmd) -> ExitCode {
-    if let Some(TrialsSub::Merge { file, shards, out }) = cmd.merge {
+    if let Some(TrialsSub::Merge {
+        file,
+        shards,
+        out,
+        allow_partial,
+    }) = cmd.merge
+    {
         let c = match rpod::trials::load(&file) {
             Ok(c) => c,
             Err(e) => {
@@ -214,15 +280,20 @@ fn trials(cmd: TrialsCmd) -> ExitCode {
                 return ExitCode::from(2);
             }
         };
-        return match rpod::trials::merge(&c, &shards, &out) {
-            Ok(n) => {
-                out!("merged {n} trials into {}", out.display());
+        return match rpod::trials::merge(&c, &shards, &out, allow_partial) {
+            Ok(st) => {
+                out!("merged {} trials into {}", st.merged, out.display());
+                if !st.missing.is_empty() {
+                    out!(
+                        "PARTIAL: {} of {} trials are missing: {}",
+                        st.missing.len(),
+                        c.spec.count,
+                        rpod::trials::ranges(&st.missing, 20)
+                    );
+                }
                 ExitCode::SUCCESS
             }
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::from(2)
-            }
+            Err(e) => trials_exit(&e),
         };
     }
     let Some(file) = cmd.file else {
@@ -251,14 +322,15 @@ fn trials(cmd: TrialsCmd) -> ExitCode {
     let jobs = cmd
         .jobs
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let out = cmd
-        .out
-        .unwrap_or_else(|| PathBuf::from("out/trials").join(&c.spec.name));
+    let out = cmd.out.unwrap_or_else(|| {
+        PathBuf::from("out/trials").join(rpod::sim::output::safe_dir_name(&c.spec.name))
+    });
     let opts = rpod::trials::RunOptions {
         jobs,
         shard,
         out: out.clone(),
-        progress: true,
+        progress: level() >= 1,
+        keep_runs: cmd.keep_runs,
     };
     match rpod::trials::run(&c, &opts) {
         Ok(st) => {
@@ -274,16 +346,20 @@ fn trials(cmd: TrialsCmd) -> ExitCode {
             if let Ok(text) = std::fs::read_to_string(out.join("summary.json"))
                 && let Ok(v) = serde_json::from_str::<serde_json::Value>(&text)
             {
+                let ci = &v["success_probability_95ci_wilson"];
+                let what = if v["capture_probability"].is_null() {
+                    "success probability"
+                } else {
+                    "capture probability"
+                };
                 out!(
-                    "outcomes {}; capture probability {:.3} (95 % Wilson [{:.3}, {:.3}])",
+                    "outcomes {}; {what} ({}) {:.3} (95 % Wilson [{:.3}, {:.3}]) over {} valid trials",
                     v["outcomes"],
-                    v["capture_probability"].as_f64().unwrap_or(f64::NAN),
-                    v["capture_probability_95ci_wilson"][0]
-                        .as_f64()
-                        .unwrap_or(f64::NAN),
-                    v["capture_probability_95ci_wilson"][1]
-                        .as_f64()
-                        .unwrap_or(f64::NAN)
+                    v["success_criterion"].as_str().unwrap_or(""),
+                    v["success_probability"].as_f64().unwrap_or(f64::NAN),
+                    ci[0].as_f64().unwrap_or(f64::NAN),
+                    ci[1].as_f64().unwrap_or(f64::NAN),
+                    v["valid_trials"]
                 );
             }
             out!(
@@ -292,15 +368,30 @@ fn trials(cmd: TrialsCmd) -> ExitCode {
             );
             ExitCode::SUCCESS
         }
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(1)
-        }
+        Err(e) => trials_exit(&e),
     }
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let from_env = std::env::var("RUST_LOG").ok().map(|v| {
+        let v = v.to_ascii_lowercase();
+        if v.contains("debug") || v.contains("trace") || v.contains("info") {
+            2
+        } else if v.contains("error") || v.contains("warn") || v.contains("off") {
+            0
+        } else {
+            1
+        }
+    });
+    let lvl = if cli.quiet {
+        0
+    } else if cli.verbose {
+        2
+    } else {
+        from_env.unwrap_or(1)
+    };
+    LEVEL.store(lvl, std::sync::atomic::Ordering::Relaxed);
     match cli.cmd {
         Cmd::Run {
             scene,
@@ -333,6 +424,22 @@ fn main() -> ExitCode {
             }
         }
         Cmd::Reproduce { name, out } => reproduce(name, &out),
+        Cmd::Plot { run_dir, out } => {
+            let out = out.unwrap_or_else(|| run_dir.join("plots"));
+            match rpod::report::run_plots::plot_run(&run_dir, &out) {
+                Ok(files) => {
+                    for f in &files {
+                        info!("wrote {}", f.display());
+                    }
+                    out!("wrote {} files to {}", files.len(), out.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            }
+        }
         Cmd::Trials(cmd) => trials(cmd),
         #[cfg(feature = "viewer")]
         Cmd::View { scene, set, win } => {
@@ -436,23 +543,39 @@ fn run(
         eprintln!("error: --duration must be a non-negative number of seconds, got {duration}");
         return ExitCode::from(2);
     }
-    let out = out.unwrap_or_else(|| PathBuf::from("out").join(&sim.scene.name));
-    sim.record_contact_points(contact_points);
-    if let Err(e) = sim.record_to(&out) {
-        eprintln!("error: cannot write to {}: {e}", out.display());
+    if let Err((_, m)) = rpod::scene::validate::check_steps("--duration", duration, sim.scene.dt_s)
+    {
+        eprintln!("error: --duration: {m}");
         return ExitCode::from(2);
     }
+    let out = out.unwrap_or_else(|| default_out(&sim.scene.name));
+    sim.record_contact_points(contact_points);
+    if let Err(e) = sim.record_to(&out) {
+        return if e.kind() == std::io::ErrorKind::WouldBlock {
+            eprintln!("error: {e}");
+            ExitCode::from(rpod::sim::output::EXIT_FOLDER_IN_USE)
+        } else {
+            eprintln!("error: cannot write to {}: {e}", out.display());
+            ExitCode::from(2)
+        };
+    }
     let total = sim.steps_for(duration);
-    let bar = indicatif::ProgressBar::new(total);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} steps  sim {msg}  ETA {eta}",
-        )
-        .expect("template"),
+    info!(
+        "rpod {} (commit {}); scene {} sha256 {}; --set {:?}; writing to {}",
+        sim.provenance["rpod_version"].as_str().unwrap_or(""),
+        sim.provenance["git_commit"].as_str().unwrap_or("unknown"),
+        sim.provenance["scene_file"].as_str().unwrap_or(""),
+        sim.provenance["scene_sha256"].as_str().unwrap_or(""),
+        sim.provenance["set"],
+        out.display()
+    );
+    let bar = progress_bar(
+        total,
+        "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} steps  sim {msg}  ETA {eta}",
     );
     let chunk = (total / 200).max(1000);
     let mut done = 0;
-    while done < total {
+    while done < total && sim.guard_trip().is_none() {
         let k = chunk.min(total - done);
         sim.step(k);
         done += k;
@@ -460,6 +583,22 @@ fn run(
         bar.set_message(format!("{:.1} s", sim.t_s()));
     }
     bar.finish_and_clear();
+    if let Some(trip) = sim.guard_trip().cloned() {
+        let kept = sim
+            .finish()
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        eprintln!("error: the run stopped: {trip}");
+        if !kept.is_empty() && !kept.contains(&trip.to_string()) {
+            eprintln!("error: {kept}");
+        }
+        eprintln!(
+            "the rows up to the last good step are in {}/*.partial; no summary.json was written",
+            out.display()
+        );
+        return ExitCode::from(rpod::sim::guard::EXIT_NUMERIC_FAILURE);
+    }
     match sim.finish() {
         Ok(summary) => {
             let md = &summary["min_distance"];
@@ -547,6 +686,11 @@ fn run(
     }
 }
 
+/// `out/<name>`, the name made safe for a path (never outside `out/`).
+fn default_out(name: &str) -> PathBuf {
+    PathBuf::from("out").join(rpod::sim::output::safe_dir_name(name))
+}
+
 fn reproduce(name: Option<String>, out: &std::path::Path) -> ExitCode {
     let names: Vec<String> = match name {
         Some(n) => vec![n],
@@ -556,35 +700,46 @@ fn reproduce(name: Option<String>, out: &std::path::Path) -> ExitCode {
             .collect(),
     };
     let mut failed = false;
+    let bar = progress_bar(
+        names.len() as u64,
+        "{spinner} [{elapsed_precise}] {bar:20} {pos}/{len} papers  {msg}",
+    );
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
     for n in &names {
         let dir = out.join(n);
-        out!("== {n} → {}", dir.display());
-        if let Err(e) = rpod::reproduce::run(n, &dir) {
-            eprintln!("error: {n}: {e}");
+        bar.set_message(format!("reproducing {n}"));
+        let r = rpod::reproduce::run(n, &dir);
+        bar.inc(1);
+        bar.suspend(|| out!("== {n} → {}", dir.display()));
+        if let Err(e) = r {
+            bar.suspend(|| eprintln!("error: {n}: {e}"));
             failed = true;
             continue;
         }
         let claims = std::fs::read_to_string(dir.join("claims.json"))
             .ok()
             .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
-        for c in claims
-            .as_ref()
-            .and_then(|v| v.as_array())
-            .into_iter()
-            .flatten()
-        {
-            out!(
-                "  [{}] {}: {}",
-                if c["held"].as_bool() == Some(true) {
-                    "held"
-                } else {
-                    "NOT held"
-                },
-                c["id"].as_str().unwrap_or(""),
-                c["measured"].as_str().unwrap_or("")
-            );
-        }
+        bar.suspend(|| {
+            for c in claims
+                .as_ref()
+                .and_then(|v| v.as_array())
+                .into_iter()
+                .flatten()
+            {
+                out!(
+                    "  [{}] {}: {}",
+                    if c["held"].as_bool() == Some(true) {
+                        "held"
+                    } else {
+                        "NOT held"
+                    },
+                    c["id"].as_str().unwrap_or(""),
+                    c["measured"].as_str().unwrap_or("")
+                );
+            }
+        });
     }
+    bar.finish_and_clear();
     // INDEX.md at the top of the output folder, rebuilt from the claims.json files there.
     match rpod::reproduce::write_index(out) {
         Ok(p) => out!("wrote {}", p.display()),

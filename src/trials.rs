@@ -92,6 +92,14 @@ impl Parameter {
             | Parameter::Normal { label, path, .. } => label.as_deref().unwrap_or(path),
         }
     }
+    /// The label as written, if any.
+    pub fn label_override(&self) -> Option<&str> {
+        match self {
+            Parameter::Grid { label, .. }
+            | Parameter::Uniform { label, .. }
+            | Parameter::Normal { label, .. } => label.as_deref(),
+        }
+    }
     /// The field path.
     pub fn path(&self) -> &str {
         match self {
@@ -102,7 +110,8 @@ impl Parameter {
     }
 }
 
-/// Success criterion.
+/// Success criterion: what a trial must show to count as a success. Combine with `All`, `Any`
+/// and `Not`, e.g. `All([GuaranteeHeld("keep_out_10m"), MinClearance(0.5)])`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub enum Success {
     /// The docking mechanism latched (and is still latched at the end).
@@ -111,6 +120,108 @@ pub enum Success {
     StateIn(Vec<String>),
     /// No collision (a contact between non-docking parts).
     NoCollision,
+    /// The named guarantee of the scene held over the whole run.
+    GuaranteeHeld(String),
+    /// The smallest clearance between parts that are not both docking parts stayed at least
+    /// this, m (full geometry, every body pair).
+    MinClearance(f64),
+    /// Every criterion.
+    All(Vec<Success>),
+    /// At least one criterion.
+    Any(Vec<Success>),
+    /// Not the criterion.
+    Not(Box<Success>),
+}
+
+/// What a finished trial shows, for judging it.
+struct Judged<'a> {
+    outcome: &'a str,
+    collided: bool,
+    min_clearance_m: f64,
+    held: &'a dyn Fn(&str) -> Option<bool>,
+}
+
+impl Success {
+    /// The criterion in words, for summaries: `Latched`, `GuaranteeHeld(keep_out) and
+    /// MinClearance(0.5 m)`.
+    pub fn describe(&self) -> String {
+        let join = |v: &[Success], w: &str| {
+            v.iter()
+                .map(|c| match c {
+                    Success::All(_) | Success::Any(_) => format!("({})", c.describe()),
+                    _ => c.describe(),
+                })
+                .collect::<Vec<_>>()
+                .join(w)
+        };
+        match self {
+            Success::Latched => "Latched".into(),
+            Success::StateIn(v) => format!("StateIn({})", v.join(", ")),
+            Success::NoCollision => "NoCollision".into(),
+            Success::GuaranteeHeld(n) => format!("GuaranteeHeld({n})"),
+            Success::MinClearance(m) => format!("MinClearance({m} m)"),
+            Success::All(v) => join(v, " and "),
+            Success::Any(v) => join(v, " or "),
+            Success::Not(c) => format!("not {}", c.describe()),
+        }
+    }
+
+    /// Whether the criterion is about docking only (then its probability is a capture
+    /// probability).
+    pub fn is_docking(&self) -> bool {
+        match self {
+            Success::Latched | Success::StateIn(_) => true,
+            Success::All(v) | Success::Any(v) => !v.is_empty() && v.iter().all(Success::is_docking),
+            Success::Not(_)
+            | Success::NoCollision
+            | Success::GuaranteeHeld(_)
+            | Success::MinClearance(_) => false,
+        }
+    }
+
+    fn judge(&self, j: &Judged) -> bool {
+        match self {
+            Success::Latched => j.outcome == "LATCHED",
+            Success::StateIn(v) => v.iter().any(|s| s == j.outcome),
+            Success::NoCollision => !j.collided,
+            Success::GuaranteeHeld(n) => (j.held)(n) == Some(true),
+            Success::MinClearance(m) => j.min_clearance_m >= *m,
+            Success::All(v) => v.iter().all(|c| c.judge(j)),
+            Success::Any(v) => v.iter().any(|c| c.judge(j)),
+            Success::Not(c) => !c.judge(j),
+        }
+    }
+
+    /// Checks names and values against the base scene's guarantees; `(path, message)`.
+    fn check(&self, path: &str, guarantees: &[(String, String)]) -> Result<(), (String, String)> {
+        match self {
+            Success::GuaranteeHeld(n) if !guarantees.iter().any(|(g, _)| g == n) => Err((
+                path.to_string(),
+                format!(
+                    "the base scene has no guarantee `{n}` (it has: {})",
+                    guarantees
+                        .iter()
+                        .map(|g| g.0.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )),
+            Success::MinClearance(m) if !(m.is_finite() && *m >= 0.0) => Err((
+                path.to_string(),
+                format!("a clearance is a finite number of metres ≥ 0, got {m}"),
+            )),
+            Success::All(v) | Success::Any(v) => {
+                if v.is_empty() {
+                    return Err((path.to_string(), "combine at least one criterion".into()));
+                }
+                v.iter()
+                    .enumerate()
+                    .try_for_each(|(i, c)| c.check(&format!("{path}.0.{i}"), guarantees))
+            }
+            Success::Not(c) => c.check(&format!("{path}.0"), guarantees),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// SplitMix64: a small, well-mixed generator; one stream per (seed, trial, parameter).
@@ -181,11 +292,32 @@ impl TrialsSpec {
                 message: msg,
             }
         };
-        if self.count == 0 {
-            return Err(err("count", "must be at least 1".into()));
+        if self.name.trim().is_empty()
+            || self.name.chars().count() > 128
+            || self.name.chars().any(char::is_control)
+        {
+            return Err(err(
+                "name",
+                "a campaign name is 1 to 128 characters without control characters".into(),
+            ));
+        }
+        if self.count == 0 || self.count > MAX_TRIALS {
+            return Err(err(
+                "count",
+                format!("must be from 1 to {MAX_TRIALS}, got {}", self.count),
+            ));
         }
         if self.parameters.is_empty() {
             return Err(err("parameters", "name at least one parameter".into()));
+        }
+        if self.parameters.len() > MAX_PARAMETERS {
+            return Err(err(
+                "parameters",
+                format!(
+                    "at most {MAX_PARAMETERS} parameters, got {}",
+                    self.parameters.len()
+                ),
+            ));
         }
         if let Some(d) = self.duration_s
             && !(d.is_finite() && d > 0.0)
@@ -195,22 +327,83 @@ impl TrialsSpec {
                 format!("must be a positive number of seconds, got {d}"),
             ));
         }
+        let mut cells: usize = 1;
         for (i, p) in self.parameters.iter().enumerate() {
             let at = format!("parameters.{i}");
+            if self.parameters[..i].iter().any(|o| o.path() == p.path()) {
+                return Err(err(
+                    &format!("{at}.path"),
+                    format!("`{}` is varied twice", p.path()),
+                ));
+            }
+            let path_ok = !p.path().is_empty()
+                && p.path().len() <= 256
+                && p.path()
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.' | '[' | ']'));
+            if !path_ok {
+                return Err(err(
+                    &format!("{at}.path"),
+                    format!(
+                        "a scene field path (letters, digits, _ - . [ ], at most 256), got {:?}",
+                        p.path()
+                    ),
+                ));
+            }
+            if let Some(l) = p.label_override()
+                && (l.chars().count() > 200 || l.chars().any(char::is_control))
+            {
+                return Err(err(
+                    &format!("{at}.label"),
+                    "a label is at most 200 characters without control characters".into(),
+                ));
+            }
             match p {
-                Parameter::Grid { values, .. } if values.is_empty() => {
-                    return Err(err(&format!("{at}.values"), "a grid needs values".into()));
+                Parameter::Grid { values, .. } => {
+                    if values.is_empty() || values.len() > MAX_GRID_VALUES {
+                        return Err(err(
+                            &format!("{at}.values"),
+                            format!(
+                                "a grid needs 1 to {MAX_GRID_VALUES} values, got {}",
+                                values.len()
+                            ),
+                        ));
+                    }
+                    if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+                        return Err(err(
+                            &format!("{at}.values.{k}"),
+                            "grid values must be finite".into(),
+                        ));
+                    }
+                    cells = cells.saturating_mul(values.len());
+                    if cells > MAX_GRID_CELLS {
+                        return Err(err(
+                            &format!("{at}.values"),
+                            format!("the grids have more than {MAX_GRID_CELLS} cells together"),
+                        ));
+                    }
                 }
                 Parameter::Uniform { min, max, .. }
-                    if !(min.is_finite() && max.is_finite() && min <= max) =>
+                    if !(min.is_finite()
+                        && max.is_finite()
+                        && min <= max
+                        && (max - min).is_finite()) =>
                 {
                     return Err(err(
                         &format!("{at}.max"),
-                        format!("need min ≤ max, got [{min}, {max}]"),
+                        format!("need finite min ≤ max, got [{min}, {max}]"),
                     ));
                 }
-                Parameter::Normal { sd, .. } if !(sd.is_finite() && *sd >= 0.0) => {
-                    return Err(err(&format!("{at}.sd"), format!("must be ≥ 0, got {sd}")));
+                Parameter::Normal { mean, sd, .. }
+                    if !(mean.is_finite()
+                        && sd.is_finite()
+                        && *sd >= 0.0
+                        && (mean.abs() + 40.0 * sd).is_finite()) =>
+                {
+                    return Err(err(
+                        &format!("{at}.sd"),
+                        format!("need a finite mean and a finite sd ≥ 0, got mean {mean}, sd {sd}"),
+                    ));
                 }
                 _ => {}
             }
@@ -219,29 +412,101 @@ impl TrialsSpec {
     }
 }
 
-/// A loaded campaign: the spec and the base scene's path.
+/// Most trials in a campaign.
+pub const MAX_TRIALS: usize = 1_000_000;
+/// Most varied parameters.
+pub const MAX_PARAMETERS: usize = 64;
+/// Most values of one grid parameter.
+pub const MAX_GRID_VALUES: usize = 100_000;
+/// Most cells of all grid parameters together.
+pub const MAX_GRID_CELLS: usize = 10_000_000;
+
+/// Outcome of a trial whose sampled parameters make an invalid scene (its reason is the
+/// scene error): not a run, so not counted in the success probability.
+pub const OUTCOME_INVALID: &str = "INVALID";
+/// Outcome of a trial the finiteness guard stopped (its reason names the body, quantity and
+/// time): a run that did not succeed, counted as a failure.
+pub const OUTCOME_NUMERIC_FAILURE: &str = "NUMERIC_FAILURE";
+/// Outcome of a trial of a scene without a docking mechanism.
+pub const OUTCOME_NO_DOCKING: &str = "NO_DOCKING";
+
+/// What identifies a campaign: every shard and every `trials.csv` row carries its id, and
+/// resuming or merging refuses rows of another campaign.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Fingerprint {
+    /// SHA-256 of the base scene file, hex.
+    pub scene_sha256: String,
+    /// SHA-256 of the trials file, hex.
+    pub trials_sha256: String,
+    /// The random parameters' seed.
+    pub seed: u64,
+    /// The rpod version that ran it.
+    pub rpod_version: String,
+    /// The first 16 hex digits of the SHA-256 of the four above: the `campaign_id` column.
+    pub campaign_id: String,
+}
+
+impl Fingerprint {
+    fn new(scene: &[u8], trials: &[u8], seed: u64) -> Self {
+        let scene_sha256 = crate::report::sha256_hex(scene);
+        let trials_sha256 = crate::report::sha256_hex(trials);
+        let rpod_version = env!("CARGO_PKG_VERSION").to_string();
+        let id = crate::report::sha256_hex(
+            format!("rpod-trials-v1\n{rpod_version}\n{scene_sha256}\n{trials_sha256}\n{seed}\n")
+                .as_bytes(),
+        );
+        Self {
+            scene_sha256,
+            trials_sha256,
+            seed,
+            rpod_version,
+            campaign_id: id[..16].to_string(),
+        }
+    }
+
+    /// What differs from `other`, in words (empty when nothing does).
+    pub fn differences(&self, other: &Fingerprint) -> Vec<&'static str> {
+        let mut d = Vec::new();
+        if self.scene_sha256 != other.scene_sha256 {
+            d.push("the base scene file");
+        }
+        if self.trials_sha256 != other.trials_sha256 {
+            d.push("the trials file");
+        }
+        if self.seed != other.seed {
+            d.push("the seed");
+        }
+        if self.rpod_version != other.rpod_version {
+            d.push("the rpod version");
+        }
+        d
+    }
+}
+
+/// A loaded campaign: the spec, the base scene's path and the campaign's fingerprint.
 pub struct Campaign {
     /// The trials file.
     pub spec: TrialsSpec,
     /// The base scene file.
     pub scene_path: PathBuf,
+    /// The fingerprint.
+    pub fingerprint: Fingerprint,
+    /// The base scene's guarantees (name, unit), in scene order: two `trials.csv` columns each.
+    pub guarantees: Vec<(String, String)>,
 }
 
 /// Reads and checks a trials file; the base scene and every parameter path are checked by
 /// building trial 0.
 pub fn load(path: &Path) -> Result<Campaign, SceneError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-        file: file.clone(),
-        line: 0,
-        col: 0,
-        field: String::new(),
-        message: format!("cannot read the trials file: {e}"),
-    })?;
+    let text = crate::scene::load::read_text(path, "trials file")?;
     let spec: TrialsSpec = crate::scene::load::parse_ron(&text, &file)?;
     spec.validate(&file, &text)?;
     let scene_path = path.parent().unwrap_or(Path::new(".")).join(&spec.scene);
-    if !scene_path.exists() {
+    let scene_bytes = std::fs::read(&scene_path)
+        .ok()
+        .filter(|_| scene_path.is_file());
+    let Some(scene_bytes) = scene_bytes else {
         let (line, col) = crate::scene::load::locate(&text, "scene")
             .map(|(s, _)| crate::scene::load::line_col(&text, s))
             .unwrap_or((0, 0));
@@ -252,10 +517,46 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
             field: "scene".into(),
             message: format!("no scene file at {}", scene_path.display()),
         });
-    }
-    let c = Campaign { spec, scene_path };
+    };
+    let fingerprint = Fingerprint::new(&scene_bytes, text.as_bytes(), spec.seed);
+    let mut c = Campaign {
+        spec,
+        scene_path,
+        fingerprint,
+        guarantees: Vec::new(),
+    };
     // Trial 0 must build: catches bad paths and values now rather than in every worker.
-    build(&c, 0)?;
+    let loaded = load_scene_file(&c.scene_path, &overrides(&c, 0))?;
+    if let Some(d) = c.spec.duration_s {
+        crate::scene::validate::check_steps("duration_s", d, loaded.scene.dt_s).map_err(
+            |(_, m)| SceneError {
+                file: file.clone(),
+                line: 0,
+                col: 0,
+                field: "duration_s".into(),
+                message: m,
+            },
+        )?;
+    }
+    let sim = Simulation::new(&loaded)?;
+    c.guarantees = sim
+        .guarantees()
+        .status
+        .iter()
+        .map(|g| (g.name.clone(), g.unit.clone()))
+        .collect();
+    if let Err((p, m)) = c.spec.success.check("success", &c.guarantees) {
+        let (line, col) = crate::scene::load::locate(&text, &p)
+            .map(|(s, _)| crate::scene::load::line_col(&text, s))
+            .unwrap_or((0, 0));
+        return Err(SceneError {
+            file,
+            line,
+            col,
+            field: p,
+            message: m,
+        });
+    }
     Ok(c)
 }
 
@@ -280,133 +581,219 @@ pub struct TrialResult {
     pub index: usize,
     /// Parameter values.
     pub values: Vec<f64>,
-    /// Final docking state (or `NO_DOCKING`, or `ERROR`).
+    /// Final docking state, or `NO_DOCKING`, `INVALID`, `NUMERIC_FAILURE`.
     pub outcome: String,
     /// Success per the criterion.
     pub success: bool,
     /// Time to latch, s.
     pub t_latch_s: Option<f64>,
     /// Peak contact force on any part, N.
-    pub peak_contact_force_n: f64,
+    pub peak_contact_force_n: Option<f64>,
     /// Peak axial and lateral loads on the docking mechanism up to the latch, N (the summary's
-    /// `docking.contact`).
-    pub peak_loads_n: (f64, f64),
+    /// `docking.contact`; none without a docking mechanism).
+    pub peak_loads_n: Option<(f64, f64)>,
     /// Largest misalignment in contact, deg.
-    pub max_misalignment_deg: f64,
+    pub max_misalignment_deg: Option<f64>,
     /// Smallest clearance between parts that are not both docking parts, m.
-    pub min_clearance_m: f64,
+    pub min_clearance_m: Option<f64>,
     /// First collision, s.
     pub first_collision_s: Option<f64>,
+    /// Per guarantee of the campaign (same order): worst margin (in its unit) and first
+    /// violation time, s.
+    pub guarantees: Vec<(Option<f64>, Option<f64>)>,
     /// Steps simulated.
     pub steps: u64,
-    /// Why (the docking state's reason).
+    /// Why (the docking state's reason, the scene error, the guard's trip).
     pub reason: String,
 }
 
-/// Runs trial `k`.
-pub fn run_trial(c: &Campaign, k: usize) -> TrialResult {
+impl TrialResult {
+    fn not_run(
+        c: &Campaign,
+        k: usize,
+        values: Vec<f64>,
+        outcome: &str,
+        reason: String,
+        steps: u64,
+    ) -> Self {
+        TrialResult {
+            index: k,
+            values,
+            outcome: outcome.into(),
+            success: false,
+            t_latch_s: None,
+            peak_contact_force_n: None,
+            peak_loads_n: None,
+            max_misalignment_deg: None,
+            min_clearance_m: None,
+            first_collision_s: None,
+            guarantees: vec![(None, None); c.guarantees.len()],
+            steps,
+            reason,
+        }
+    }
+}
+
+/// Runs trial `k`; with `keep` its standard outputs (`trajectory.csv`, `events.jsonl`,
+/// `contacts.csv`, `summary.json`) are written into that folder.
+pub fn run_trial(c: &Campaign, k: usize, keep: Option<&Path>) -> TrialResult {
     let values = c.spec.values(k);
     let mut sim = match build(c, k) {
         Ok(s) => s,
         Err(e) => {
-            return TrialResult {
-                index: k,
-                values,
-                outcome: "ERROR".into(),
-                success: false,
-                t_latch_s: None,
-                peak_contact_force_n: 0.0,
-                peak_loads_n: (0.0, 0.0),
-                max_misalignment_deg: 0.0,
-                min_clearance_m: f64::NAN,
-                first_collision_s: None,
-                steps: 0,
-                reason: e.to_string(),
-            };
+            return TrialResult::not_run(c, k, values, OUTCOME_INVALID, e.to_string(), 0);
         }
     };
+    if let Some(dir) = keep
+        && let Err(e) = sim.record_to(dir)
+    {
+        let reason = format!("cannot write {}: {e}", dir.display());
+        return TrialResult::not_run(c, k, values, "IO_ERROR", reason, 0);
+    }
     let duration = c.spec.duration_s.unwrap_or(sim.scene.duration_s);
     sim.step(sim.steps_for(duration));
+    if let Some(trip) = sim.guard_trip().cloned() {
+        let steps = sim.steps();
+        let _ = sim.finish();
+        return TrialResult::not_run(
+            c,
+            k,
+            values,
+            OUTCOME_NUMERIC_FAILURE,
+            trip.to_string(),
+            steps,
+        );
+    }
     let dock = sim.app.world().get_resource::<Docking>().cloned();
     let cs = sim.contacts();
-    let outcome = dock
-        .as_ref()
-        .map_or("NO_DOCKING".to_string(), |d| d.state.name().to_string());
-    let success = match &c.spec.success {
-        Success::Latched => outcome == "LATCHED",
-        Success::StateIn(v) => v.contains(&outcome),
-        Success::NoCollision => cs.first_collision_s.is_none(),
-    };
-    TrialResult {
+    let outcome = dock.as_ref().map_or(OUTCOME_NO_DOCKING.to_string(), |d| {
+        d.state.name().to_string()
+    });
+    let min_clearance = sim
+        .monitor()
+        .min_clearance_per_pair
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    let status = &sim.guarantees().status;
+    let held = |n: &str| status.iter().find(|g| g.name == n).map(|g| g.held);
+    let success = c.spec.success.judge(&Judged {
+        outcome: &outcome,
+        collided: cs.first_collision_s.is_some(),
+        min_clearance_m: min_clearance,
+        held: &held,
+    });
+    let guarantees = c
+        .guarantees
+        .iter()
+        .map(|(n, _)| {
+            status
+                .iter()
+                .find(|g| &g.name == n)
+                .map_or((None, None), |g| {
+                    (
+                        g.worst_margin.is_finite().then_some(g.worst_margin),
+                        g.first_violation_s,
+                    )
+                })
+        })
+        .collect();
+    let r = TrialResult {
         index: k,
         values,
         outcome,
         success,
         t_latch_s: dock.as_ref().and_then(|d| d.t_latch_s),
-        peak_contact_force_n: cs
-            .per_part
-            .values()
-            .map(|p| p.peak_force_n)
-            .fold(0.0, f64::max),
-        peak_loads_n: dock.as_ref().map_or((0.0, 0.0), |d| {
-            (d.loads.peak_axial_load_n, d.loads.peak_lateral_load_n)
-        }),
-        max_misalignment_deg: dock.as_ref().map_or(0.0, |d| d.max_misalignment_deg),
-        min_clearance_m: sim
-            .monitor()
-            .min_clearance_per_pair
-            .iter()
-            .copied()
-            .fold(f64::INFINITY, f64::min),
+        peak_contact_force_n: Some(
+            cs.per_part
+                .values()
+                .map(|p| p.peak_force_n)
+                .fold(0.0, f64::max),
+        ),
+        peak_loads_n: dock
+            .as_ref()
+            .map(|d| (d.loads.peak_axial_load_n, d.loads.peak_lateral_load_n)),
+        max_misalignment_deg: dock.as_ref().map(|d| d.max_misalignment_deg),
+        min_clearance_m: min_clearance.is_finite().then_some(min_clearance),
         first_collision_s: cs.first_collision_s,
+        guarantees,
         steps: sim.steps(),
         reason: dock.map_or(String::new(), |d| d.reason),
+    };
+    if keep.is_some() {
+        let _ = sim.finish();
     }
+    r
 }
 
 fn opt(v: Option<f64>) -> String {
     v.map_or(String::new(), |x| format!("{x}"))
 }
 
-/// The CSV header for a campaign.
-pub fn header(spec: &TrialsSpec) -> String {
+/// The fixed result columns after the parameters.
+const RESULT_COLS: [&str; 9] = [
+    "outcome",
+    "success",
+    "t_latch_s",
+    "peak_contact_force_n",
+    "peak_axial_load_n",
+    "peak_lateral_load_n",
+    "max_misalignment_deg",
+    "min_clearance_non_docking_m",
+    "first_collision_s",
+];
+
+/// The CSV header cells for a campaign: `index`, one column per parameter path, the results,
+/// per guarantee `guarantee.NAME.worst_margin_UNIT` and `guarantee.NAME.first_violation_s`
+/// (empty: never violated), `steps`, `reason`, `campaign_id`.
+pub fn header(c: &Campaign) -> Vec<String> {
     let mut cols = vec!["index".to_string()];
-    cols.extend(spec.parameters.iter().map(|p| p.path().to_string()));
-    cols.extend(
-        [
-            "outcome",
-            "success",
-            "t_latch_s",
-            "peak_contact_force_n",
-            "peak_axial_load_n",
-            "peak_lateral_load_n",
-            "max_misalignment_deg",
-            "min_clearance_non_docking_m",
-            "first_collision_s",
-            "steps",
-            "reason",
-        ]
-        .map(String::from),
-    );
-    cols.join(",")
+    cols.extend(c.spec.parameters.iter().map(|p| p.path().to_string()));
+    cols.extend(RESULT_COLS.map(String::from));
+    for (n, u) in &c.guarantees {
+        cols.push(format!("guarantee.{n}.worst_margin_{u}"));
+        cols.push(format!("guarantee.{n}.first_violation_s"));
+    }
+    cols.extend(["steps", "reason", "campaign_id"].map(String::from));
+    cols
 }
 
-/// One CSV row.
-pub fn row(r: &TrialResult) -> String {
+/// One CSV row's cells. Free text (the reason) is kept on one line: control characters become
+/// spaces, so every row is one line of the file; the CSV writer quotes commas and quotes.
+pub fn row(r: &TrialResult, campaign_id: &str) -> Vec<String> {
     let mut cells = vec![r.index.to_string()];
     cells.extend(r.values.iter().map(|v| format!("{v}")));
     cells.push(r.outcome.clone());
     cells.push(r.success.to_string());
     cells.push(opt(r.t_latch_s));
-    cells.push(format!("{}", r.peak_contact_force_n));
-    cells.push(format!("{}", r.peak_loads_n.0));
-    cells.push(format!("{}", r.peak_loads_n.1));
-    cells.push(format!("{}", r.max_misalignment_deg));
-    cells.push(format!("{}", r.min_clearance_m));
+    cells.push(opt(r.peak_contact_force_n));
+    cells.push(opt(r.peak_loads_n.map(|l| l.0)));
+    cells.push(opt(r.peak_loads_n.map(|l| l.1)));
+    cells.push(opt(r.max_misalignment_deg));
+    cells.push(opt(r.min_clearance_m));
     cells.push(opt(r.first_collision_s));
+    for (w, f) in &r.guarantees {
+        cells.push(opt(*w));
+        cells.push(opt(*f));
+    }
     cells.push(r.steps.to_string());
-    cells.push(format!("\"{}\"", r.reason.replace('"', "'")));
-    cells.join(",")
+    cells.push(
+        r.reason
+            .chars()
+            .map(|c| if c.is_control() { ' ' } else { c })
+            .collect(),
+    );
+    cells.push(campaign_id.to_string());
+    cells
+}
+
+/// One CSV line (with its newline) from cells, quoted as RFC 4180 says.
+fn csv_line(cells: &[String]) -> String {
+    let mut w = csv::WriterBuilder::new()
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(Vec::new());
+    w.write_record(cells).expect("writing to memory");
+    String::from_utf8(w.into_inner().expect("writing to memory")).expect("cells are UTF-8")
 }
 
 /// Options of a run.
@@ -420,6 +807,8 @@ pub struct RunOptions {
     pub out: PathBuf,
     /// Show a progress bar.
     pub progress: bool,
+    /// Keep each trial's standard outputs in `OUT/runs/NNNNNN/`.
+    pub keep_runs: bool,
 }
 
 /// What a run did.
@@ -435,57 +824,282 @@ pub struct RunStats {
     pub steps: u64,
 }
 
-/// Indices already in an existing `trials.csv` (for resuming), checking the header.
-fn done_indices(path: &Path, header: &str) -> Result<Vec<usize>, String> {
-    let Ok(text) = std::fs::read_to_string(path) else {
-        return Ok(Vec::new());
+/// Why a command on trials failed: bad files (exit 2), the output folder in use (exit 4),
+/// or I/O (exit 1).
+#[derive(Debug)]
+pub enum TrialsError {
+    /// A `trials.csv` or shard that cannot be used (another campaign, damaged rows, missing
+    /// or duplicated indices): the message says which file, line and why.
+    Refused(String),
+    /// Another rpod process writes into the output folder.
+    FolderInUse(String),
+    /// Reading or writing failed.
+    Io(String),
+}
+
+impl std::fmt::Display for TrialsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            TrialsError::Refused(m) | TrialsError::FolderInUse(m) | TrialsError::Io(m) => {
+                write!(f, "{m}")
+            }
+        }
+    }
+}
+
+fn io_err(e: impl std::fmt::Display) -> TrialsError {
+    TrialsError::Io(e.to_string())
+}
+
+fn lock(dir: &Path) -> Result<crate::sim::output::FolderLock, TrialsError> {
+    crate::sim::output::FolderLock::acquire(dir).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::WouldBlock {
+            TrialsError::FolderInUse(e.to_string())
+        } else {
+            TrialsError::Io(format!("{}: {e}", dir.display()))
+        }
+    })
+}
+
+/// A row read back from a `trials.csv` and checked: index, values, outcome, success, cells.
+#[derive(Debug, Clone)]
+pub struct Row {
+    /// Trial index.
+    pub index: usize,
+    /// Parameter values.
+    pub values: Vec<f64>,
+    /// Outcome.
+    pub outcome: String,
+    /// Success.
+    pub success: bool,
+    /// All cells, as written.
+    pub cells: Vec<String>,
+}
+
+/// Reads and checks every row of a `trials.csv` against the campaign: the header; per row, the
+/// cell count, an index below `count` (and in `shard` when given) seen once, the parameter
+/// values trial k must have (recomputed from k and the seed), an outcome, a boolean success,
+/// numbers where numbers belong, and this campaign's id. An unterminated last line (a crash
+/// while writing it) is dropped when `drop_torn_tail` (a resume reruns that trial); any other
+/// damage is refused with the file, line and reason. Returns the rows and the length of the
+/// file's accepted prefix, bytes.
+pub fn read_checked(
+    path: &Path,
+    c: &Campaign,
+    shard: Option<(usize, usize)>,
+    drop_torn_tail: bool,
+) -> Result<(Vec<Row>, usize), TrialsError> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        TrialsError::Refused(format!("{}: cannot read it as text: {e}", path.display()))
+    })?;
+    let at = |line: usize, why: String| {
+        TrialsError::Refused(format!(
+            "{}:{line}: {why}; this file cannot be resumed or merged as it is (fix or remove \
+             the line, or use another --out)",
+            path.display()
+        ))
     };
-    // Only complete (newline-terminated) rows count: a crash may leave half a row.
-    let mut lines = text
-        .split_inclusive('\n')
-        .filter(|l| l.ends_with('\n'))
-        .map(|l| l.trim_end_matches('\n'));
-    match lines.next() {
-        Some(h) if h == header => {}
-        Some(_) => {
-            return Err(format!(
-                "{} belongs to a different campaign (its header differs); use another --out",
-                path.display()
+    let mut accepted = text.len();
+    let mut body = text.as_str();
+    if !text.is_empty() && !text.ends_with('\n') {
+        let cut = text.rfind('\n').map_or(0, |i| i + 1);
+        if !drop_torn_tail {
+            return Err(at(
+                text[..cut].matches('\n').count() + 1,
+                "the last line is cut (no newline at its end)".into(),
             ));
         }
-        None => return Ok(Vec::new()),
+        accepted = cut;
+        body = &text[..cut];
     }
-    Ok(lines
-        .filter_map(|l| l.split(',').next()?.parse().ok())
-        .collect())
+    let header = header(c);
+    let mut rows = Vec::new();
+    let mut seen = std::collections::HashSet::new();
+    let np = c.spec.parameters.len();
+    for (n, line) in body.lines().enumerate() {
+        let lineno = n + 1;
+        let cells: Vec<String> = match csv::ReaderBuilder::new()
+            .has_headers(false)
+            .from_reader(line.as_bytes())
+            .records()
+            .next()
+        {
+            Some(Ok(r)) => r.iter().map(str::to_string).collect(),
+            Some(Err(e)) => return Err(at(lineno, format!("not a CSV row ({e})"))),
+            None => return Err(at(lineno, "an empty line".into())),
+        };
+        if n == 0 {
+            if cells != header {
+                return Err(TrialsError::Refused(format!(
+                    "{}: its header differs from this campaign's (another trials file, or an \
+                     older rpod); use another --out",
+                    path.display()
+                )));
+            }
+            continue;
+        }
+        if cells.len() != header.len() {
+            return Err(at(
+                lineno,
+                format!("{} cells, the header has {}", cells.len(), header.len()),
+            ));
+        }
+        let id = cells.last().map(String::as_str).unwrap_or("");
+        if id != c.fingerprint.campaign_id {
+            return Err(at(
+                lineno,
+                format!(
+                    "the row belongs to campaign {id:?}, not to this one ({}): the base scene, \
+                     the trials file, the seed or the rpod version differ",
+                    c.fingerprint.campaign_id
+                ),
+            ));
+        }
+        let k: usize = cells[0]
+            .parse()
+            .map_err(|_| at(lineno, format!("index {:?} is not a number", cells[0])))?;
+        if k >= c.spec.count {
+            return Err(at(
+                lineno,
+                format!("index {k} is out of range (count {})", c.spec.count),
+            ));
+        }
+        if let Some((i, m)) = shard
+            && k % m != i
+        {
+            return Err(at(lineno, format!("trial {k} is not in shard {i}/{m}")));
+        }
+        if !seen.insert(k) {
+            return Err(at(lineno, format!("trial {k} appears twice")));
+        }
+        let expect = c.spec.values(k);
+        for (j, v) in expect.iter().enumerate() {
+            if cells[1 + j] != format!("{v}") {
+                return Err(at(
+                    lineno,
+                    format!(
+                        "trial {k}'s `{}` is {:?}, the campaign gives it {v}",
+                        header[1 + j],
+                        cells[1 + j]
+                    ),
+                ));
+            }
+        }
+        let outcome = cells[np + 1].clone();
+        if outcome.is_empty() || !outcome.bytes().all(|b| b.is_ascii_uppercase() || b == b'_') {
+            return Err(at(lineno, format!("outcome {outcome:?} is not an outcome")));
+        }
+        let success = match cells[np + 2].as_str() {
+            "true" => true,
+            "false" => false,
+            other => {
+                return Err(at(
+                    lineno,
+                    format!("success {other:?} is not true or false"),
+                ));
+            }
+        };
+        // The numeric result columns (empty = none) and `steps`.
+        for j in np + 3..header.len() - 2 {
+            let cell = &cells[j];
+            let ok = if header[j] == "steps" {
+                cell.parse::<u64>().is_ok()
+            } else {
+                cell.is_empty() || cell.parse::<f64>().is_ok_and(f64::is_finite)
+            };
+            if !ok {
+                return Err(at(
+                    lineno,
+                    format!("`{}` is {cell:?}, not a number", header[j]),
+                ));
+            }
+        }
+        rows.push(Row {
+            index: k,
+            values: expect,
+            outcome,
+            success,
+            cells,
+        });
+    }
+    Ok((rows, accepted))
+}
+
+/// Writes the campaign's fingerprint as `campaign.json` in `dir`.
+fn write_campaign_json(dir: &Path, c: &Campaign) -> Result<(), TrialsError> {
+    let v = serde_json::json!({
+        "campaign": c.spec.name,
+        "fingerprint": c.fingerprint,
+    });
+    crate::report::write_atomic(
+        &dir.join("campaign.json"),
+        (serde_json::to_string_pretty(&v).map_err(io_err)? + "\n").as_bytes(),
+    )
+    .map_err(io_err)
+}
+
+/// Refuses a folder whose `campaign.json` names another campaign, saying what differs.
+fn check_campaign_json(dir: &Path, c: &Campaign) -> Result<(), TrialsError> {
+    let Ok(text) = std::fs::read_to_string(dir.join("campaign.json")) else {
+        return Ok(());
+    };
+    let other: Option<Fingerprint> = serde_json::from_str::<serde_json::Value>(&text)
+        .ok()
+        .and_then(|v| serde_json::from_value(v["fingerprint"].clone()).ok());
+    match other {
+        Some(f) if f == c.fingerprint => Ok(()),
+        Some(f) => Err(TrialsError::Refused(format!(
+            "{} holds campaign {} ({} differ from this campaign {}); use another --out",
+            dir.display(),
+            f.campaign_id,
+            c.fingerprint.differences(&f).join(", "),
+            c.fingerprint.campaign_id
+        ))),
+        None => Err(TrialsError::Refused(format!(
+            "{}/campaign.json cannot be read; use another --out",
+            dir.display()
+        ))),
+    }
 }
 
 /// Runs (or resumes) a campaign's shard into `opts.out`.
-pub fn run(c: &Campaign, opts: &RunOptions) -> Result<RunStats, String> {
-    std::fs::create_dir_all(&opts.out).map_err(|e| format!("{}: {e}", opts.out.display()))?;
-    let csv = opts.out.join("trials.csv");
-    let header = header(&c.spec);
-    let done = done_indices(&csv, &header)?;
+pub fn run(c: &Campaign, opts: &RunOptions) -> Result<RunStats, TrialsError> {
+    let _lock = lock(&opts.out)?;
+    check_campaign_json(&opts.out, c)?;
+    let csv_path = opts.out.join("trials.csv");
     let (si, sn) = opts.shard;
-    let todo: Vec<usize> = (0..c.spec.count)
-        .filter(|k| k % sn == si && !done.contains(k))
-        .collect();
-    // A partial last line from a crash is dropped by rewriting the file's complete lines.
-    let mut file = if done.is_empty() {
-        let mut f = std::fs::File::create(&csv).map_err(|e| format!("{}: {e}", csv.display()))?;
-        writeln!(f, "{header}").map_err(|e| e.to_string())?;
-        f
+    let done: Vec<usize> = if csv_path.exists() {
+        let (rows, accepted) = read_checked(&csv_path, c, Some((si, sn)), true)?;
+        // A torn last line from a crash is dropped: that trial runs again.
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&csv_path)
+            .map_err(io_err)?;
+        f.set_len(accepted as u64).map_err(io_err)?;
+        if accepted == 0 {
+            drop(f);
+            std::fs::remove_file(&csv_path).map_err(io_err)?;
+        }
+        rows.iter().map(|r| r.index).collect()
     } else {
-        let text = std::fs::read_to_string(&csv).map_err(|e| e.to_string())?;
-        let complete: String = text
-            .split_inclusive('\n')
-            .filter(|l| l.ends_with('\n'))
-            .collect();
-        std::fs::write(&csv, complete).map_err(|e| e.to_string())?;
+        Vec::new()
+    };
+    write_campaign_json(&opts.out, c)?;
+    let done_set: std::collections::HashSet<usize> = done.iter().copied().collect();
+    let todo: Vec<usize> = (0..c.spec.count)
+        .filter(|k| k % sn == si && !done_set.contains(k))
+        .collect();
+    let mut file = if csv_path.exists() {
         std::fs::OpenOptions::new()
             .append(true)
-            .open(&csv)
-            .map_err(|e| format!("{}: {e}", csv.display()))?
+            .open(&csv_path)
+            .map_err(|e| TrialsError::Io(format!("{}: {e}", csv_path.display())))?
+    } else {
+        let mut f = std::fs::File::create(&csv_path)
+            .map_err(|e| TrialsError::Io(format!("{}: {e}", csv_path.display())))?;
+        f.write_all(csv_line(&header(c)).as_bytes())
+            .map_err(io_err)?;
+        f
     };
     let bar = if opts.progress {
         indicatif::ProgressBar::new(todo.len() as u64)
@@ -503,15 +1117,20 @@ pub fn run(c: &Campaign, opts: &RunOptions) -> Result<RunStats, String> {
     let (tx, rx) = mpsc::channel::<TrialResult>();
     let mut steps = 0u64;
     let jobs = opts.jobs.max(1).min(todo.len().max(1));
-    std::thread::scope(|s| -> Result<(), String> {
+    let id = c.fingerprint.campaign_id.clone();
+    let runs_dir = opts.out.join("runs");
+    let keep_runs = opts.keep_runs;
+    std::thread::scope(|s| -> Result<(), TrialsError> {
         for _ in 0..jobs {
             let tx = tx.clone();
+            let runs_dir = &runs_dir;
             let (todo, next) = (&todo, &next);
             s.spawn(move || {
                 loop {
                     let i = next.fetch_add(1, Ordering::Relaxed);
                     let Some(&k) = todo.get(i) else { break };
-                    if tx.send(run_trial(c, k)).is_err() {
+                    let keep = keep_runs.then(|| runs_dir.join(format!("{k:06}")));
+                    if tx.send(run_trial(c, k, keep.as_deref())).is_err() {
                         break;
                     }
                 }
@@ -528,8 +1147,9 @@ pub fn run(c: &Campaign, opts: &RunOptions) -> Result<RunStats, String> {
                 let Some(r) = pending.remove(&todo[cursor]) else {
                     break;
                 };
-                writeln!(file, "{}", row(&r)).map_err(|e| e.to_string())?;
-                file.flush().map_err(|e| e.to_string())?;
+                file.write_all(csv_line(&row(&r, &id)).as_bytes())
+                    .map_err(io_err)?;
+                file.flush().map_err(io_err)?;
                 cursor += 1;
                 bar.inc(1);
             }
@@ -538,7 +1158,8 @@ pub fn run(c: &Campaign, opts: &RunOptions) -> Result<RunStats, String> {
     })?;
     bar.finish_and_clear();
     let wall_s = t0.elapsed().as_secs_f64();
-    write_summary(&opts.out, c)?;
+    let (rows, _) = read_checked(&csv_path, c, Some((si, sn)), false)?;
+    write_summary(&opts.out, c, &rows, &[])?;
     Ok(RunStats {
         ran: todo.len(),
         resumed: done.len(),
@@ -561,79 +1182,103 @@ pub fn wilson(s: usize, n: usize) -> (f64, f64, f64) {
     (p, (centre - half).max(0.0), (centre + half).min(1.0))
 }
 
-/// One row read back from `trials.csv`: (index, values, outcome, success, the line itself).
-type Row = (usize, Vec<f64>, String, bool, String);
-
-/// Reads `trials.csv`: its header and rows.
-fn read_rows(path: &Path) -> Result<(String, Vec<Row>), String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut lines = text.lines();
-    let header = lines.next().unwrap_or("").to_string();
-    let nparams = header.split(',').position(|h| h == "outcome").unwrap_or(1) - 1;
-    let mut rows = Vec::new();
-    for l in lines {
-        let cells: Vec<&str> = l.splitn(nparams + 4, ',').collect();
-        if cells.len() < nparams + 3 {
-            continue;
+/// Index ranges `a-b` (or `a`) of a sorted list, comma-separated, at most `max` ranges shown.
+pub fn ranges(idx: &[usize], max: usize) -> String {
+    let mut out: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < idx.len() {
+        let mut j = i;
+        while j + 1 < idx.len() && idx[j + 1] == idx[j] + 1 {
+            j += 1;
         }
-        let Ok(k) = cells[0].parse() else { continue };
-        let values = cells[1..=nparams]
-            .iter()
-            .map(|c| c.parse().unwrap_or(f64::NAN))
-            .collect();
-        rows.push((
-            k,
-            values,
-            cells[nparams + 1].to_string(),
-            cells[nparams + 2] == "true",
-            l.to_string(),
-        ));
+        out.push(if i == j {
+            idx[i].to_string()
+        } else {
+            format!("{}-{}", idx[i], idx[j])
+        });
+        i = j + 1;
     }
-    Ok((header, rows))
+    let n = out.len();
+    if n > max {
+        out.truncate(max);
+        out.push(format!("… ({} more ranges)", n - max));
+    }
+    out.join(", ")
 }
 
-/// Writes `summary.json` and the capture-envelope plot from `dir/trials.csv`.
-pub fn write_summary(dir: &Path, c: &Campaign) -> Result<(), String> {
-    let (_, rows) = read_rows(&dir.join("trials.csv"))?;
+/// Writes `summary.json` and the capture-envelope plot for the checked rows of `dir/trials.csv`
+/// (`missing`: indices a partial merge lacks).
+pub fn write_summary(
+    dir: &Path,
+    c: &Campaign,
+    rows: &[Row],
+    missing: &[usize],
+) -> Result<(), TrialsError> {
     let mut counts: BTreeMap<String, usize> = BTreeMap::new();
-    for r in &rows {
-        *counts.entry(r.2.clone()).or_default() += 1;
+    for r in rows {
+        *counts.entry(r.outcome.clone()).or_default() += 1;
     }
-    let s = rows.iter().filter(|r| r.3).count();
-    let (p, lo, hi) = wilson(s, rows.len());
-    let summary = serde_json::json!({
+    let invalid = counts.get(OUTCOME_INVALID).copied().unwrap_or(0);
+    let valid: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.outcome != OUTCOME_INVALID)
+        .collect();
+    let s = valid.iter().filter(|r| r.success).count();
+    let (p, lo, hi) = wilson(s, valid.len());
+    let p_json = if valid.is_empty() {
+        serde_json::Value::Null
+    } else {
+        serde_json::json!(p)
+    };
+    let mut summary = serde_json::json!({
         "campaign": c.spec.name,
         "scene": c.scene_path.display().to_string(),
+        "fingerprint": c.fingerprint,
         "trials": rows.len(),
         "planned": c.spec.count,
-        "success_criterion": format!("{:?}", c.spec.success),
+        "complete": missing.is_empty() && rows.len() == c.spec.count,
+        "missing_indices": ranges(missing, 50),
+        "invalid": invalid,
+        "valid_trials": valid.len(),
+        "numeric_failures": counts.get(OUTCOME_NUMERIC_FAILURE).copied().unwrap_or(0),
+        "success_criterion": c.spec.success.describe(),
         "successes": s,
         "outcomes": counts,
-        "capture_probability": p,
-        "capture_probability_95ci_wilson": [lo, hi],
+        "success_probability": p_json,
+        "success_probability_95ci_wilson": [lo, hi],
+        "probability_over": "valid trials (INVALID trials, whose sampled parameters made an invalid scene, are not runs; NUMERIC_FAILURE counts as a failure)",
         "parameters": c.spec.parameters.iter().map(|p| p.path()).collect::<Vec<_>>(),
+        "provenance": crate::report::build_provenance(),
     });
+    if c.spec.success.is_docking() {
+        summary["capture_probability"] = p_json;
+        summary["capture_probability_95ci_wilson"] = serde_json::json!([lo, hi]);
+    }
     crate::report::write_atomic(
         &dir.join("summary.json"),
-        (serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())? + "\n").as_bytes(),
+        (serde_json::to_string_pretty(&summary).map_err(io_err)? + "\n").as_bytes(),
     )
-    .map_err(|e| e.to_string())?;
-    envelope_plot(dir, c, &rows)
+    .map_err(io_err)?;
+    envelope_plot(dir, c, rows).map_err(TrialsError::Io)
 }
 
 /// Outcome over the two leading parameters (`capture_envelope.png` and `.svg`); with a
 /// single parameter the vertical axis is the trial index.
 fn envelope_plot(dir: &Path, c: &Campaign, rows: &[Row]) -> Result<(), String> {
     let paths: Vec<&str> = c.spec.parameters.iter().map(|p| p.label()).collect();
-    let mut cats: Vec<String> = rows.iter().map(|r| r.2.clone()).collect();
+    let mut cats: Vec<String> = rows.iter().map(|r| r.outcome.clone()).collect();
     cats.sort();
     cats.dedup();
     let points: Vec<(f64, f64, usize)> = rows
         .iter()
         .map(|r| {
-            let y = if paths.len() > 1 { r.1[1] } else { r.0 as f64 };
-            let k = cats.iter().position(|c| *c == r.2).expect("category");
-            (r.1[0], y, k)
+            let y = if paths.len() > 1 {
+                r.values[1]
+            } else {
+                r.index as f64
+            };
+            let k = cats.iter().position(|c| *c == r.outcome).expect("category");
+            (r.values[0], y, k)
         })
         .collect();
     let plot =
@@ -650,27 +1295,62 @@ fn envelope_plot(dir: &Path, c: &Campaign, rows: &[Row]) -> Result<(), String> {
         .map_err(|e| e.to_string())
 }
 
+/// What a merge did.
+#[derive(Debug, Clone)]
+pub struct MergeStats {
+    /// Trials merged.
+    pub merged: usize,
+    /// Indices missing (only with `allow_partial`).
+    pub missing: Vec<usize>,
+}
+
 /// Joins shard outputs into one `trials.csv` (rows in index order), `summary.json` and plot.
-pub fn merge(c: &Campaign, shards: &[PathBuf], out: &Path) -> Result<usize, String> {
-    let header = header(&c.spec);
-    let mut all: BTreeMap<usize, String> = BTreeMap::new();
-    for d in shards {
-        let (h, rows) = read_rows(&d.join("trials.csv"))?;
-        if h != header {
-            return Err(format!("{} is from a different campaign", d.display()));
-        }
+/// Every shard row is checked ([`read_checked`]: this campaign's id, values, cells); a shard
+/// of another campaign, an index in two shards, or (unless `allow_partial`) an index in none
+/// is refused, naming the shard or the indices.
+pub fn merge(
+    c: &Campaign,
+    shards: &[PathBuf],
+    out: &Path,
+    allow_partial: bool,
+) -> Result<MergeStats, TrialsError> {
+    let mut all: BTreeMap<usize, (Row, usize)> = BTreeMap::new();
+    for (si, d) in shards.iter().enumerate() {
+        check_campaign_json(d, c)?;
+        let (rows, _) = read_checked(&d.join("trials.csv"), c, None, false)?;
         for r in rows {
-            all.insert(r.0, r.4);
+            if let Some((_, other)) = all.get(&r.index) {
+                return Err(TrialsError::Refused(format!(
+                    "trial {} is in two shards, {} and {}",
+                    r.index,
+                    shards[*other].display(),
+                    d.display()
+                )));
+            }
+            all.insert(r.index, (r, si));
         }
     }
-    std::fs::create_dir_all(out).map_err(|e| e.to_string())?;
-    let mut text = header + "\n";
-    for l in all.values() {
-        text.push_str(l);
-        text.push('\n');
+    let missing: Vec<usize> = (0..c.spec.count).filter(|k| !all.contains_key(k)).collect();
+    if !missing.is_empty() && !allow_partial {
+        return Err(TrialsError::Refused(format!(
+            "{} of {} trials are in no shard: {} (a shard is missing or unfinished; rerun it, \
+             or merge with --allow-partial)",
+            missing.len(),
+            c.spec.count,
+            ranges(&missing, 20)
+        )));
     }
-    crate::report::write_atomic(&out.join("trials.csv"), text.as_bytes())
-        .map_err(|e| e.to_string())?;
-    write_summary(out, c)?;
-    Ok(all.len())
+    let _lock = lock(out)?;
+    let mut text = csv_line(&header(c));
+    for (r, _) in all.values() {
+        text.push_str(&csv_line(&r.cells));
+    }
+    crate::report::write_atomic(&out.join("trials.csv"), text.as_bytes()).map_err(io_err)?;
+    write_campaign_json(out, c)?;
+    let rows: Vec<Row> = all.into_values().map(|(r, _)| r).collect();
+    write_summary(out, c, &rows, &missing)?;
+    Ok(MergeStats {
+        merged: rows.len(),
+        missing,
+    })
 }

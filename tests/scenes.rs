@@ -25,14 +25,65 @@ fn every_bundled_scene_passes_check() {
 }
 
 /// (file, line, field, words the message must contain)
+///
+/// The corpus covers, besides single wrong values: panics once hit (a tiny inertia, a file
+/// ending inside a string or after a backslash, an unclosed `#![`), stack overflows (deep
+/// nesting), allocation aborts and hangs (panel, slot and prism segment counts, body and part
+/// counts, substeps, steps), finite values that overflow downstream (inertia, mass, speed,
+/// magnet force, table gravity, a tiny box), names that would break CSV columns or `--set`
+/// paths, duplicate names, docking that cannot dock, non-UTF-8 bytes, degenerate reference
+/// orbits and far-away bodies (once reported as overlaps).
 const CORPUS: &[(&str, usize, &str, &str)] = &[
+    ("deep_brackets", 62, "", "nested deeper than 64 levels"),
+    ("deep_parens", 45, "", "nested deeper than 64 levels"),
+    (
+        "docking_no_cone",
+        58,
+        "docking.chaser_port",
+        "carries no DockingCone",
+    ),
+    (
+        "docking_no_slot",
+        58,
+        "docking.target_port",
+        "carries no DockingSlot",
+    ),
+    ("docking_role_other", 58, "docking.target", "has role Other"),
+    (
+        "docking_roles_swapped",
+        58,
+        "docking.chaser",
+        "has role Target",
+    ),
+    ("dt_huge", 8, "dt_s", "at most 100 s, got 1e12"),
+    ("dt_tiny", 8, "dt_s", "got 1e-300"),
     ("duplicate_body", 42, "bodies.1.name", "duplicate body name"),
+    (
+        "duplicate_guarantee",
+        64,
+        "guarantees.1.name",
+        "duplicate guarantee name `clearance_50cm`",
+    ),
     ("eccentricity", 13, "environment.reference.e", "[0, 1)"),
+    ("eof_after_backslash", 56, "", "Expected end of string"),
+    ("eof_in_string", 56, "", "Expected end of string"),
+    (
+        "far_away_body",
+        50,
+        "bodies.chaser.initial.pos_m",
+        "exceeds the limit of 1e7 m",
+    ),
     (
         "guarantee_unknown_body",
         62,
         "guarantees.clearance_50cm.b",
         "no body named `station`",
+    ),
+    (
+        "huge_inertia",
+        46,
+        "bodies.chaser.inertia_kg_m2",
+        "at most 1e18 kg·m²",
     ),
     (
         "inside_earth",
@@ -41,11 +92,31 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "inside the Earth",
     ),
     (
+        "magnet_1e308",
+        61,
+        "docking.magnet.f0_n",
+        "from 0 to 1e9 N, got 1e308",
+    ),
+    (
+        "mass_1e308",
+        45,
+        "bodies.chaser.mass_kg",
+        "from 1e-6 to 1e12 kg, got 1e308",
+    ),
+    (
         "missing_model",
         53,
         "bodies.target.parts.antenna.model.path",
         "no model file",
     ),
+    ("name_comma", 43, "bodies.1.name", "A-Z a-z 0-9 _ -"),
+    (
+        "name_newline",
+        56,
+        "bodies.chaser.parts.1.name",
+        "A-Z a-z 0-9 _ -",
+    ),
+    ("name_quote", 63, "guarantees.0.name", "A-Z a-z 0-9 _ -"),
     (
         "negative_mass",
         44,
@@ -58,6 +129,7 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "bodies.chaser.parts.wing_pz.panel_size_m.1",
         "positive number of metres",
     ),
+    ("non_utf8", 45, "", "byte 0xFF is not valid UTF-8"),
     (
         "not_positive_definite",
         27,
@@ -65,18 +137,99 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "positive definite",
     ),
     (
+        "orbit_hyperbolic",
+        12,
+        "environment.reference.v_eci_m_s",
+        "not a bound orbit",
+    ),
+    (
+        "orbit_radial",
+        12,
+        "environment.reference.v_eci_m_s",
+        "degenerate orbit",
+    ),
+    (
         "overlap_at_start",
         53,
         "bodies.chaser.parts.bus",
         "overlaps `target/wing_py.panel2`",
     ),
+    (
+        "panel_count_huge",
+        57,
+        "bodies.chaser.parts.wing_pz.panel_count",
+        "from 1 to 64, got 4000000000",
+    ),
+    (
+        "port_name_space",
+        53,
+        "bodies.chaser.ports.0.name",
+        "A-Z a-z 0-9 _ -",
+    ),
+    (
+        "prism_segments_huge",
+        54,
+        "bodies.chaser.parts.bus.shape.segments",
+        "from 8 to 1024",
+    ),
+    (
+        "scene_name_newline",
+        7,
+        "name",
+        "without control characters",
+    ),
+    (
+        "size_tiny",
+        54,
+        "bodies.chaser.parts.bus.shape.size_m.0",
+        "from 1e-6 to 10000 m, got 1e-300",
+    ),
+    (
+        "slot_segments_huge",
+        32,
+        "bodies.target.parts.slot.segments",
+        "from 6 to 256",
+    ),
+    (
+        "speed_1e308",
+        51,
+        "bodies.chaser.initial.vel_m_s",
+        "exceeds the limit of 100000 m/s",
+    ),
+    (
+        "substeps_max",
+        9,
+        "physics_substeps",
+        "from 1 to 1000, got 4294967295",
+    ),
     ("syntax_error", 44, "", "Expected comma"),
+    (
+        "table_gravity_1e308",
+        24,
+        "environment.0.gravity_m_s2",
+        "got 1e308",
+    ),
+    (
+        "tiny_inertia",
+        46,
+        "bodies.chaser.inertia_kg_m2",
+        "below the limit of 1e-12 kg·m²",
+    ),
+    ("too_many_bodies", 23, "bodies", "at most 64 bodies, got 67"),
+    (
+        "too_many_parts",
+        53,
+        "bodies.chaser.parts",
+        "at most 256 parts on a body, got 258",
+    ),
+    ("too_many_steps", 9, "duration_s", "1e14 steps"),
     (
         "triangle_inertia",
         45,
         "bodies.chaser.inertia_kg_m2",
         "triangle inequality",
     ),
+    ("unclosed_attribute", 5, "", "Expected comma"),
     (
         "unknown_field",
         26,
@@ -173,4 +326,178 @@ fn cli_bad_scene_exits_2_and_writes_nothing() {
         .output()
         .unwrap();
     assert_eq!(r.status.code(), Some(2));
+}
+
+#[test]
+fn regress_set_value_with_newlines_is_located_in_its_own_text() {
+    let path = "tests/broken_scenes/negative_mass.ron";
+    let text = std::fs::read_to_string(path).unwrap();
+    // An error inside a multi-line value points into the `--set` argument, line and column.
+    let e = load_scene_str(&text, path, &["bodies.chaser.mass_kg=\n  -5.0".into()]).unwrap_err();
+    assert_eq!(e.field, "bodies.chaser.mass_kg", "{e}");
+    assert!(
+        e.file.contains("(--set bodies.chaser.mass_kg=\\n  -5.0)"),
+        "{e}"
+    );
+    assert_eq!((e.line, e.col), (2, 3), "{e}");
+    // An override with newlines earlier in the file does not shift the lines of errors after
+    // it: the chaser's negative mass stays at line 44 of the file.
+    let e =
+        load_scene_str(&text, path, &["bodies.target.mass_kg=\n\n\n800.0\n".into()]).unwrap_err();
+    assert_eq!((e.file.as_str(), e.line, e.col), (path, 44, 22), "{e}");
+    // A syntax error inside the value is located in the value too.
+    let e = load_scene_str(
+        &text,
+        path,
+        &["bodies.chaser.com_m=(1.0,\n 2.0 3.0)".into()],
+    )
+    .unwrap_err();
+    assert!(e.file.contains("--set"), "{e}");
+    assert_eq!(e.line, 2, "{e}");
+}
+
+#[test]
+fn regress_set_cannot_inject_scene_text() {
+    let text = std::fs::read_to_string("scenes/collision_course.ron").unwrap();
+    for (set, words) in [
+        (
+            "bodies.chaser.mass_kg=1.0, friction: 9.0",
+            "expected one value",
+        ),
+        (
+            "bodies.chaser.mass_kg=300.0 // the rest of the line",
+            "comment",
+        ),
+        ("bodies.chaser.mass_kg=300.0 /* x */", "comment"),
+        ("bodies.chaser.friction: 1.0, restitution=0.5", "no field"),
+        (
+            "bodies.chaser.initial.pos_m=((((((((((((((((((((((((((((((((((((((((((((((((((((((((((((((((((1.0)))))))))))))))))))))))))))))))))))))))))))))))))))))))))))))))))))",
+            "nest deeper",
+        ),
+    ] {
+        let e = load_scene_str(&text, "cc", &[set.into()]).unwrap_err();
+        assert!(e.message.contains(words), "{set}: {e}");
+        assert!(e.file.contains("--set"), "{set}: {e}");
+    }
+}
+
+/// A minimal body line for the count-limit scenes.
+fn tiny_body(k: usize) -> String {
+    format!(
+        "(name:\"b{k}\",role:Other,mass_kg:1.0,inertia_kg_m2:(xx:1.0,yy:1.0,zz:1.0),initial:(pos_m:({k}.0,0.0,0.0)),parts:[Bus(name:\"p\",shape:Sphere(radius_m:0.1))]),\n"
+    )
+}
+
+#[test]
+fn regress_check_on_a_hundred_thousand_bodies_or_parts_is_a_located_error() {
+    let head =
+        "Scene(name: \"many\", dt_s: 0.01, duration_s: 1.0, environment: FreeSpace,\nbodies: [\n";
+    let bodies: String = (0..100_000).map(tiny_body).collect();
+    let text = format!("{head}{bodies}],\n)");
+    let e = load_scene_str(&text, "many", &[]).unwrap_err();
+    assert_eq!((e.line, e.field.as_str()), (2, "bodies"), "{e}");
+    assert!(e.message.contains("at most 64 bodies, got 100000"), "{e}");
+    let parts: String = (0..100_000)
+        .map(|k| format!("Bus(name:\"p{k}\",shape:Sphere(radius_m:0.1)),\n"))
+        .collect();
+    let text = format!(
+        "{head}(name:\"b\",role:Other,mass_kg:1.0,inertia_kg_m2:(xx:1.0,yy:1.0,zz:1.0),initial:(pos_m:(0.0,0.0,0.0)),parts:[\n{parts}]),\n],\n)"
+    );
+    let e = load_scene_str(&text, "many", &[]).unwrap_err();
+    assert_eq!(e.field, "bodies.b.parts", "{e}");
+    assert!(
+        e.message
+            .contains("at most 256 parts on a body, got 100000"),
+        "{e}"
+    );
+}
+
+#[test]
+fn regress_scene_and_files_beyond_the_size_limit_are_refused() {
+    let d = std::env::temp_dir().join(format!("rpod-big-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let f = d.join("big.ron");
+    let mut text = std::fs::read_to_string("scenes/collision_course.ron").unwrap();
+    text.push_str(&"// padding\n".repeat(2 << 20));
+    std::fs::write(&f, text).unwrap();
+    let e = load_scene_file(&f, &[]).unwrap_err();
+    assert!(e.message.contains("larger than 16 MiB"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn regress_default_output_folder_is_a_safe_name_under_out() {
+    let d = std::env::temp_dir().join(format!("rpod-outname-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(d.join("work")).unwrap();
+    let scene = std::fs::canonicalize("scenes/collision_course.ron").unwrap();
+    for (name, dir) in [
+        ("../../escaped", "_.._escaped"),
+        ("/tmp/absolute", "_tmp_absolute"),
+        ("..", "unnamed"),
+        ("a b\\c", "a_b_c"),
+    ] {
+        let r = Command::new(env!("CARGO_BIN_EXE_rpod"))
+            .current_dir(d.join("work"))
+            .arg("run")
+            .arg(&scene)
+            .args(["--duration", "0.05", "--set"])
+            .arg(format!("name={name:?}"))
+            .output()
+            .unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let out = d.join("work/out").join(dir);
+        assert!(
+            out.join("summary.json").exists(),
+            "{name}: no {}",
+            out.display()
+        );
+    }
+    // Nothing was written beside `work/` or at the absolute path.
+    let top: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(top, vec![std::ffi::OsString::from("work")]);
+    assert!(!Path::new("/tmp/absolute/summary.json").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn regress_symlinked_model_files_and_folders_are_refused() {
+    let d = std::env::temp_dir().join(format!("rpod-assets-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    let real = std::fs::canonicalize("assets/models").unwrap();
+    // A link to a file, then a link to the folder.
+    std::fs::create_dir_all(d.join("file/models")).unwrap();
+    std::os::unix::fs::symlink(
+        real.join("hga_dish.gltf"),
+        d.join("file/models/hga_dish.gltf"),
+    )
+    .unwrap();
+    std::fs::create_dir_all(d.join("folder")).unwrap();
+    std::os::unix::fs::symlink(&real, d.join("folder/models")).unwrap();
+    for (assets, link) in [("file", "models/hga_dish.gltf"), ("folder", "models")] {
+        let r = Command::new(env!("CARGO_BIN_EXE_rpod"))
+            .env("RPOD_ASSETS", d.join(assets))
+            .args(["check", "scenes/free_drift.ron"])
+            .output()
+            .unwrap();
+        assert_eq!(r.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            err.contains("field `bodies.target.parts.antenna.model.path`")
+                && err.contains("is a symbolic link")
+                && err.contains(&d.join(assets).join(link).display().to_string()),
+            "{err}"
+        );
+    }
+    // The real folder is accepted.
+    let r = Command::new(env!("CARGO_BIN_EXE_rpod"))
+        .env("RPOD_ASSETS", real.parent().unwrap())
+        .args(["check", "scenes/free_drift.ron"])
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let _ = std::fs::remove_dir_all(&d);
 }

@@ -164,3 +164,332 @@ fn val_wilson_interval_closed_forms() {
     let (_, c, d) = rpod::trials::wilson(14, 17);
     assert!((a - (1.0 - d)).abs() < 1e-12 && (b - (1.0 - c)).abs() < 1e-12);
 }
+
+fn trials_fails(args: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_rpod"))
+        .arg("trials")
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).to_string(),
+    )
+}
+
+/// Damaged `trials.csv` files are refused on resume with the line and the reason; only an
+/// unterminated last line (a crash while writing it) is dropped and rerun.
+#[test]
+fn regress_damaged_trials_csv_is_refused_on_resume() {
+    let d = tmp("damaged");
+    let f = campaign(&d);
+    let f = f.to_str().unwrap();
+    let good = d.join("good");
+    trials(&[f, "--out", good.to_str().unwrap()]);
+    let reference = read(&good.join("trials.csv"));
+    let lines: Vec<&str> = reference.lines().collect();
+    let cut = &lines[3][..lines[3].len() / 2];
+    let garbage = format!("{}\n{}\nhello, world\n", lines[0], lines[1]);
+    let swapped = lines[2].replacen(",0.05,", ",0.04,", 1);
+    assert_ne!(swapped, lines[2]);
+    let cases: Vec<(&str, String, &str)> = vec![
+        (
+            "cut row ending in a newline",
+            format!("{}\n{}\n{cut}\n", lines[0], lines[1]),
+            ":3: ",
+        ),
+        (
+            "duplicated row",
+            format!("{}\n{}\n{}\n{}\n", lines[0], lines[1], lines[2], lines[2]),
+            "appears twice",
+        ),
+        ("garbage line", garbage, ":3: "),
+        (
+            "index out of range",
+            format!("{}\n{}\n", lines[0], lines[1].replacen("0,", "99,", 1)),
+            "index 99 is out of range",
+        ),
+        (
+            "values that are not trial k's",
+            format!("{}\n{swapped}\n", lines[0]),
+            "the campaign gives it",
+        ),
+        (
+            "another campaign's row",
+            format!(
+                "{}\n{}\n",
+                lines[0],
+                lines[1].replace(&lines[1][lines[1].len() - 16..], "0123456789abcdef")
+            ),
+            "belongs to campaign",
+        ),
+    ];
+    for (what, text, words) in cases {
+        let dir = d.join(what.replace(' ', "_"));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("trials.csv"), &text).unwrap();
+        let (code, err) = trials_fails(&[f, "--out", dir.to_str().unwrap()]);
+        assert_eq!(code, 2, "{what}: {err}");
+        assert!(err.contains(words), "{what}: {err}");
+        // Nothing was changed.
+        assert_eq!(read(&dir.join("trials.csv")), text, "{what}");
+    }
+    // A shard's rows resumed under another --shard are not this shard's.
+    let s0 = d.join("s0");
+    trials(&[f, "--shard", "0/2", "--out", s0.to_str().unwrap()]);
+    let (code, err) = trials_fails(&[f, "--shard", "1/2", "--out", s0.to_str().unwrap()]);
+    assert_eq!(code, 2);
+    assert!(err.contains("is not in shard 1/2"), "{err}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Merge refuses shards of another seed or base scene, an index in two shards and missing
+/// indices; `--allow-partial` merges what there is and says what is missing.
+#[test]
+fn regress_merge_refuses_mismatched_missing_and_duplicated_shards() {
+    let d = tmp("merge");
+    let f = campaign(&d);
+    let fs = f.to_str().unwrap();
+    let (s0, s1) = (d.join("s0"), d.join("s1"));
+    trials(&[fs, "--shard", "0/2", "--out", s0.to_str().unwrap()]);
+    trials(&[fs, "--shard", "1/2", "--out", s1.to_str().unwrap()]);
+    let merged = d.join("merged");
+    let m = merged.to_str().unwrap();
+    // A missing shard.
+    let (code, err) = trials_fails(&["merge", fs, s0.to_str().unwrap(), "--out", m]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("3 of 6 trials are in no shard: 1, 3, 5"),
+        "{err}"
+    );
+    assert!(!merged.join("trials.csv").exists());
+    // The same shard twice.
+    let (code, err) = trials_fails(&[
+        "merge",
+        fs,
+        s0.to_str().unwrap(),
+        s0.to_str().unwrap(),
+        "--out",
+        m,
+    ]);
+    assert_eq!(code, 2);
+    assert!(err.contains("trial 0 is in two shards"), "{err}");
+    // --allow-partial merges what there is and says what is missing.
+    let out = trials(&[
+        "merge",
+        fs,
+        s0.to_str().unwrap(),
+        "--allow-partial",
+        "--out",
+        m,
+    ]);
+    let so = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        so.contains("PARTIAL: 3 of 6 trials are missing: 1, 3, 5"),
+        "{so}"
+    );
+    let s: serde_json::Value = serde_json::from_str(&read(&merged.join("summary.json"))).unwrap();
+    assert_eq!(s["complete"], false);
+    assert_eq!(s["missing_indices"], "1, 3, 5");
+    assert_eq!(s["trials"], 3);
+    // Another seed: the trials file differs, so the campaign does.
+    let other = d.join("other.ron");
+    std::fs::write(&other, read(&f).replace("seed: 7", "seed: 8")).unwrap();
+    let (code, err) = trials_fails(&[
+        "merge",
+        other.to_str().unwrap(),
+        s0.to_str().unwrap(),
+        s1.to_str().unwrap(),
+        "--out",
+        d.join("m2").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(err.contains("the trials file, the seed differ"), "{err}");
+    // Resuming into a folder of another campaign is refused too.
+    let (code, err) = trials_fails(&[other.to_str().unwrap(), "--out", s0.to_str().unwrap()]);
+    assert_eq!(code, 2);
+    assert!(err.contains("holds campaign"), "{err}");
+    // Every row carries the campaign id; summary.json the full fingerprint.
+    let s: serde_json::Value = serde_json::from_str(&read(&s0.join("summary.json"))).unwrap();
+    let id = s["fingerprint"]["campaign_id"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    assert_eq!(s["fingerprint"]["seed"], 7);
+    assert_eq!(
+        s["fingerprint"]["trials_sha256"],
+        rpod::report::sha256_hex(read(&f).as_bytes())
+    );
+    for l in read(&s0.join("trials.csv")).lines().skip(1) {
+        assert!(l.ends_with(&format!(",{id}")), "{l}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A trial whose sampled values make an invalid scene is `INVALID` (its own outcome, not a
+/// failed run, not in the probability's denominator), with the scene error as its reason,
+/// quoted as CSV needs.
+#[test]
+fn regress_invalid_trials_are_their_own_outcome() {
+    let d = tmp("invalid");
+    let scene = std::fs::canonicalize("scenes/docking_aligned.ron").unwrap();
+    let f = d.join("inv.ron");
+    std::fs::write(
+        &f,
+        format!(
+            r#"Trials(name: "inv", scene: "{}", duration_s: 5.0, count: 3,
+    parameters: [Grid(path: "bodies.chaser.mass_kg", values: [300.0, -1.0, 250.0])],
+    success: NoCollision)"#,
+            scene.display()
+        ),
+    )
+    .unwrap();
+    let out = d.join("out");
+    trials(&[f.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let text = read(&out.join("trials.csv"));
+    let mut rdr = csv::Reader::from_reader(text.as_bytes());
+    let h = rdr.headers().unwrap().clone();
+    let col = |n: &str| h.iter().position(|c| c == n).unwrap();
+    let rows: Vec<csv::StringRecord> = rdr.records().map(|r| r.unwrap()).collect();
+    assert_eq!(rows.len(), 3);
+    assert_eq!(&rows[1][col("outcome")], "INVALID");
+    assert_eq!(&rows[1][col("success")], "false");
+    assert!(
+        rows[1][col("reason")].contains("field `bodies.chaser.mass_kg`: must be a positive number"),
+        "{:?}",
+        &rows[1]
+    );
+    let s: serde_json::Value = serde_json::from_str(&read(&out.join("summary.json"))).unwrap();
+    assert_eq!(s["invalid"], 1);
+    assert_eq!(s["valid_trials"], 2);
+    assert_eq!(s["successes"], 2);
+    assert_eq!(s["success_probability"], 1.0);
+    // NoCollision is not about docking: no capture probability.
+    assert!(s.get("capture_probability").is_none(), "{s}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Success beyond docking: `All([GuaranteeHeld(..), MinClearance(..)])` is judged per trial
+/// from the guarantee's status and the clearance — checked here against the trial's own
+/// `trials.csv` columns (worst margin, first violation, clearance); the summary names the
+/// criterion and gives no capture probability; `--keep-runs` keeps each trial's outputs with
+/// their provenance.
+#[test]
+fn val_success_criteria_match_the_recorded_columns() {
+    let d = tmp("criteria");
+    let scene = std::fs::canonicalize("scenes/docking_aligned.ron").unwrap();
+    let f = d.join("c.ron");
+    let text = format!(
+        r#"Trials(name: "criteria", scene: "{}", duration_s: 30.0, count: 4,
+    parameters: [Grid(path: "bodies.chaser.initial.pos_m.1", values: [0.0, 0.05, 0.4, 0.9])],
+    success: All([GuaranteeHeld("clearance_5cm"), MinClearance(0.01)]))"#,
+        scene.display()
+    );
+    std::fs::write(&f, &text).unwrap();
+    let out = d.join("out");
+    trials(&[
+        f.to_str().unwrap(),
+        "--keep-runs",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let csv_text = read(&out.join("trials.csv"));
+    let mut rdr = csv::Reader::from_reader(csv_text.as_bytes());
+    let h = rdr.headers().unwrap().clone();
+    let col = |n: &str| {
+        h.iter()
+            .position(|c| c == n)
+            .unwrap_or_else(|| panic!("{n}: {h:?}"))
+    };
+    let mut successes = 0;
+    for r in rdr.records().map(|r| r.unwrap()) {
+        let worst: f64 = r[col("guarantee.clearance_5cm.worst_margin_m")]
+            .parse()
+            .unwrap();
+        let first = &r[col("guarantee.clearance_5cm.first_violation_s")];
+        let clearance: f64 = r[col("min_clearance_non_docking_m")].parse().unwrap();
+        // Held ⇔ never violated ⇔ worst margin ≥ 0.
+        assert_eq!(first.is_empty(), worst >= 0.0, "{r:?}");
+        let expect = first.is_empty() && clearance >= 0.01;
+        assert_eq!(
+            &r[col("success")],
+            if expect { "true" } else { "false" },
+            "{r:?}"
+        );
+        successes += usize::from(expect);
+        let k = &r[col("index")];
+        let kept = out.join(format!("runs/{:06}", k.parse::<usize>().unwrap()));
+        let s: serde_json::Value = serde_json::from_str(&read(&kept.join("summary.json"))).unwrap();
+        assert_eq!(s["provenance"]["rpod_version"], env!("CARGO_PKG_VERSION"));
+        assert!(
+            s["provenance"]["set"][0]
+                .as_str()
+                .unwrap()
+                .starts_with("bodies.chaser.initial.pos_m.1=")
+        );
+        assert!(kept.join("trajectory.csv").exists());
+    }
+    let s: serde_json::Value = serde_json::from_str(&read(&out.join("summary.json"))).unwrap();
+    assert_eq!(
+        s["success_criterion"],
+        "GuaranteeHeld(clearance_5cm) and MinClearance(0.01 m)"
+    );
+    assert_eq!(s["successes"], successes);
+    assert!(s.get("capture_probability").is_none(), "{s}");
+    assert_eq!(s["provenance"]["rpod_version"], env!("CARGO_PKG_VERSION"));
+    // An unknown guarantee is a located error.
+    std::fs::write(
+        &f,
+        text.replace(
+            "GuaranteeHeld(\"clearance_5cm\")",
+            "GuaranteeHeld(\"nope\")",
+        ),
+    )
+    .unwrap();
+    let e = rpod::trials::load(&f).err().expect("refused");
+    assert_eq!((e.line, e.field.as_str()), (3, "success.0.0"), "{e}");
+    assert!(e.message.contains("no guarantee `nope`"), "{e}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn regress_trials_file_limits_and_nesting_are_located() {
+    let d = tmp("limits");
+    for (body, line, field, words) in [
+        ("count: 100000000,", 3, "count", "from 1 to 1000000"),
+        (
+            "count: 2, parameters: [Grid(path: \"a\", values: [1.0]), Grid(path: \"a\", values: [2.0])],",
+            3,
+            "parameters.1.path",
+            "varied twice",
+        ),
+        (
+            &format!("count: 2, parameters: [{}]", "[".repeat(10_000)),
+            3,
+            "",
+            "nested deeper than 64",
+        ),
+        (
+            "count: 2, parameters: [Grid(path: \"a, b\", values: [1.0])],",
+            3,
+            "parameters.0.path",
+            "a scene field path",
+        ),
+    ] {
+        let f = d.join("t.ron");
+        let params = if body.contains("parameters") {
+            ""
+        } else {
+            "parameters: [Grid(path: \"a\", values: [1.0])],"
+        };
+        std::fs::write(
+            &f,
+            format!("Trials(\n  name: \"x\", scene: \"s.ron\",\n  {body} {params}\n  success: Latched,\n)"),
+        )
+        .unwrap();
+        let e = rpod::trials::load(&f).err().expect("refused");
+        assert_eq!((e.line, e.field.as_str()), (line, field), "{e}");
+        assert!(e.message.contains(words), "{e}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -5,7 +5,8 @@
 //!   peak of an independent 1-D f64 integration of the same law, face on face (RK4 at 1 µs,
 //!   written here): it is the mechanism's load, not the step's.
 //! - The capture envelope (`scenes/trials/capture_envelope.ron`, 35 trials) gives the same
-//!   outcome in every trial at dt = 10, 5 and 2 ms.
+//!   outcome in every trial at dt = 10, 5 and 2 ms (seven representative trials in CI, the
+//!   whole grid as an ignored test).
 
 use rpod::contact::{ContactModelSpec, Law};
 use rpod::scene::load_scene_file;
@@ -114,60 +115,96 @@ fn val_docking_peak_force_converges_with_dt() {
     }
 }
 
-/// The envelope's outcomes at three steps. A trial whose run ends with the cone still in the
-/// funnel would be judged on a transient state; the bundled mechanism resolves every trial within
-/// the 50 s (checked: no CONTACT, SOFT_CAPTURE or ATTRACTING at the end).
-#[test]
-fn val_capture_envelope_outcomes_do_not_change_with_dt() {
-    let dir = std::env::temp_dir().join(format!("rpod_envelope_dt_{}", std::process::id()));
+/// The envelope's outcomes at three steps for the trials `which` (all when `None`). A trial whose
+/// run ends with the cone still in the funnel would be judged on a transient state; the bundled
+/// mechanism resolves every trial within the 50 s (checked: no CONTACT, SOFT_CAPTURE or
+/// ATTRACTING at the end).
+fn envelope_outcomes_at_three_dts(which: Option<&[usize]>) {
+    let dir = std::env::temp_dir().join(format!(
+        "rpod_envelope_dt_{}_{}",
+        std::process::id(),
+        which.map_or(0, |w| w.len())
+    ));
     std::fs::create_dir_all(&dir).unwrap();
     let base = std::fs::read_to_string("scenes/docking_aligned.ron").unwrap();
-    let trials = rpod::trials::load("scenes/trials/capture_envelope.ron".as_ref()).unwrap();
+    let trials = std::fs::read_to_string("scenes/trials/capture_envelope.ron").unwrap();
+    let all: Vec<usize> = (0..rpod::trials::load("scenes/trials/capture_envelope.ron".as_ref())
+        .unwrap()
+        .spec
+        .count)
+        .collect();
+    let which = which.unwrap_or(&all);
     let mut outcomes: Vec<Vec<String>> = Vec::new();
     for dt in [0.01, 0.005, 0.002] {
         assert!(base.contains("dt_s: 0.01,"));
         let scene = dir.join(format!("aligned_{dt}.ron"));
         std::fs::write(&scene, base.replace("dt_s: 0.01,", &format!("dt_s: {dt},"))).unwrap();
-        let c = rpod::trials::Campaign {
-            spec: trials.spec.clone(),
-            scene_path: scene,
-        };
-        let n = c.spec.count;
+        let tf = dir.join(format!("envelope_{dt}.ron"));
+        assert!(trials.contains("scene: \"../docking_aligned.ron\""));
+        std::fs::write(
+            &tf,
+            trials.replace(
+                "scene: \"../docking_aligned.ron\"",
+                &format!("scene: \"aligned_{dt}.ron\""),
+            ),
+        )
+        .unwrap();
+        let c = rpod::trials::load(&tf).unwrap();
         let next = std::sync::atomic::AtomicUsize::new(0);
-        let results = std::sync::Mutex::new(vec![String::new(); n]);
+        let results = std::sync::Mutex::new(vec![String::new(); which.len()]);
         std::thread::scope(|s| {
             for _ in 0..2 {
                 s.spawn(|| {
                     loop {
-                        let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        if k >= n {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        if i >= which.len() {
                             break;
                         }
-                        let r = rpod::trials::run_trial(&c, k);
-                        results.lock().unwrap()[k] = r.outcome;
+                        let r = rpod::trials::run_trial(&c, which[i], None);
+                        results.lock().unwrap()[i] = r.outcome;
                     }
                 });
             }
         });
         let r = results.into_inner().unwrap();
         println!("dt {dt} s: {r:?}");
-        for (k, o) in r.iter().enumerate() {
+        for (i, o) in r.iter().enumerate() {
             assert!(
                 !matches!(
                     o.as_str(),
-                    "CONTACT" | "SOFT_CAPTURE" | "ATTRACTING" | "ERROR"
+                    "CONTACT" | "SOFT_CAPTURE" | "ATTRACTING" | "INVALID" | "NUMERIC_FAILURE"
                 ),
-                "dt {dt}: trial {k} ends unresolved ({o})"
+                "dt {dt}: trial {} ends unresolved ({o})",
+                which[i]
             );
         }
         outcomes.push(r);
     }
     let _ = std::fs::remove_dir_all(&dir);
-    for k in 0..outcomes[0].len() {
+    for i in 0..outcomes[0].len() {
         assert!(
-            outcomes.iter().all(|o| o[k] == outcomes[0][k]),
-            "trial {k}: {:?}",
-            outcomes.iter().map(|o| &o[k]).collect::<Vec<_>>()
+            outcomes.iter().all(|o| o[i] == outcomes[0][i]),
+            "trial {}: {:?}",
+            which[i],
+            outcomes.iter().map(|o| &o[i]).collect::<Vec<_>>()
         );
     }
+}
+
+/// Seven of the 35 trials (every row and every column of the 7 × 5 grid at least once, both
+/// captured and missed outcomes), so the test's cost stays inside CI's budget: the whole grid at
+/// the three steps takes about 12 minutes on the two-core CI machine. The whole grid is
+/// `val_capture_envelope_all_trials_do_not_change_with_dt` (run with `--ignored`).
+#[test]
+fn val_capture_envelope_outcomes_do_not_change_with_dt() {
+    envelope_outcomes_at_three_dts(Some(&[0, 6, 12, 18, 24, 25, 32]));
+}
+
+/// The whole envelope (35 trials) at the three steps; about 12 minutes on two cores, so not in
+/// CI (`cargo test --release --test val_docking_convergence -- --ignored`). Last run: all 35
+/// outcomes the same at dt = 10, 5 and 2 ms.
+#[test]
+#[ignore = "about 12 minutes; the CI test runs seven representative trials"]
+fn val_capture_envelope_all_trials_do_not_change_with_dt() {
+    envelope_outcomes_at_three_dts(None);
 }

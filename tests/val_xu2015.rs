@@ -378,12 +378,10 @@ fn regress_xu2015_scene_errors() {
     let e = Simulation::new(&l).err().expect("rejected");
     assert_eq!(e.field, "controllers.0.0.accm.sample_period_s");
     assert!(
-        e.line > 0
-            && l.text
-                .lines()
-                .nth(e.line - 1)
-                .unwrap()
-                .contains("sample_period_s: 0.15"),
+        // An error in an overridden value is located in the `--set` argument (issue 17):
+        // line 1, the column of the value after `=`.
+        e.file == "s.ron (--set controllers.0.0.accm.sample_period_s=0.15)"
+            && (e.line, e.col) == (1, 38),
         "{e}"
     );
     let l = load_scene_str(text, "s.ron", &["controllers.0.0.target=\"chaser\"".into()]).unwrap();

@@ -16,11 +16,22 @@
 //!   contains the cylinder: a conservative (never larger) margin, at most r·(1/cos(π/32) − 1)
 //!   = 0.48 % of r below the exact one.
 //!
-//! margin = −max over the body's parts of max h, m: positive inside the cone by that much.
+//! c = −max over the body's parts of max h, m: positive inside the cone by that much.
 //! The band is `to_range_m` ≤ |r_com − apex| ≤ `from_range_m` (the body's centre of mass);
-//! outside it the cone does not apply and the margin is +∞ (written `inf`).
+//! outside it the cone does not apply. With b = min(range − `to_range_m`, `from_range_m` −
+//! range) (positive inside the band, minus the distance to it outside), the margin is
+//!
+//! margin = max(c, −b), m:
+//!
+//! - inside the band it is negative exactly when c is (a violation of the cone), and equals
+//!   c except where a violation is deeper than the distance to the band's edge (then it is
+//!   −b: still negative, its size clipped);
+//! - outside the band it is positive (at least the distance to the band): the cone is not
+//!   violated there;
+//! - it is continuous in time and Lipschitz (a maximum of two Lipschitz functions), so the
+//!   monitor judges it between samples too ([`ApproachCone::rate_bound`]).
 
-use crate::guarantee::{Guarantee, MonitorView};
+use crate::guarantee::{Guarantee, MonitorView, MotionBounds, Reads};
 use crate::scene::parts::{PartCollider, Primitive};
 use nalgebra::{Point3, Vector3};
 
@@ -117,9 +128,7 @@ impl ApproachCone {
     ) -> f64 {
         let apex = around_pos_m + around_att * (self.port_m - self.around_com_m);
         let range = (body_pos_m - apex).norm();
-        if !(range <= self.from_range_m && range >= self.to_range_m) {
-            return f64::INFINITY;
-        }
+        let band = (range - self.to_range_m).min(self.from_range_m - range);
         let u = around_att * self.axis;
         let (s, c) = self.half_angle_rad.sin_cos();
         let worst = self
@@ -130,7 +139,16 @@ impl ApproachCone {
                 cone_h(&apex, &u, s, c, &w) + r
             })
             .fold(f64::NEG_INFINITY, f64::max);
-        -worst
+        (-worst).max(-band)
+    }
+
+    /// Radius about the body's centre of mass of the sphere holding every support point
+    /// (with its radius), m.
+    pub fn points_extent_m(&self) -> f64 {
+        self.points
+            .iter()
+            .map(|(p, r)| (p - self.body_com_m).norm() + r)
+            .fold(0.0, f64::max)
     }
 }
 
@@ -141,6 +159,26 @@ impl Guarantee for ApproachCone {
     fn margin(&self, v: &MonitorView) -> f64 {
         let (b, a) = (&v.bodies[self.body], &v.bodies[self.around]);
         self.margin_at(&b.pos_m, &b.att, &a.pos_m, &a.att)
+    }
+    /// With V = |v_body − v_around|, Ω_a, Ω_b the angular speeds, p = |port − com_around|,
+    /// R = [`ApproachCone::points_extent_m`] and S the bound on |r_body − r_around|: the apex
+    /// moves at most at |v_a| + Ω_a p, so the range changes at most at V + Ω_a p; a support
+    /// point w moves relative to the apex at most at V + Ω_b R + Ω_a p, and the cone's normals
+    /// turn at Ω_a, so each h(w) = max_n n·(w − apex) changes at most at
+    /// V + Ω_b R + Ω_a p + Ω_a (S + p + R). The margin, a maximum of the two, changes at most
+    /// at the larger bound.
+    fn rate_bound(&self, m: &dyn MotionBounds) -> Option<f64> {
+        let v = m.rel_speed_bound(self.body, self.around);
+        let (wa, wb) = (m.omega_bound(self.around), m.omega_bound(self.body));
+        let p = (self.port_m - self.around_com_m).norm();
+        let r = self.points_extent_m();
+        let s = m.separation_bound(self.body, self.around);
+        let band = v + wa * p;
+        let cone = v + wb * r + wa * p + wa * (s + p + r);
+        Some(band.max(cone))
+    }
+    fn reads(&self) -> Reads {
+        Reads::Bodies
     }
 }
 
@@ -217,13 +255,31 @@ mod tests {
         }
         // The grid contains the corners: the vertex maximum equals the surface maximum.
         assert!((m + worst).abs() < 1e-12, "{m} vs {}", -worst);
-        // Out of the band: not applicable.
+        // Out of the band: not applicable, the margin is at least the distance to the band
+        // (100 m out at a range of 200 m; the body is far inside the cone's extension there).
         let far = g.margin_at(
             &Vector3::new(200.0, 0.0, 0.0),
             &att,
             &Vector3::zeros(),
             &UnitQuaternion::identity(),
         );
-        assert!(far.is_infinite() && far > 0.0);
+        assert!(far.is_finite() && far >= 100.0 - 1e-9, "{far}");
+        // Across the band's edge the margin is continuous: a body 40° off the axis (far
+        // outside the 15° cone) 1 mm inside the band is violated by the clipped −1 mm; 1 mm
+        // outside the band the margin is +1 mm.
+        let dir = Vector3::new(40f64.to_radians().cos(), 40f64.to_radians().sin(), 0.0);
+        let at = |r: f64| {
+            g.margin_at(
+                &(dir * r),
+                &att,
+                &Vector3::zeros(),
+                &UnitQuaternion::identity(),
+            )
+        };
+        let (m_in, m_out) = (at(100.0 - 1e-3), at(100.0 + 1e-3));
+        assert!(
+            (m_in + 1e-3).abs() < 1e-9 && (m_out - 1e-3).abs() < 1e-9,
+            "{m_in} {m_out}"
+        );
     }
 }

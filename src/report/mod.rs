@@ -12,6 +12,7 @@
 //!   [`write_claims_json`] — the `claims.json` contract.
 //! - [`markdown`]: [`ReportBuilder`] — `REPORT.md` with paragraphs, tables, a claims table and
 //!   figures, plus the figure files and `claims.json`, in one call.
+//! - [`run_plots`]: `rpod plot RUN_DIR`, the standard figures of a recorded run.
 //! - [`write_atomic`]: every file is written to a temporary name in its directory, flushed, and
 //!   renamed, so a crash never leaves a half file that looks whole.
 //!
@@ -26,6 +27,7 @@ pub mod fsio;
 pub mod markdown;
 pub mod plot;
 mod raster;
+pub mod run_plots;
 mod svg;
 mod ticks;
 
@@ -34,6 +36,24 @@ pub use fsio::write_atomic;
 pub use markdown::{ReportBuilder, claims_markdown};
 pub use plot::{Color, Dash, Figure, Legend, LineStyle, PALETTE, Plot};
 pub use raster::svg_to_png;
+
+/// The rpod version (`Cargo.toml`).
+pub const RPOD_VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// The git commit rpod was built from, when built from a git checkout (see `build.rs`).
+pub const GIT_COMMIT: Option<&str> = option_env!("RPOD_GIT_COMMIT");
+
+/// What built this binary: `{"rpod_version": …, "git_commit": … or null}`.
+pub fn build_provenance() -> serde_json::Value {
+    serde_json::json!({"rpod_version": RPOD_VERSION, "git_commit": GIT_COMMIT})
+}
+
+/// SHA-256 of bytes, lower-case hex (provenance: scene and trials file hashes).
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::Digest;
+    let d = sha2::Sha256::digest(bytes);
+    d.iter().map(|b| format!("{b:02x}")).collect()
+}
 
 /// A scratch directory unique to this test process and tag (emptied first).
 #[cfg(test)]

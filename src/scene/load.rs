@@ -38,6 +38,36 @@ impl fmt::Display for SceneError {
 
 impl std::error::Error for SceneError {}
 
+/// Largest scene or trials file read, bytes (16 MiB). Larger files are refused before they are
+/// read whole, so a hostile file (or `/dev/zero`) cannot exhaust memory.
+pub const MAX_FILE_BYTES: usize = 16 << 20;
+
+/// Deepest bracket nesting accepted in a scene, a trials file or a `--set` value. The deepest
+/// bundled scene nests 7 levels; the check runs before any parser so that no input can overflow
+/// the stack.
+pub const MAX_NESTING: usize = 64;
+
+/// Most `--set` overrides in one command, and the longest one, bytes.
+pub const MAX_OVERRIDES: usize = 1024;
+/// Longest `--set` assignment, bytes.
+pub const MAX_OVERRIDE_BYTES: usize = 64 << 10;
+
+/// One `--set` applied to the text: bytes `at .. at + new_len` of the text after it replaced
+/// `old_len` bytes of the text before it.
+#[derive(Debug, Clone)]
+struct Edit {
+    at: usize,
+    old_len: usize,
+    new_len: usize,
+    /// Offset of the value inside the inserted bytes (non-zero when `path: value, ` was
+    /// inserted).
+    value_at: usize,
+    /// The assignment as the user wrote it.
+    assignment: String,
+    /// Byte offset of the value inside `assignment`.
+    value_in_assignment: usize,
+}
+
 /// A parsed, validated scene with the text it came from (after overrides), so that checks made
 /// later (e.g. geometry overlaps) can still point at a line and column.
 #[derive(Debug, Clone)]
@@ -48,16 +78,74 @@ pub struct LoadedScene {
     pub text: String,
     /// The file name used in errors.
     pub file: String,
+    /// The overrides applied, in order, for mapping positions back to what the user wrote.
+    edits: Vec<Edit>,
+    /// The file's text before the overrides.
+    original: String,
+}
+
+/// Where a byte of the rewritten text came from: the file (line and column as the user sees
+/// them, unshifted by overrides; `original` is the file's text) or a `--set` argument (line
+/// and column inside it).
+fn position(original: &str, file: &str, edits: &[Edit], offset: usize) -> (String, usize, usize) {
+    let mut o = offset;
+    for e in edits.iter().rev() {
+        if o < e.at {
+            continue;
+        }
+        if o >= e.at + e.new_len {
+            o = o - e.new_len + e.old_len;
+            continue;
+        }
+        let within = o - e.at;
+        let idx = if within < e.value_at {
+            0
+        } else {
+            (e.value_in_assignment + within - e.value_at).min(e.assignment.len())
+        };
+        let (line, col) = line_col(&e.assignment, idx);
+        return (override_file(file, &e.assignment), line, col);
+    }
+    let (line, col) = line_col(original, o);
+    (file.to_string(), line, col)
+}
+
+/// The name errors inside a `--set` argument carry: `FILE (--set ASSIGNMENT)`, control
+/// characters escaped so that the message stays on one line.
+fn override_file(file: &str, assignment: &str) -> String {
+    format!("{file} (--set {})", assignment.escape_debug())
 }
 
 impl LoadedScene {
-    /// An error about the field at `path`, located in the text.
+    /// SHA-256 of the scene text as read (before the overrides), hex.
+    pub fn source_sha256(&self) -> String {
+        crate::report::sha256_hex(self.original.as_bytes())
+    }
+
+    /// The `--set` overrides applied, in order, as written.
+    pub fn overrides(&self) -> Vec<String> {
+        self.edits.iter().map(|e| e.assignment.clone()).collect()
+    }
+
+    /// Provenance of the scene: its file, its SHA-256 and every `--set` applied, with the rpod
+    /// version and git commit that loaded it.
+    pub fn provenance(&self) -> serde_json::Value {
+        let mut v = crate::report::build_provenance();
+        v["scene_file"] = serde_json::json!(self.file);
+        v["scene_sha256"] = serde_json::json!(self.source_sha256());
+        v["set"] = serde_json::json!(self.overrides());
+        v
+    }
+
+    /// An error about the field at `path`, located in the text (or in the `--set` argument
+    /// that wrote the value).
     pub fn error_at(&self, path: &str, message: impl Into<String>) -> SceneError {
-        let (line, col) = locate(&self.text, path)
-            .map(|(s, _)| line_col(&self.text, s))
-            .unwrap_or((0, 0));
+        let (file, line, col) = match locate(&self.text, path) {
+            Some((s, _)) => position(&self.original, &self.file, &self.edits, s),
+            None => (self.file.clone(), 0, 0),
+        };
         SceneError {
-            file: self.file.clone(),
+            file,
             line,
             col,
             field: path.to_string(),
@@ -66,17 +154,58 @@ impl LoadedScene {
     }
 }
 
-/// Reads, overrides, parses and validates a scene file.
-pub fn load_scene_file(path: &Path, overrides: &[String]) -> Result<LoadedScene, SceneError> {
-    let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-        file: file.clone(),
+fn whole_file_error(file: &str, message: String) -> SceneError {
+    SceneError {
+        file: file.to_string(),
         line: 0,
         col: 0,
         field: String::new(),
-        message: format!("cannot read the scene: {e}"),
-    })?;
-    load_scene_str(&text, &file, overrides)
+        message,
+    }
+}
+
+/// Reads a text file for the loaders: at most [`MAX_FILE_BYTES`], UTF-8 (an invalid byte is
+/// reported at its line and column). `what` names the file in messages ("scene", "trials file").
+pub fn read_text(path: &Path, what: &str) -> Result<String, SceneError> {
+    use std::io::Read;
+    let file = path.display().to_string();
+    let f = std::fs::File::open(path)
+        .map_err(|e| whole_file_error(&file, format!("cannot read the {what}: {e}")))?;
+    let mut bytes = Vec::new();
+    f.take(MAX_FILE_BYTES as u64 + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| whole_file_error(&file, format!("cannot read the {what}: {e}")))?;
+    if bytes.len() > MAX_FILE_BYTES {
+        return Err(whole_file_error(
+            &file,
+            format!(
+                "the {what} is larger than {} MiB (the limit for a scene or trials file)",
+                MAX_FILE_BYTES >> 20
+            ),
+        ));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let prefix = std::str::from_utf8(&bytes[..valid]).unwrap_or("");
+        let (line, col) = line_col(prefix, valid);
+        SceneError {
+            file: file.clone(),
+            line,
+            col,
+            field: String::new(),
+            message: format!(
+                "byte 0x{:02X} is not valid UTF-8 (scene and trials files are UTF-8 text)",
+                bytes[valid]
+            ),
+        }
+    })
+}
+
+/// Reads, overrides, parses and validates a scene file.
+pub fn load_scene_file(path: &Path, overrides: &[String]) -> Result<LoadedScene, SceneError> {
+    let text = read_text(path, "scene")?;
+    load_scene_str(&text, &path.display().to_string(), overrides)
 }
 
 /// Parses and validates scene text; `file` names it in errors.
@@ -85,15 +214,46 @@ pub fn load_scene_str(
     file: &str,
     overrides: &[String],
 ) -> Result<LoadedScene, SceneError> {
-    let mut text = text.to_string();
-    for o in overrides {
-        text = apply_override(&text, file, o)?;
+    if text.len() > MAX_FILE_BYTES {
+        return Err(whole_file_error(
+            file,
+            format!("the scene is larger than {} MiB", MAX_FILE_BYTES >> 20),
+        ));
     }
-    let scene: Scene = parse_ron(&text, file)?;
+    if overrides.len() > MAX_OVERRIDES {
+        return Err(whole_file_error(
+            file,
+            format!(
+                "at most {MAX_OVERRIDES} --set overrides, got {}",
+                overrides.len()
+            ),
+        ));
+    }
+    check_nesting(text, file)?;
+    let original = text.to_string();
+    let mut text = text.to_string();
+    let mut edits = Vec::with_capacity(overrides.len());
+    for o in overrides {
+        let (t, e) = apply_override_edit(&text, file, o)?;
+        text = t;
+        edits.push(e);
+    }
+    if text.len() > MAX_FILE_BYTES {
+        return Err(whole_file_error(
+            file,
+            format!(
+                "the scene with its --set overrides is larger than {} MiB",
+                MAX_FILE_BYTES >> 20
+            ),
+        ));
+    }
+    let scene: Scene = parse_ron_mapped(&text, file, &original, &edits)?;
     let loaded = LoadedScene {
         scene,
         text,
         file: file.to_string(),
+        edits,
+        original,
     };
     if let Err((path, message)) = super::validate::validate(&loaded.scene) {
         return Err(loaded.error_at(&path, message));
@@ -101,49 +261,187 @@ pub fn load_scene_str(
     Ok(loaded)
 }
 
+/// Refuses text whose brackets nest deeper than [`MAX_NESTING`], pointing at the first bracket
+/// too deep. Strings, character literals and comments are skipped; unbalanced brackets are
+/// left to the parser to report.
+pub fn check_nesting(text: &str, file: &str) -> Result<(), SceneError> {
+    let b = text.as_bytes();
+    let mut depth = 0usize;
+    let mut i = 0;
+    while i < b.len() {
+        match b[i] {
+            b'(' | b'[' | b'{' => {
+                depth += 1;
+                if depth > MAX_NESTING {
+                    let (line, col) = line_col(text, i);
+                    return Err(SceneError {
+                        file: file.to_string(),
+                        line,
+                        col,
+                        field: String::new(),
+                        message: format!(
+                            "brackets nested deeper than {MAX_NESTING} levels (the limit)"
+                        ),
+                    });
+                }
+                i += 1;
+            }
+            b')' | b']' | b'}' => {
+                depth = depth.saturating_sub(1);
+                i += 1;
+            }
+            _ => i = skip_token(b, i),
+        }
+    }
+    Ok(())
+}
+
+/// From `i`, skips one comment, string, raw string or character literal (returning the index
+/// after it, at most `b.len()`), or one other byte.
+fn skip_token(b: &[u8], i: usize) -> usize {
+    let at = |k: usize| b.get(k).copied();
+    match b[i] {
+        b'/' if at(i + 1) == Some(b'/') => {
+            let mut j = i + 2;
+            while j < b.len() && b[j] != b'\n' {
+                j += 1;
+            }
+            j
+        }
+        b'/' if at(i + 1) == Some(b'*') => {
+            let mut depth = 1usize;
+            let mut j = i + 2;
+            while j < b.len() && depth > 0 {
+                if b[j] == b'/' && at(j + 1) == Some(b'*') {
+                    depth += 1;
+                    j += 2;
+                } else if b[j] == b'*' && at(j + 1) == Some(b'/') {
+                    depth -= 1;
+                    j += 2;
+                } else {
+                    j += 1;
+                }
+            }
+            j.min(b.len())
+        }
+        q @ (b'"' | b'\'') => {
+            let mut j = i + 1;
+            while j < b.len() && b[j] != q {
+                j += if b[j] == b'\\' { 2 } else { 1 };
+            }
+            (j + 1).min(b.len())
+        }
+        b'r' if (i == 0 || !is_ident_byte(b[i - 1]))
+            && matches!(at(i + 1), Some(b'"') | Some(b'#')) =>
+        {
+            // Raw string r#"…"#: count the hashes, find `"` followed by as many.
+            let mut j = i + 1;
+            let mut hashes = 0;
+            while at(j) == Some(b'#') {
+                hashes += 1;
+                j += 1;
+            }
+            if at(j) != Some(b'"') {
+                return i + 1;
+            }
+            j += 1;
+            while j < b.len() {
+                if b[j] == b'"' && (1..=hashes).all(|h| at(j + h) == Some(b'#')) {
+                    return (j + 1 + hashes).min(b.len());
+                }
+                j += 1;
+            }
+            b.len()
+        }
+        _ => i + 1,
+    }
+}
+
+fn is_ident_byte(c: u8) -> bool {
+    c.is_ascii_alphanumeric() || c == b'_'
+}
+
 /// Parses any RON document (e.g. a trials file), with serde errors located like scene errors.
-/// Optional fields may be written bare (`duration_s: 30.0`) or as `Some(30.0)`.
+/// Optional fields may be written bare (`duration_s: 30.0`) or as `Some(30.0)`. Nesting is
+/// limited to [`MAX_NESTING`] before parsing.
 pub fn parse_ron<T: serde::de::DeserializeOwned>(text: &str, file: &str) -> Result<T, SceneError> {
+    check_nesting(text, file)?;
+    parse_ron_mapped(text, file, text, &[])
+}
+
+fn parse_ron_mapped<T: serde::de::DeserializeOwned>(
+    text: &str,
+    file: &str,
+    original: &str,
+    edits: &[Edit],
+) -> Result<T, SceneError> {
     ron::Options::default()
         .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
         .from_str(text)
-        .map_err(|e| SceneError {
-            file: file.to_string(),
-            line: e.span.start.line,
-            col: e.span.start.col,
-            field: field_at(text, e.span.start.line, e.span.start.col),
-            message: e.code.to_string(),
+        .map_err(|e| {
+            let offset = offset_of(text, e.span.start.line, e.span.start.col);
+            let (file, line, col) = if e.span.start.line == 0 {
+                (file.to_string(), 0, 0)
+            } else {
+                position(original, file, edits, offset)
+            };
+            SceneError {
+                file,
+                line,
+                col,
+                field: field_at_offset(text, offset),
+                message: e.code.to_string(),
+            }
         })
 }
 
-/// Applies one `path=value` override to scene text. The value is RON (`3.5`, `true`,
-/// `(1.0, 2.0, 3.0)`, `"name"`). A field absent from the text is inserted into its struct.
+/// Applies one `path=value` override to scene text. The value is one RON value (`3.5`, `true`,
+/// `(1.0, 2.0, 3.0)`, `"name"`), without comments. A field absent from the text is inserted
+/// into its struct.
 pub fn apply_override(text: &str, file: &str, assignment: &str) -> Result<String, SceneError> {
-    let err = |message: String| SceneError {
-        file: format!("{file} (--set {assignment})"),
-        line: 0,
-        col: 0,
-        field: assignment
-            .split('=')
-            .next()
-            .unwrap_or("")
-            .trim()
-            .to_string(),
+    apply_override_edit(text, file, assignment).map(|(t, _)| t)
+}
+
+fn apply_override_edit(
+    text: &str,
+    file: &str,
+    assignment: &str,
+) -> Result<(String, Edit), SceneError> {
+    let path_part = assignment.split('=').next().unwrap_or("").trim();
+    let err_at = |line: usize, col: usize, message: String| SceneError {
+        file: override_file(file, assignment),
+        line,
+        col,
+        field: path_part.to_string(),
         message,
     };
-    let (path, value) = assignment
-        .split_once('=')
-        .ok_or_else(|| err("expected `path=value`".into()))?;
-    let (path, value) = (path.trim(), value.trim());
-    if path.is_empty() || value.is_empty() {
-        return Err(err("expected `path=value`".into()));
+    let err = |col: usize, message: String| err_at(usize::from(col > 0), col, message);
+    if assignment.len() > MAX_OVERRIDE_BYTES {
+        return Err(err(
+            0,
+            format!("a --set is at most {} KiB", MAX_OVERRIDE_BYTES >> 10),
+        ));
     }
-    let root = parse_tree(text).map_err(|m| err(format!("cannot read the scene text: {m}")))?;
+    let Some(eq) = assignment.find('=') else {
+        return Err(err(1, "expected `path=value`".into()));
+    };
+    let (path, raw_value) = (assignment[..eq].trim(), &assignment[eq + 1..]);
+    let value = raw_value.trim();
+    let value_in_assignment = eq + 1 + (raw_value.len() - raw_value.trim_start().len());
+    if path.is_empty() || value.is_empty() {
+        return Err(err(1, "expected `path=value`".into()));
+    }
+    check_value(value).map_err(|(k, m)| {
+        let (line, col) = line_col(assignment, value_in_assignment + k);
+        err_at(line, col, m)
+    })?;
+    let root = parse_tree(text).map_err(|m| err(0, format!("cannot read the scene text: {m}")))?;
     let segs = split_path(path);
     // Navigate to the parent; the last segment may be missing (then insert it).
     let mut node = &root;
     for (i, seg) in segs.iter().enumerate() {
         let last = i + 1 == segs.len();
+        let seg_col = assignment.find(seg.as_str()).map_or(1, |k| k + 1);
         match child(text, node, seg) {
             Some(c) => {
                 if last {
@@ -151,26 +449,82 @@ pub fn apply_override(text: &str, file: &str, assignment: &str) -> Result<String
                     out.push_str(&text[..c.start]);
                     out.push_str(value);
                     out.push_str(&text[c.end..]);
-                    return Ok(out);
+                    let edit = Edit {
+                        at: c.start,
+                        old_len: c.end - c.start,
+                        new_len: value.len(),
+                        value_at: 0,
+                        assignment: assignment.to_string(),
+                        value_in_assignment,
+                    };
+                    return Ok((out, edit));
                 }
                 node = c;
             }
             None => {
-                if last && let NodeKind::Struct { open, .. } = &unwrap_newtype(node).kind {
-                    let mut out = String::with_capacity(text.len() + value.len() + 8);
+                if last
+                    && let NodeKind::Struct { open, .. } = &unwrap_newtype(node).kind
+                    && is_identifier(seg)
+                {
+                    let inserted = format!("{seg}: {value}, ");
+                    let mut out = String::with_capacity(text.len() + inserted.len());
                     out.push_str(&text[..open + 1]);
-                    out.push_str(&format!("{seg}: {value}, "));
+                    out.push_str(&inserted);
                     out.push_str(&text[open + 1..]);
-                    return Ok(out);
+                    let edit = Edit {
+                        at: open + 1,
+                        old_len: 0,
+                        new_len: inserted.len(),
+                        value_at: seg.len() + 2,
+                        assignment: assignment.to_string(),
+                        value_in_assignment,
+                    };
+                    return Ok((out, edit));
                 }
-                return Err(err(format!(
-                    "no field `{seg}` at `{}`",
-                    segs[..i].join(".")
-                )));
+                return Err(err(
+                    seg_col,
+                    format!("no field `{seg}` at `{}`", segs[..i].join(".")),
+                ));
             }
         }
     }
-    Err(err("empty path".into()))
+    Err(err(1, "empty path".into()))
+}
+
+/// A field name that may be inserted into a struct: `[A-Za-z_][A-Za-z0-9_]*`.
+fn is_identifier(s: &str) -> bool {
+    let mut c = s.bytes();
+    matches!(c.next(), Some(b) if b.is_ascii_alphabetic() || b == b'_') && c.all(is_ident_byte)
+}
+
+/// A `--set` value must be exactly one RON value, nested at most [`MAX_NESTING`] deep, without
+/// comments (which would comment out the scene text after it). On failure: the byte offset in
+/// the value and why.
+fn check_value(value: &str) -> Result<(), (usize, String)> {
+    check_nesting(value, "").map_err(|e| {
+        (
+            offset_of(value, e.line, e.col),
+            format!("the value's brackets nest deeper than {MAX_NESTING} levels"),
+        )
+    })?;
+    let b = value.as_bytes();
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'/' && matches!(b.get(i + 1), Some(b'/') | Some(b'*')) {
+            return Err((i, "a --set value cannot contain a comment".into()));
+        }
+        i = skip_token(b, i);
+    }
+    let mut lx = Lexer { b, i: 0 };
+    let node = parse_value(&mut lx, 0).map_err(|m| (lx.i.min(b.len()), m))?;
+    lx.skip_ws();
+    if lx.i < b.len() || node.end > b.len() {
+        return Err((
+            lx.i.min(b.len()),
+            "expected one value (text follows the value)".into(),
+        ));
+    }
+    Ok(())
 }
 
 /// Splits `a.b[2].c` into `["a", "b", "2", "c"]`.
@@ -202,34 +556,48 @@ pub fn locate(text: &str, path: &str) -> Option<(usize, usize)> {
 
 /// 1-based line and column of a byte offset.
 pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
-    let before = &text[..offset.min(text.len())];
+    let mut end = offset.min(text.len());
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    let before = &text[..end];
     let line = before.matches('\n').count() + 1;
     let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
     (line, col)
 }
 
-/// The innermost field path that contains a line/column (for serde errors).
-fn field_at(text: &str, line: usize, col: usize) -> String {
-    let Ok(root) = parse_tree(text) else {
-        return String::new();
-    };
-    // Byte offset of (line, col).
-    let mut offset = text.len();
+/// Byte offset of a 1-based (line, column) in `text` (columns count characters); the end of
+/// the text when past it.
+fn offset_of(text: &str, line: usize, col: usize) -> usize {
     let mut l = 1;
-    for (i, ch) in text.char_indices() {
-        if l == line {
-            for (c, (j, ch2)) in (1..).zip(text[i..].char_indices()) {
-                if c == col || ch2 == '\n' {
-                    offset = i + j;
+    let mut line_start = if line <= 1 { Some(0) } else { None };
+    if line_start.is_none() {
+        for (i, ch) in text.char_indices() {
+            if ch == '\n' {
+                l += 1;
+                if l == line {
+                    line_start = Some(i + 1);
                     break;
                 }
             }
-            break;
-        }
-        if ch == '\n' {
-            l += 1;
         }
     }
+    let Some(start) = line_start else {
+        return text.len();
+    };
+    for (c, (j, ch)) in (1..).zip(text[start..].char_indices()) {
+        if c == col || ch == '\n' {
+            return start + j;
+        }
+    }
+    text.len()
+}
+
+/// The innermost field path that contains a byte offset (for serde errors).
+fn field_at_offset(text: &str, offset: usize) -> String {
+    let Ok(root) = parse_tree(text) else {
+        return String::new();
+    };
     let mut path = Vec::new();
     descend(text, &root, offset, &mut path);
     path.join(".")
@@ -333,31 +701,16 @@ struct Lexer<'a> {
 }
 
 impl Lexer<'_> {
+    fn at(&self, k: usize) -> Option<u8> {
+        self.b.get(k).copied()
+    }
     fn skip_ws(&mut self) {
         loop {
-            while self.i < self.b.len() && self.b[self.i].is_ascii_whitespace() {
+            while self.at(self.i).is_some_and(|c| c.is_ascii_whitespace()) {
                 self.i += 1;
             }
-            if self.b[self.i..].starts_with(b"//") {
-                while self.i < self.b.len() && self.b[self.i] != b'\n' {
-                    self.i += 1;
-                }
-            } else if self.b[self.i..].starts_with(b"/*") {
-                let mut depth = 0;
-                while self.i < self.b.len() {
-                    if self.b[self.i..].starts_with(b"/*") {
-                        depth += 1;
-                        self.i += 2;
-                    } else if self.b[self.i..].starts_with(b"*/") {
-                        depth -= 1;
-                        self.i += 2;
-                        if depth == 0 {
-                            break;
-                        }
-                    } else {
-                        self.i += 1;
-                    }
-                }
+            if self.at(self.i) == Some(b'/') && matches!(self.at(self.i + 1), Some(b'/' | b'*')) {
+                self.i = skip_token(self.b, self.i);
             } else {
                 return;
             }
@@ -365,14 +718,12 @@ impl Lexer<'_> {
     }
     fn peek(&mut self) -> Option<u8> {
         self.skip_ws();
-        self.b.get(self.i).copied()
+        self.at(self.i)
     }
     fn ident(&mut self) -> Option<(usize, usize)> {
         self.skip_ws();
         let s = self.i;
-        while self.i < self.b.len()
-            && (self.b[self.i].is_ascii_alphanumeric() || self.b[self.i] == b'_')
-        {
+        while self.at(self.i).is_some_and(is_ident_byte) {
             self.i += 1;
         }
         (self.i > s).then_some((s, self.i))
@@ -386,22 +737,28 @@ fn parse_tree(text: &str) -> Result<Node, String> {
     };
     // Skip `#![enable(...)]` extension attributes.
     while lx.peek() == Some(b'#') {
-        while lx.i < lx.b.len() && lx.b[lx.i] != b']' {
+        while lx.at(lx.i).is_some_and(|c| c != b']') {
             lx.i += 1;
+        }
+        if lx.at(lx.i).is_none() {
+            return Err("unclosed `#![` attribute".into());
         }
         lx.i += 1;
     }
-    parse_value(&mut lx)
+    parse_value(&mut lx, 0)
 }
 
-fn parse_value(lx: &mut Lexer) -> Result<Node, String> {
+fn parse_value(lx: &mut Lexer, depth: usize) -> Result<Node, String> {
+    if depth > MAX_NESTING {
+        return Err(format!("nested deeper than {MAX_NESTING} levels"));
+    }
     let c = lx.peek().ok_or("unexpected end")?;
     let start = lx.i;
     match c {
-        b'(' => parse_paren(lx, start),
+        b'(' => parse_paren(lx, start, depth),
         b'[' => {
             lx.i += 1;
-            let items = parse_items(lx, b']')?;
+            let items = parse_items(lx, b']', depth)?;
             Ok(Node {
                 start,
                 end: lx.i,
@@ -410,16 +767,20 @@ fn parse_value(lx: &mut Lexer) -> Result<Node, String> {
         }
         b'{' => {
             // Maps: skip to the matching brace.
-            let mut depth = 0;
-            while lx.i < lx.b.len() {
-                match lx.b[lx.i] {
-                    b'{' => depth += 1,
+            let mut d = 0usize;
+            while let Some(ch) = lx.at(lx.i) {
+                match ch {
+                    b'{' => d += 1,
                     b'}' => {
-                        depth -= 1;
-                        if depth == 0 {
+                        d = d.saturating_sub(1);
+                        if d == 0 {
                             lx.i += 1;
                             break;
                         }
+                    }
+                    b'"' | b'\'' | b'/' => {
+                        lx.i = skip_token(lx.b, lx.i);
+                        continue;
                     }
                     _ => {}
                 }
@@ -427,23 +788,24 @@ fn parse_value(lx: &mut Lexer) -> Result<Node, String> {
             }
             Ok(Node {
                 start,
+                end: lx.i.min(lx.b.len()),
+                kind: NodeKind::Atom,
+            })
+        }
+        b'"' | b'\'' => {
+            // A string or a char literal: skip to the closing quote, honouring escapes.
+            lx.i = skip_token(lx.b, lx.i);
+            Ok(Node {
+                start,
                 end: lx.i,
                 kind: NodeKind::Atom,
             })
         }
-        q @ (b'"' | b'\'') => {
-            // A string or a char literal: skip to the closing quote, honouring escapes.
-            lx.i += 1;
-            while lx.i < lx.b.len() && lx.b[lx.i] != q {
-                if lx.b[lx.i] == b'\\' {
-                    lx.i += 1;
-                }
-                lx.i += 1;
-            }
-            lx.i += 1;
+        b'r' if matches!(lx.at(lx.i + 1), Some(b'"' | b'#')) => {
+            lx.i = skip_token(lx.b, lx.i);
             Ok(Node {
                 start,
-                end: lx.i.min(lx.b.len()),
+                end: lx.i,
                 kind: NodeKind::Atom,
             })
         }
@@ -451,7 +813,7 @@ fn parse_value(lx: &mut Lexer) -> Result<Node, String> {
             lx.ident();
             if lx.peek() == Some(b'(') {
                 let p = lx.i;
-                let mut n = parse_paren(lx, p)?;
+                let mut n = parse_paren(lx, p, depth)?;
                 n.start = start;
                 Ok(n)
             } else {
@@ -464,10 +826,9 @@ fn parse_value(lx: &mut Lexer) -> Result<Node, String> {
         }
         _ => {
             // Number or other scalar.
-            while lx.i < lx.b.len()
-                && !matches!(lx.b[lx.i], b',' | b')' | b']' | b'}')
-                && !lx.b[lx.i].is_ascii_whitespace()
-            {
+            while lx.at(lx.i).is_some_and(|c| {
+                !matches!(c, b',' | b')' | b']' | b'}') && !c.is_ascii_whitespace()
+            }) {
                 lx.i += 1;
             }
             if lx.i == start {
@@ -482,13 +843,13 @@ fn parse_value(lx: &mut Lexer) -> Result<Node, String> {
     }
 }
 
-fn parse_paren(lx: &mut Lexer, start: usize) -> Result<Node, String> {
+fn parse_paren(lx: &mut Lexer, start: usize, depth: usize) -> Result<Node, String> {
     let open = lx.i;
     lx.i += 1; // '('
     // Struct if the first token is `ident :` (not `::`).
     let save = lx.i;
     let is_struct = match lx.ident() {
-        Some(_) => lx.peek() == Some(b':') && lx.b.get(lx.i + 1) != Some(&b':'),
+        Some(_) => lx.peek() == Some(b':') && lx.at(lx.i + 1) != Some(b':'),
         None => false,
     };
     lx.i = save;
@@ -505,7 +866,7 @@ fn parse_paren(lx: &mut Lexer, start: usize) -> Result<Node, String> {
                 return Err(format!("expected `:` after `{key}`"));
             }
             lx.i += 1;
-            let v = parse_value(lx)?;
+            let v = parse_value(lx, depth + 1)?;
             fields.push((key, ks, v));
             match lx.peek() {
                 Some(b',') => lx.i += 1,
@@ -519,7 +880,7 @@ fn parse_paren(lx: &mut Lexer, start: usize) -> Result<Node, String> {
             kind: NodeKind::Struct { open, fields },
         })
     } else {
-        let items = parse_items(lx, b')')?;
+        let items = parse_items(lx, b')', depth)?;
         Ok(Node {
             start,
             end: lx.i,
@@ -528,7 +889,7 @@ fn parse_paren(lx: &mut Lexer, start: usize) -> Result<Node, String> {
     }
 }
 
-fn parse_items(lx: &mut Lexer, close: u8) -> Result<Vec<Node>, String> {
+fn parse_items(lx: &mut Lexer, close: u8, depth: usize) -> Result<Vec<Node>, String> {
     let mut items = Vec::new();
     loop {
         match lx.peek() {
@@ -539,7 +900,7 @@ fn parse_items(lx: &mut Lexer, close: u8) -> Result<Vec<Node>, String> {
             None => return Err("unexpected end".into()),
             _ => {}
         }
-        items.push(parse_value(lx)?);
+        items.push(parse_value(lx, depth + 1)?);
         match lx.peek() {
             Some(b',') => lx.i += 1,
             Some(c) if c == close => {}
@@ -587,6 +948,6 @@ mod tests {
 
     #[test]
     fn field_at_finds_the_innermost_field() {
-        assert_eq!(field_at(T, 5, 27), "bodies.b.mass_kg");
+        assert_eq!(field_at_offset(T, offset_of(T, 5, 27)), "bodies.b.mass_kg");
     }
 }

@@ -892,8 +892,9 @@ pub enum GuaranteeSpec {
     /// Full-geometry approach cone: while `body`'s centre of mass is between `to_range_m` and
     /// `from_range_m` from the port `port` of `around`, every point of every part of `body`
     /// stays inside the cone with its apex at the port, its axis the port's outward axis and
-    /// half-angle `half_angle_deg` (margin = the clearance to the cone's wall, m; `inf` outside
-    /// the range band; see [`crate::geometry::approach_cone`]).
+    /// half-angle `half_angle_deg` (margin = the clearance to the cone's wall, m, inside the
+    /// range band; positive outside it, continuous across its edges; see
+    /// [`crate::geometry::approach_cone`]).
     ApproachCone {
         /// Guarantee name.
         name: String,

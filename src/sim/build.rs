@@ -1,6 +1,6 @@
 //! From a scene to a running [`Simulation`].
 
-use super::monitor::{ColliderRef, ContactState, shape_distance};
+use super::monitor::{ColliderRef, ContactState};
 use super::output::{Diagnostics, OutputFiles, Recorder};
 use super::{
     BodyState, Clock, EventLog, Guarantees, MonitorState, OrbitEnv, Part, Physics, Roster, SimBody,
@@ -29,6 +29,9 @@ pub struct Simulation {
     pub scene_file: String,
     /// Wall-clock seconds spent stepping.
     pub wall_s: f64,
+    /// What produced this run (rpod version, git commit, scene hash, `--set` overrides), for
+    /// `summary.json`.
+    pub provenance: serde_json::Value,
 }
 
 /// The rapier/parry shape of a part primitive (f32, in the part frame); `None` for a hull
@@ -137,6 +140,13 @@ impl Simulation {
                 conv::v(&moments),
                 conv::q(&frame),
             );
+            let Some(inertia_inv) = j.try_inverse().filter(|m| m.iter().all(|v| v.is_finite()))
+            else {
+                return Err(loaded.error_at(
+                    &format!("bodies.{}.inertia_kg_m2", b.name),
+                    "the inertia tensor cannot be inverted in f64",
+                ));
+            };
             let colliders = expand_body(b);
             let has_docking = colliders.iter().any(|c| c.role.is_docking());
             let rb = rp::RigidBodyBuilder::dynamic()
@@ -160,7 +170,7 @@ impl Simulation {
                         mass_kg: b.mass_kg,
                         inertia_kg_m2: j,
                         com_body_m: com,
-                        inertia_inv: j.try_inverse().expect("validated positive definite"),
+                        inertia_inv,
                     },
                     state,
                     Wrench::default(),
@@ -216,39 +226,32 @@ impl Simulation {
         contacts.body_angular_impulse = vec![Vector3::zeros(); scene.bodies.len()];
 
         // Parts of different bodies must not overlap at t = 0 unless marked.
-        let states: Vec<BodyState> = roster
+        let probes: Vec<Vec<super::overlap::Probe>> = roster
             .bodies
             .iter()
-            .map(|e| app.world().get::<BodyState>(*e).expect("state").clone())
+            .zip(&all_parts)
+            .zip(&roster.parts)
+            .enumerate()
+            .map(|(i, ((be, cols), pes))| {
+                let s = app.world().get::<BodyState>(*be).expect("state");
+                let body_pose = s.body_pose(&Vector3::from(scene.bodies[i].com_m));
+                cols.iter()
+                    .zip(pes)
+                    .map(|(c, pe)| {
+                        let part = app.world().get::<Part>(*pe).expect("part");
+                        super::overlap::Probe {
+                            collider: c,
+                            pose: body_pose * c.pose_body,
+                            shape: part.shape.clone(),
+                            handle: part.collider,
+                            entity: *pe,
+                        }
+                    })
+                    .collect()
+            })
             .collect();
-        for i in 0..all_parts.len() {
-            for j in i + 1..all_parts.len() {
-                let pi = states[i].body_pose(&Vector3::from(scene.bodies[i].com_m));
-                let pj = states[j].body_pose(&Vector3::from(scene.bodies[j].com_m));
-                for (ka, a) in all_parts[i].iter().enumerate() {
-                    for (kb, b) in all_parts[j].iter().enumerate() {
-                        if a.allow_initial_overlap || b.allow_initial_overlap {
-                            continue;
-                        }
-                        let ea = roster.parts[i][ka];
-                        let eb = roster.parts[j][kb];
-                        let sa = app.world().get::<Part>(ea).expect("part").shape.clone();
-                        let sb = app.world().get::<Part>(eb).expect("part").shape.clone();
-                        let d =
-                            shape_distance(&(pi * a.pose_body), &*sa, &(pj * b.pose_body), &*sb);
-                        if d <= 0.0 {
-                            return Err(loaded.error_at(
-                                &format!("bodies.{}.parts.{}", scene.bodies[j].name, b.part),
-                                format!(
-                                    "part `{}/{}` overlaps `{}/{}` at t = 0; move it or set `allow_initial_overlap: true`",
-                                    scene.bodies[j].name, b.name, scene.bodies[i].name, a.name
-                                ),
-                            ));
-                        }
-                    }
-                }
-            }
-        }
+        let suppressed = super::overlap::check_initial(loaded, &probes)?;
+        drop(probes);
 
         let mut guarantees = Guarantees::default();
         let idx = |n: &str| {
@@ -355,6 +358,7 @@ impl Simulation {
         });
         super::add_pipeline(&mut app);
         super::environment::add_systems(&mut app, &scene.environment);
+        super::overlap::install(&mut app, loaded, suppressed)?;
         super::docking::install(&mut app, loaded)?;
         super::contact_model::install(&mut app, loaded)?;
         super::airbearing::install(&mut app, loaded)?;
@@ -437,6 +441,7 @@ impl Simulation {
             scene,
             scene_file: loaded.file.clone(),
             wall_s: 0.0,
+            provenance: loaded.provenance(),
         })
     }
 
@@ -464,7 +469,7 @@ impl Simulation {
     pub fn step(&mut self, n: u64) {
         let t0 = std::time::Instant::now();
         let mut left = n;
-        while left > 0 {
+        while left > 0 && self.guard_trip().is_none() {
             let k = left.min(STEPS_PER_UPDATE);
             self.app.world_mut().resource_mut::<StepBudget>().0 = k;
             self.app.update();
@@ -476,6 +481,14 @@ impl Simulation {
     /// Steps needed to cover `duration_s` (rounded to the nearest step).
     pub fn steps_for(&self, duration_s: f64) -> u64 {
         (duration_s / self.scene.dt_s).round().max(0.0) as u64
+    }
+
+    /// What stopped the run, if the finiteness guard did (see [`super::guard`]).
+    pub fn guard_trip(&self) -> Option<&super::guard::GuardTrip> {
+        self.app
+            .world()
+            .get_resource::<super::guard::Guard>()
+            .and_then(|g| g.trip.as_ref())
     }
 
     /// Simulated time, s.
@@ -567,6 +580,18 @@ impl Simulation {
         Ok(k)
     }
 
+    /// Adds a disturbance (forces and torques on any body, added in the Actuate stage after the
+    /// controllers' commands, e.g. forces applied from Python). It writes no columns, so it may
+    /// be added at any time; it acts from the next step.
+    pub fn add_disturbance(&mut self, d: Box<dyn crate::control::registry::Disturbance>) {
+        self.app
+            .world_mut()
+            .resource_mut::<super::controllers::ControllerHost>()
+            .disturbances
+            .push(d);
+        super::controllers::ensure_systems(&mut self.app);
+    }
+
     /// The monitor's results.
     pub fn monitor(&self) -> &MonitorState {
         self.app.world().resource::<MonitorState>()
@@ -646,6 +671,7 @@ impl Simulation {
         serde_json::json!({
             "scene": self.scene.name,
             "scene_file": self.scene_file,
+            "provenance": self.provenance,
             "frame": match self.scene.environment {
                 Environment::Orbit { .. } => "world: Earth-inertial axes, origin on the reference orbit (the target's unforced orbit); positions are centres of mass",
                 Environment::FreeSpace => "world: inertial, no gravity; positions are centres of mass",
@@ -692,6 +718,13 @@ impl Simulation {
 
     /// Writes the last row, the summary, and renames the files into place.
     pub fn finish(mut self) -> std::io::Result<serde_json::Value> {
+        if let Some(trip) = self.guard_trip().cloned() {
+            // Nothing of the bad step is recorded; the rows so far stay as `.partial` files.
+            if let Some(files) = self.app.world_mut().resource_mut::<Recorder>().files.take() {
+                files.keep_partial()?;
+            }
+            return Err(std::io::Error::other(trip.to_string()));
+        }
         super::output::record_now(self.app.world_mut());
         let summary = self.summary();
         let mut rec = self.app.world_mut().resource_mut::<Recorder>();

@@ -30,9 +30,11 @@ pub mod contact_model;
 pub mod controllers;
 pub mod docking;
 pub mod environment;
+pub mod guard;
 pub mod monitor;
 pub mod motion;
 pub mod output;
+pub mod overlap;
 
 use crate::guarantee::{BodyView, Guarantee, GuaranteeStatus, MonitorView, PairDistance};
 use crate::scene::{BodyRole, PartRole};
@@ -319,6 +321,9 @@ fn advance(world: &mut World) {
     let n = world.resource::<StepBudget>().0;
     for _ in 0..n {
         world.run_schedule(SimStep);
+        if world.resource::<guard::Guard>().trip.is_some() {
+            break;
+        }
     }
     world.resource_mut::<StepBudget>().0 = 0;
 }
@@ -1124,6 +1129,7 @@ pub fn add_pipeline(app: &mut App) {
         output::record.in_set(Stage::Record),
     ));
     app.add_schedule(schedule);
+    guard::install(app);
     app.add_systems(Update, advance);
 }
 

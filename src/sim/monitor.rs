@@ -178,12 +178,18 @@ pub fn angular_momentum(
 
 /// A contact pair counts as touching when a contact point is at zero or negative distance or
 /// carries a normal impulse (rapier also keeps speculative points within its prediction
-/// distance: those are not contacts).
+/// distance: those are not contacts). A manifold the solver ignores (solver groups off: a pair
+/// that overlapped at t = 0 and has not separated yet, see `overlap.rs`) is no contact either.
 fn touching(pair: &rp::ContactPair) -> bool {
     pair.has_any_active_contact()
         && pair
             .manifolds
             .iter()
+            .filter(|m| {
+                m.data
+                    .solver_flags
+                    .contains(rp::SolverFlags::COMPUTE_IMPULSES)
+            })
             .flat_map(|m| m.points.iter())
             .any(|p| p.dist <= 0.0 || p.data.impulse > 0.0)
 }

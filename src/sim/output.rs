@@ -5,8 +5,24 @@
 //! history; tens of MB for a run that stays in contact for tens of seconds).
 //!
 //! All are written under a temporary name (`NAME.partial`) and renamed when the run
-//! finishes, so a crash never leaves a file that looks whole. Numbers are printed in Rust's
-//! shortest round-trip form, so the same run gives byte-identical files.
+//! finishes, `summary.json` last, so a crash never leaves a file that looks whole: a folder
+//! without `summary.json` holds no complete run. Numbers are printed in Rust's shortest
+//! round-trip form, so the same run gives byte-identical files. A controller or mechanism
+//! column that is undefined at a row (NaN) is an empty cell; no output holds a NaN (the
+//! finiteness guard, [`super::guard`], stops a run before anything non-finite is written).
+//!
+//! # The output folder
+//! - One writer at a time: a run holds an exclusive lock on `DIR/.rpod.lock` (an OS file lock,
+//!   released by the kernel when the process ends, even by `kill -9`) for as long as it
+//!   writes; a second `rpod run` or `rpod trials` into the same folder is refused
+//!   ([`EXIT_FOLDER_IN_USE`]) with the holder's process id.
+//! - Nothing stale: once it holds the lock, a run deletes every file an earlier run wrote
+//!   there ([`RUN_FILES`], complete or `.partial`) before it writes its own, so a run killed at
+//!   any point leaves only `.partial` files, never an older run's complete files beside them.
+//!   Other files in the folder are left alone. Files are created new (a symlink planted under
+//!   one of these names is removed, not followed).
+//! - The default folder is `out/<name>` with the scene name made safe ([`safe_dir_name`]): a
+//!   name never leads outside `out/`.
 
 use super::monitor::{ContactState, CumulativeImpulse};
 use super::{BodyState, Clock, EventLog, Guarantees, MonitorState, Roster, SimBody};
@@ -37,6 +53,110 @@ impl Diagnostics {
     }
 }
 
+/// Exit code of a command refused because another rpod process writes into its output folder.
+pub const EXIT_FOLDER_IN_USE: u8 = 4;
+
+/// The files a run writes into its folder (each also as `NAME.partial` while it runs): deleted
+/// when a new run starts there.
+pub const RUN_FILES: [&str; 5] = FILES;
+
+/// An exclusive lock on an output folder (`DIR/.rpod.lock`), held until dropped.
+#[derive(Debug)]
+pub struct FolderLock {
+    _file: File,
+    /// The folder.
+    pub dir: PathBuf,
+}
+
+impl FolderLock {
+    /// Creates `dir` if needed and locks it. A folder another process holds gives an error of
+    /// kind [`std::io::ErrorKind::WouldBlock`] whose message names the holder.
+    pub fn acquire(dir: &Path) -> std::io::Result<Self> {
+        use std::io::{Read, Seek};
+        std::fs::create_dir_all(dir)?;
+        let path = dir.join(".rpod.lock");
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&path)?;
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                let mut holder = String::new();
+                let _ = file.read_to_string(&mut holder);
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::WouldBlock,
+                    format!(
+                        "{} is in use by another rpod process ({}); wait for it to finish or \
+                         choose another --out",
+                        dir.display(),
+                        holder.trim().chars().take(200).collect::<String>()
+                    ),
+                ));
+            }
+            Err(std::fs::TryLockError::Error(e)) => return Err(e),
+        }
+        file.set_len(0)?;
+        file.seek(std::io::SeekFrom::Start(0))?;
+        writeln!(file, "pid {}", std::process::id())?;
+        file.flush()?;
+        Ok(Self {
+            _file: file,
+            dir: dir.to_path_buf(),
+        })
+    }
+
+    /// Deletes `names` and their `.partial` files from the folder (a symlink is removed, not
+    /// followed).
+    pub fn clear(&self, names: &[&str]) -> std::io::Result<()> {
+        for n in names {
+            for p in [self.dir.join(n), partial(&self.dir, n)] {
+                match std::fs::remove_file(&p) {
+                    Ok(()) => {}
+                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                    Err(e) => {
+                        return Err(std::io::Error::new(
+                            e.kind(),
+                            format!("cannot remove the earlier run's {}: {e}", p.display()),
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A file name made from a scene or campaign name: ASCII letters, digits, `_`, `-` and `.`
+/// kept, anything else (`/`, `\`, spaces, control characters, non-ASCII) replaced by `_`,
+/// leading dots removed (no `..`, no hidden folder), at most 64 characters; `unnamed` if
+/// nothing is left. Used for the default output folders `out/<name>`.
+pub fn safe_dir_name(name: &str) -> String {
+    let s: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.') {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    let s: String = s.trim_start_matches('.').chars().take(64).collect();
+    if s.is_empty() { "unnamed".into() } else { s }
+}
+
+/// Creates a new file: fails if something (a file, a planted symlink) is already there.
+fn create_new(path: &Path) -> std::io::Result<File> {
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(path)
+        .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))
+}
+
 /// Open output files of a run.
 pub struct OutputFiles {
     /// Output directory.
@@ -45,6 +165,7 @@ pub struct OutputFiles {
     events: BufWriter<File>,
     contacts: BufWriter<File>,
     points: Option<BufWriter<File>>,
+    lock: Option<FolderLock>,
 }
 
 /// The output files, in the order they are renamed into place.
@@ -102,13 +223,29 @@ fn partial(dir: &Path, name: &str) -> PathBuf {
 }
 
 impl OutputFiles {
-    /// Creates the directory and the temporary files (`contact_points.csv` if `points`).
+    /// Locks the directory (creating it), deletes an earlier run's files there and creates
+    /// the temporary files (`contact_points.csv` if `points`; see the module docs).
     pub fn create(dir: &Path, points: bool) -> std::io::Result<Self> {
+        let lock = FolderLock::acquire(dir)?;
+        lock.clear(&RUN_FILES)?;
+        Self::create_locked(dir, Some(lock), points)
+    }
+
+    /// Creates the temporary files in a folder the caller has locked and cleared (a trial of
+    /// `rpod trials --keep-runs` writes into a folder of the campaign's locked output).
+    pub fn create_locked(
+        dir: &Path,
+        lock: Option<FolderLock>,
+        points: bool,
+    ) -> std::io::Result<Self> {
         std::fs::create_dir_all(dir)?;
-        let mut contacts = BufWriter::new(File::create(partial(dir, "contacts.csv"))?);
+        for n in RUN_FILES {
+            let _ = std::fs::remove_file(partial(dir, n));
+        }
+        let mut contacts = BufWriter::new(create_new(&partial(dir, "contacts.csv"))?);
         writeln!(contacts, "{CONTACTS_HEADER}")?;
         let points = if points {
-            let mut w = BufWriter::new(File::create(partial(dir, "contact_points.csv"))?);
+            let mut w = BufWriter::new(create_new(&partial(dir, "contact_points.csv"))?);
             writeln!(w, "{CONTACT_POINTS_HEADER}")?;
             Some(w)
         } else {
@@ -116,11 +253,24 @@ impl OutputFiles {
         };
         Ok(Self {
             dir: dir.to_path_buf(),
-            traj: BufWriter::new(File::create(partial(dir, "trajectory.csv"))?),
-            events: BufWriter::new(File::create(partial(dir, "events.jsonl"))?),
+            traj: BufWriter::new(create_new(&partial(dir, "trajectory.csv"))?),
+            events: BufWriter::new(create_new(&partial(dir, "events.jsonl"))?),
             contacts,
             points,
+            lock,
         })
+    }
+
+    /// Flushes the temporary files and leaves them as `.partial` (a run the guard stopped:
+    /// the rows up to the last good step, and no summary).
+    pub fn keep_partial(mut self) -> std::io::Result<()> {
+        self.traj.flush()?;
+        self.events.flush()?;
+        self.contacts.flush()?;
+        if let Some(p) = self.points.as_mut() {
+            p.flush()?;
+        }
+        Ok(())
     }
 
     /// Flushes, writes the summary and renames the files into place.
@@ -137,12 +287,16 @@ impl OutputFiles {
         drop(self.contacts);
         drop(self.points);
         let s = serde_json::to_string_pretty(summary).map_err(std::io::Error::other)?;
-        std::fs::write(partial(&self.dir, "summary.json"), s + "\n")?;
+        let mut f = create_new(&partial(&self.dir, "summary.json"))?;
+        f.write_all((s + "\n").as_bytes())?;
+        f.sync_all()?;
+        drop(f);
         for n in FILES {
             if n != "contact_points.csv" || points {
                 std::fs::rename(partial(&self.dir, n), self.dir.join(n))?;
             }
         }
+        drop(self.lock);
         Ok(())
     }
 
@@ -289,7 +443,11 @@ fn write_row(
         write!(w, ",{}", s.last_margin)?;
     }
     for v in &diag.values {
-        write!(w, ",{v}")?;
+        if v.is_nan() {
+            write!(w, ",")?;
+        } else {
+            write!(w, ",{v}")?;
+        }
     }
     if let Some(o) = orbit {
         for v in orbit_values(o, states) {

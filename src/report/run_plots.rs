@@ -1,0 +1,399 @@
+//! `rpod plot RUN_DIR`: the standard figures of a recorded run, from its `trajectory.csv`,
+//! `contacts.csv` and `summary.json`, as PNG and SVG with the data behind each figure as CSV
+//! beside it (so a user can restyle it without reading the run's files).
+//!
+//! Figures (each `NAME.png`, `NAME.svg`, `NAME.csv` in the output folder):
+//! - `relative_position` — the chaser's centre of mass relative to the target's, in the
+//!   target's body frame (x–y and x–z, equal aspect); with Hill-frame columns in the run
+//!   (`NAME.hill_x_m …`) also in the reference orbit's Hill frame;
+//! - `range` — range |r| and range rate ṙ = r·v/|r| over time;
+//! - `clearance` — the monitor's minimum full-geometry distance and every guarantee's margin
+//!   over time, with the zero line;
+//! - `docking` — the docking state code (`dock.state`) and the summed contact force of each
+//!   recorded row (from `contacts.csv`), when the run has a mechanism or contacts;
+//! - `commands` — every controller column that is a force (`…force…_n`, `…_fx_n`) or a torque
+//!   (`…torque…_nm`).
+//!
+//! The chaser and target are the bodies of those roles in the scene `summary.json` names
+//! (loaded with the run's `--set` overrides); failing that, bodies named `chaser` and `target`,
+//! else the first two bodies. Curves that can overlap are told apart by dashes as well as
+//! colour; tick labels use the Unicode minus; units are in brackets after every axis name.
+
+use super::{Dash, Figure, LineStyle, Plot};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Columns of a CSV file, by header name (empty cells and text are NaN).
+struct Table {
+    names: Vec<String>,
+    cols: Vec<Vec<f64>>,
+}
+
+impl Table {
+    fn read(path: &Path) -> Result<Self, String> {
+        let mut rdr =
+            csv::Reader::from_path(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let names: Vec<String> = rdr
+            .headers()
+            .map_err(|e| format!("{}: {e}", path.display()))?
+            .iter()
+            .map(str::to_string)
+            .collect();
+        let mut cols = vec![Vec::new(); names.len()];
+        for r in rdr.records() {
+            let r = r.map_err(|e| format!("{}: {e}", path.display()))?;
+            for (c, v) in cols.iter_mut().zip(r.iter()) {
+                c.push(v.parse().unwrap_or(f64::NAN));
+            }
+        }
+        Ok(Self { names, cols })
+    }
+    fn col(&self, name: &str) -> Option<&[f64]> {
+        self.names
+            .iter()
+            .position(|n| n == name)
+            .map(|i| self.cols[i].as_slice())
+    }
+    fn text_col(path: &Path, name: &str) -> Vec<String> {
+        let Ok(mut rdr) = csv::Reader::from_path(path) else {
+            return Vec::new();
+        };
+        let Some(i) = rdr
+            .headers()
+            .ok()
+            .and_then(|h| h.iter().position(|c| c == name))
+        else {
+            return Vec::new();
+        };
+        rdr.records()
+            .filter_map(|r| r.ok().map(|r| r.get(i).unwrap_or("").to_string()))
+            .collect()
+    }
+}
+
+/// Line styles told apart by dash as well as colour: solid, dashed, dotted in turn.
+fn style(k: usize) -> LineStyle {
+    LineStyle {
+        dash: [Dash::Solid, Dash::Dashed, Dash::Dotted][k % 3],
+        ..LineStyle::default()
+    }
+}
+
+/// Writes `name.png`, `name.svg` and `name.csv` (columns `header`, rows of `data`).
+fn write(
+    out: &Path,
+    name: &str,
+    fig: &Figure,
+    header: &[String],
+    data: &[Vec<f64>],
+    written: &mut Vec<PathBuf>,
+) -> Result<(), String> {
+    let png = out.join(format!("{name}.png"));
+    let svg = out.join(format!("{name}.svg"));
+    fig.write_png(&png).map_err(|e| e.to_string())?;
+    fig.write_svg(&svg).map_err(|e| e.to_string())?;
+    let mut w = csv::WriterBuilder::new()
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(Vec::new());
+    w.write_record(header).map_err(|e| e.to_string())?;
+    let n = data.first().map_or(0, Vec::len);
+    for i in 0..n {
+        w.write_record(data.iter().map(|c| {
+            let v = c.get(i).copied().unwrap_or(f64::NAN);
+            if v.is_finite() {
+                format!("{v}")
+            } else {
+                String::new()
+            }
+        }))
+        .map_err(|e| e.to_string())?;
+    }
+    let bytes = w.into_inner().map_err(|e| e.to_string())?;
+    let csv_path = out.join(format!("{name}.csv"));
+    super::write_atomic(&csv_path, &bytes).map_err(|e| e.to_string())?;
+    written.extend([png, svg, csv_path]);
+    Ok(())
+}
+
+/// (chaser, target) names for a run.
+fn roles(dir: &Path, bodies: &[String]) -> (String, String) {
+    let summary: Option<serde_json::Value> = std::fs::read_to_string(dir.join("summary.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok());
+    if let Some(s) = &summary
+        && let Some(file) = s["scene_file"].as_str()
+    {
+        let set: Vec<String> = s["provenance"]["set"]
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|v| v.as_str().map(str::to_string))
+                    .collect()
+            })
+            .unwrap_or_default();
+        if let Ok(l) = crate::scene::load_scene_file(Path::new(file), &set) {
+            let find = |r: crate::scene::BodyRole| {
+                l.scene
+                    .bodies
+                    .iter()
+                    .find(|b| b.role == r)
+                    .map(|b| b.name.clone())
+            };
+            if let (Some(c), Some(t)) = (
+                find(crate::scene::BodyRole::Chaser),
+                find(crate::scene::BodyRole::Target),
+            ) {
+                return (c, t);
+            }
+        }
+    }
+    let has = |n: &str| bodies.iter().any(|b| b == n);
+    if has("chaser") && has("target") {
+        return ("chaser".into(), "target".into());
+    }
+    (
+        bodies.first().cloned().unwrap_or_default(),
+        bodies.get(1).cloned().unwrap_or_default(),
+    )
+}
+
+/// Draws the standard figures of the run in `dir` into `out` (created); returns the files.
+pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, String> {
+    let traj = Table::read(&dir.join("trajectory.csv"))?;
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let t = traj
+        .col("t_s")
+        .ok_or("trajectory.csv has no t_s column")?
+        .to_vec();
+    let bodies: Vec<String> = traj
+        .names
+        .iter()
+        .filter_map(|n| n.strip_suffix(".px_m").map(str::to_string))
+        .collect();
+    let run = dir.display().to_string();
+    let mut written = Vec::new();
+    let (ch, tg) = roles(dir, &bodies);
+    let get = |b: &str, c: &str| traj.col(&format!("{b}.{c}")).map(<[f64]>::to_vec);
+    // Relative state in the target's body frame (and the Hill frame when recorded).
+    if bodies.len() >= 2
+        && let (Some(cp), Some(tp)) = (
+            ["px_m", "py_m", "pz_m", "vx_m_s", "vy_m_s", "vz_m_s"]
+                .iter()
+                .map(|c| get(&ch, c))
+                .collect::<Option<Vec<_>>>(),
+            [
+                "px_m", "py_m", "pz_m", "vx_m_s", "vy_m_s", "vz_m_s", "qw", "qx", "qy", "qz",
+            ]
+            .iter()
+            .map(|c| get(&tg, c))
+            .collect::<Option<Vec<_>>>(),
+        )
+    {
+        let n = t.len();
+        let mut body: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(n)).collect();
+        let (mut range, mut rate) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for i in 0..n {
+            let r = nalgebra::Vector3::new(
+                cp[0][i] - tp[0][i],
+                cp[1][i] - tp[1][i],
+                cp[2][i] - tp[2][i],
+            );
+            let v = nalgebra::Vector3::new(
+                cp[3][i] - tp[3][i],
+                cp[4][i] - tp[4][i],
+                cp[5][i] - tp[5][i],
+            );
+            let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                tp[6][i], tp[7][i], tp[8][i], tp[9][i],
+            ));
+            let rb = q.inverse() * r;
+            for k in 0..3 {
+                body[k].push(rb[k]);
+            }
+            range.push(r.norm());
+            rate.push(if r.norm() > 0.0 {
+                r.dot(&v) / r.norm()
+            } else {
+                f64::NAN
+            });
+        }
+        let xy = |a: usize, b: usize| body[a].iter().copied().zip(body[b].iter().copied());
+        let mut fig = Figure::new(format!("{run}: {ch} relative to {tg}"))
+            .cols(2)
+            .plot(
+                Plot::new(format!("{tg} body frame, x–y"))
+                    .x_label("x [m]")
+                    .y_label("y [m]")
+                    .equal_aspect()
+                    .line(format!("{ch} centre of mass"), xy(0, 1))
+                    .scatter("start", xy(0, 1).take(1)),
+            )
+            .plot(
+                Plot::new(format!("{tg} body frame, x–z"))
+                    .x_label("x [m]")
+                    .y_label("z [m]")
+                    .equal_aspect()
+                    .line(format!("{ch} centre of mass"), xy(0, 2))
+                    .scatter("start", xy(0, 2).take(1)),
+            );
+        let mut header: Vec<String> = ["t_s", "x_body_m", "y_body_m", "z_body_m"]
+            .map(String::from)
+            .to_vec();
+        let mut data = vec![t.clone(), body[0].clone(), body[1].clone(), body[2].clone()];
+        let hill: Option<Vec<Vec<f64>>> = ["hill_x_m", "hill_y_m", "hill_z_m"]
+            .iter()
+            .map(|c| Some((get(&ch, c)?, get(&tg, c)?)))
+            .map(|p| p.map(|(a, b)| a.iter().zip(&b).map(|(x, y)| x - y).collect()))
+            .collect();
+        if let Some(h) = hill {
+            let hp = |a: usize, b: usize| h[a].iter().copied().zip(h[b].iter().copied());
+            fig.push(
+                Plot::new("Hill frame, y (along-track) – x (radial)")
+                    .x_label("y along-track [m]")
+                    .y_label("x radial [m]")
+                    .equal_aspect()
+                    .line(format!("{ch} − {tg}"), hp(1, 0)),
+            );
+            fig.push(
+                Plot::new("Hill frame, y (along-track) – z (normal)")
+                    .x_label("y along-track [m]")
+                    .y_label("z normal [m]")
+                    .equal_aspect()
+                    .line(format!("{ch} − {tg}"), hp(1, 2)),
+            );
+            header.extend(["x_hill_m", "y_hill_m", "z_hill_m"].map(String::from));
+            data.extend(h);
+        }
+        write(out, "relative_position", &fig, &header, &data, &mut written)?;
+        let fig = Figure::new(format!("{run}: range and range rate, {ch} to {tg}"))
+            .cols(1)
+            .plot(
+                Plot::new("range (centres of mass)")
+                    .x_label("t [s]")
+                    .y_label("range [m]")
+                    .line("|r|", t.iter().copied().zip(range.iter().copied())),
+            )
+            .plot(
+                Plot::new("range rate")
+                    .x_label("t [s]")
+                    .y_label("range rate [m/s]")
+                    .hline(0.0, "0")
+                    .line("ṙ = r·v/|r|", t.iter().copied().zip(rate.iter().copied())),
+            );
+        write(
+            out,
+            "range",
+            &fig,
+            &["t_s", "range_m", "range_rate_m_s"].map(String::from),
+            &[t.clone(), range, rate],
+            &mut written,
+        )?;
+    }
+    // Clearance and guarantee margins.
+    {
+        let mut p = Plot::new("minimum distance and guarantee margins")
+            .x_label("t [s]")
+            .y_label("distance, margin [m]")
+            .hline(0.0, "0");
+        let mut header = vec!["t_s".to_string()];
+        let mut data = vec![t.clone()];
+        let mut k = 0;
+        for (i, n) in traj.names.iter().enumerate() {
+            let label = if n == "min_distance_m" {
+                Some("minimum distance (full geometry)".to_string())
+            } else {
+                n.strip_prefix("guarantee.")
+                    .map(|g| format!("margin of {g}"))
+            };
+            if let Some(label) = label {
+                let pts = t.iter().copied().zip(traj.cols[i].iter().copied());
+                p = p.line_styled(label, pts, style(k));
+                k += 1;
+                header.push(n.clone());
+                data.push(traj.cols[i].clone());
+            }
+        }
+        if k > 0 {
+            let fig = Figure::new(format!("{run}: clearance")).cols(1).plot(p);
+            write(out, "clearance", &fig, &header, &data, &mut written)?;
+        }
+    }
+    // Docking state and contact forces.
+    let contacts = dir.join("contacts.csv");
+    let mut force_by_t: BTreeMap<u64, f64> = BTreeMap::new();
+    if contacts.exists() {
+        let ts = Table::text_col(&contacts, "t_s");
+        let fs = Table::text_col(&contacts, "force_n");
+        for (a, b) in ts.iter().zip(&fs) {
+            if let (Ok(a), Ok(b)) = (a.parse::<f64>(), b.parse::<f64>()) {
+                *force_by_t.entry(a.to_bits()).or_default() += b;
+            }
+        }
+    }
+    let state = traj.col("dock.state");
+    if state.is_some() || !force_by_t.is_empty() {
+        let force: Vec<f64> = t
+            .iter()
+            .map(|x| force_by_t.get(&x.to_bits()).copied().unwrap_or(0.0))
+            .collect();
+        let mut fig = Figure::new(format!("{run}: docking and contact")).cols(1);
+        if let Some(s) = state {
+            fig.push(
+                Plot::new("docking state (0 FREE, 1 ATTRACTING, 2 CONTACT, 3 SOFT_CAPTURE, 4 LATCHED, 5 REBOUND, 6 JAMMED, 7 MISSED)")
+                    .x_label("t [s]")
+                    .y_label("state code")
+                    .line("dock.state", t.iter().copied().zip(s.iter().copied())),
+            );
+        }
+        fig.push(
+            Plot::new("contact force (all part pairs, mean over each recorded row)")
+                .x_label("t [s]")
+                .y_label("force [N]")
+                .line("Σ force_n", t.iter().copied().zip(force.iter().copied())),
+        );
+        let mut header = vec!["t_s".to_string(), "contact_force_n".to_string()];
+        let mut data = vec![t.clone(), force];
+        if let Some(s) = state {
+            header.push("dock.state".into());
+            data.push(s.to_vec());
+        }
+        write(out, "docking", &fig, &header, &data, &mut written)?;
+    }
+    // Commanded forces and torques.
+    let is_state = |n: &str| bodies.iter().any(|b| n.starts_with(&format!("{b}.")));
+    let mut forces = Plot::new("forces").x_label("t [s]").y_label("force [N]");
+    let mut torques = Plot::new("torques")
+        .x_label("t [s]")
+        .y_label("torque [N·m]");
+    let (mut nf, mut nt) = (0, 0);
+    let mut header = vec!["t_s".to_string()];
+    let mut data = vec![t.clone()];
+    for (i, n) in traj.names.iter().enumerate() {
+        if is_state(n) || n.starts_with("dock.") || traj.cols[i].iter().all(|v| !v.is_finite()) {
+            continue;
+        }
+        let pts = t.iter().copied().zip(traj.cols[i].iter().copied());
+        if n.ends_with("_n") && (n.contains("force") || n.contains("_f")) {
+            forces = forces.line_styled(n.clone(), pts, style(nf));
+            nf += 1;
+        } else if n.contains("torque") && n.ends_with("_nm") {
+            torques = torques.line_styled(n.clone(), pts, style(nt));
+            nt += 1;
+        } else {
+            continue;
+        }
+        header.push(n.clone());
+        data.push(traj.cols[i].clone());
+    }
+    if nf + nt > 0 {
+        let mut fig = Figure::new(format!("{run}: controller forces and torques")).cols(1);
+        if nf > 0 {
+            fig.push(forces);
+        }
+        if nt > 0 {
+            fig.push(torques);
+        }
+        write(out, "commands", &fig, &header, &data, &mut written)?;
+    }
+    Ok(written)
+}

@@ -1,0 +1,266 @@
+//! The runtime finiteness guard: the first non-finite or overflowing force, state or monitor
+//! output stops the run, naming the body, the quantity, its value and the simulated time.
+//!
+//! A scene can pass validation and still overflow downstream: a drag coefficient of 1e300
+//! times a speed, a control law that diverges, a gravity model evaluated far from its domain.
+//! Without a guard the NaN or infinity flows into rapier (f32), the monitor and the outputs,
+//! and the run ends with exit 0 and a file of NaNs. The guard checks, every step:
+//!
+//! 1. **forces** — after the Environment stage, every body's [`Wrench`] (gravity, other
+//!    forces, torque): everything the next physics step will apply;
+//! 2. **states** — after the Physics stage, every body's [`BodyState`] (position, velocity,
+//!    attitude quaternion, angular velocity);
+//! 3. **outputs** — after the Monitor stage, every pair distance, every guarantee margin and
+//!    every controller or mechanism column that is infinite (a column may be NaN: it means
+//!    "undefined at this step" and is written as an empty cell).
+//!
+//! A value trips the guard when it is not finite or its magnitude exceeds [`GUARD_LIMIT`]
+//! (SI units). The limit is ours: 10¹⁵ m is 7000 astronomical units, 10¹⁵ m/s is 3·10⁶ c,
+//! 10¹⁵ N no thruster; no physical scene comes near it, while rapier's f32 arithmetic squares
+//! values (a 10¹⁹ number squared overflows f32), so anything past it is already meaningless.
+//!
+//! After a trip no stage runs any more (each has a run condition), so nothing of the bad step
+//! reaches the recorder; the run stops at once. `rpod run` then exits with code 3, leaves the
+//! rows recorded up to the last good step as `*.partial` files and writes no `summary.json`
+//! (nothing looks like a whole run); `rpod trials` records the trial's outcome as
+//! `NUMERIC_FAILURE` with the trip as its reason.
+//!
+//! The checks are their own systems, ordered between the stages, so they stay independent of
+//! how the physics step itself is written.
+
+use super::output::Diagnostics;
+use super::{BodyState, Clock, Guarantees, MonitorState, Roster, SimBody, SimStep, Stage, Wrench};
+use bevy::ecs::schedule::SystemSet;
+use bevy::prelude::*;
+use std::fmt;
+
+/// Largest magnitude any checked quantity may reach, SI units.
+pub const GUARD_LIMIT: f64 = 1e15;
+
+/// Exit code of `rpod run` when the guard stops a run.
+pub const EXIT_NUMERIC_FAILURE: u8 = 3;
+
+/// What tripped the guard.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct GuardTrip {
+    /// Simulated time of the check, s.
+    pub t_s: f64,
+    /// Completed steps at the check.
+    pub step: u64,
+    /// Which check: `force`, `state` or `output`.
+    pub check: &'static str,
+    /// The body concerned, if any.
+    pub body: Option<String>,
+    /// The quantity, with its component and unit (`vel_m_s.x`, `guarantee.g.margin_m`).
+    pub quantity: String,
+    /// The value found.
+    pub value: f64,
+}
+
+impl fmt::Display for GuardTrip {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let what = if self.value.is_finite() {
+            "overflowing"
+        } else {
+            "non-finite"
+        };
+        write!(
+            f,
+            "{what} {} at t = {} s (step {}): ",
+            self.check, self.t_s, self.step
+        )?;
+        if let Some(b) = &self.body {
+            write!(f, "body `{b}` ")?;
+        }
+        write!(
+            f,
+            "{} = {} (the guard allows finite values up to {GUARD_LIMIT:e} in magnitude)",
+            self.quantity, self.value
+        )
+    }
+}
+
+/// The guard's state: the first trip, if any.
+#[derive(Resource, Debug, Default, Clone)]
+pub struct Guard {
+    /// The first value that tripped the guard.
+    pub trip: Option<GuardTrip>,
+}
+
+/// The guard's checks, ordered between the pipeline stages.
+#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
+pub enum GuardCheck {
+    /// After Environment, before Physics: the wrenches.
+    Forces,
+    /// After Physics, before Monitor: the states.
+    States,
+    /// After Monitor, before Record: distances, margins, columns.
+    Outputs,
+}
+
+fn clear(g: Res<Guard>) -> bool {
+    g.trip.is_none()
+}
+
+fn bad(v: f64) -> bool {
+    !(v.is_finite() && v.abs() <= GUARD_LIMIT)
+}
+
+/// Adds the guard to an app whose `SimStep` schedule exists.
+pub fn install(app: &mut App) {
+    app.insert_resource(Guard::default());
+    app.configure_sets(
+        SimStep,
+        (
+            GuardCheck::Forces
+                .after(Stage::Environment)
+                .before(Stage::Physics),
+            GuardCheck::States
+                .after(Stage::Physics)
+                .before(Stage::Monitor),
+            GuardCheck::Outputs
+                .after(Stage::Monitor)
+                .before(Stage::Record),
+        ),
+    );
+    // One condition per set (a condition on a tuple of sets would be evaluated once, before
+    // the first of them, for the whole step): each stage runs only while no check has tripped,
+    // so the step a check trips in goes no further.
+    for stage in [
+        Stage::Sense,
+        Stage::Control,
+        Stage::Actuate,
+        Stage::Environment,
+        Stage::Physics,
+        Stage::Monitor,
+        Stage::Record,
+    ] {
+        app.configure_sets(SimStep, stage.run_if(clear));
+    }
+    for check in [GuardCheck::Forces, GuardCheck::States, GuardCheck::Outputs] {
+        app.configure_sets(SimStep, check.run_if(clear));
+    }
+    app.add_systems(
+        SimStep,
+        (
+            check_forces.in_set(GuardCheck::Forces),
+            check_states.in_set(GuardCheck::States),
+            check_outputs.in_set(GuardCheck::Outputs),
+        ),
+    );
+}
+
+/// The first bad component of a named vector quantity.
+fn first_bad(quantity: &str, v: &nalgebra::Vector3<f64>) -> Option<(String, f64)> {
+    ["x", "y", "z"]
+        .iter()
+        .zip(v.iter())
+        .find(|(_, x)| bad(**x))
+        .map(|(c, x)| (format!("{quantity}.{c}"), *x))
+}
+
+fn trip(g: &mut Guard, clock: &Clock, check: &'static str, body: Option<&str>, q: (String, f64)) {
+    if g.trip.is_none() {
+        g.trip = Some(GuardTrip {
+            t_s: clock.t_s(),
+            step: clock.step,
+            check,
+            body: body.map(str::to_string),
+            quantity: q.0,
+            value: q.1,
+        });
+    }
+}
+
+/// Bodies in scene order (deterministic: the first bad body in scene order is reported).
+fn in_order<'a, T: Component>(
+    roster: &Roster,
+    q: &'a Query<(&SimBody, &T)>,
+) -> impl Iterator<Item = (&'a SimBody, &'a T)> {
+    roster.bodies.iter().filter_map(|e| q.get(*e).ok())
+}
+
+fn check_forces(
+    clock: Res<Clock>,
+    roster: Res<Roster>,
+    q: Query<(&SimBody, &Wrench)>,
+    mut g: ResMut<Guard>,
+) {
+    for (b, w) in in_order(&roster, &q) {
+        let found = first_bad("gravity_n", &w.gravity_n)
+            .or_else(|| first_bad("force_n", &w.force_n))
+            .or_else(|| first_bad("torque_nm", &w.torque_nm));
+        if let Some(q) = found {
+            trip(&mut g, &clock, "force", Some(&b.name), q);
+            return;
+        }
+    }
+}
+
+fn check_states(
+    clock: Res<Clock>,
+    roster: Res<Roster>,
+    q: Query<(&SimBody, &BodyState)>,
+    mut g: ResMut<Guard>,
+) {
+    for (b, s) in in_order(&roster, &q) {
+        let quat = s.att.quaternion();
+        let att = [
+            ("qw", quat.w),
+            ("qx", quat.i),
+            ("qy", quat.j),
+            ("qz", quat.k),
+        ]
+        .into_iter()
+        .find(|(_, v)| !v.is_finite())
+        .map(|(n, v)| (format!("attitude.{n}"), v));
+        let found = first_bad("pos_m", &s.pos_m)
+            .or_else(|| first_bad("vel_m_s", &s.vel_m_s))
+            .or(att)
+            .or_else(|| first_bad("omega_rad_s", &s.omega_rad_s));
+        if let Some(q) = found {
+            trip(&mut g, &clock, "state", Some(&b.name), q);
+            return;
+        }
+    }
+}
+
+fn check_outputs(
+    clock: Res<Clock>,
+    roster: Res<Roster>,
+    mon: Res<MonitorState>,
+    gs: Res<Guarantees>,
+    diag: Res<Diagnostics>,
+    mut g: ResMut<Guard>,
+) {
+    for p in &mon.pairs {
+        if bad(p.distance_m) {
+            let q = (
+                format!(
+                    "distance.{}.{}_m",
+                    roster.names.get(p.a).map_or("?", String::as_str),
+                    roster.names.get(p.b).map_or("?", String::as_str)
+                ),
+                p.distance_m,
+            );
+            trip(&mut g, &clock, "output", None, q);
+            return;
+        }
+    }
+    for s in &gs.status {
+        if bad(s.last_margin) {
+            let q = (
+                format!("guarantee.{}.margin_{}", s.name, s.unit),
+                s.last_margin,
+            );
+            trip(&mut g, &clock, "output", None, q);
+            return;
+        }
+    }
+    for (n, v) in diag.names.iter().zip(&diag.values) {
+        if v.is_infinite() {
+            trip(&mut g, &clock, "output", None, (n.clone(), *v));
+            return;
+        }
+    }
+}
