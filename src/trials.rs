@@ -41,6 +41,20 @@ pub struct TrialsSpec {
     pub parameters: Vec<Parameter>,
     /// What counts as a success.
     pub success: Success,
+    /// The envelope plot (`capture_envelope.png`): `plot: (color_by: "peak_axial_load_n")`.
+    #[serde(default)]
+    pub plot: EnvelopePlot,
+}
+
+/// How the envelope plot is drawn.
+#[derive(Debug, Clone, Serialize, Deserialize, Default, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct EnvelopePlot {
+    /// The `trials.csv` column that colours the cells (default `outcome`): `success`, or a
+    /// numeric column (`t_latch_s`, `peak_axial_load_n`, `guarantee.NAME.worst_margin_m`, …),
+    /// drawn in five equal bins between its smallest and largest value (empty cells: `n/a`).
+    #[serde(default)]
+    pub color_by: Option<String>,
 }
 
 /// One varied scene field.
@@ -545,6 +559,32 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
         .iter()
         .map(|g| (g.name.clone(), g.unit.clone()))
         .collect();
+    if let Some(col) = &c.spec.plot.color_by {
+        let cols = header(&c);
+        let allowed: Vec<&String> = cols
+            .iter()
+            .filter(|h| !matches!(h.as_str(), "index" | "reason" | "campaign_id"))
+            .collect();
+        if !allowed.iter().any(|h| *h == col) {
+            let (line, col_no) = crate::scene::load::locate(&text, "plot.color_by")
+                .map(|(s, _)| crate::scene::load::line_col(&text, s))
+                .unwrap_or((0, 0));
+            return Err(SceneError {
+                file,
+                line,
+                col: col_no,
+                field: "plot.color_by".into(),
+                message: format!(
+                    "no trials.csv column {col:?} to colour by; one of: {}",
+                    allowed
+                        .iter()
+                        .map(|s| s.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            });
+        }
+    }
     if let Err((p, m)) = c.spec.success.check("success", &c.guarantees) {
         let (line, col) = crate::scene::load::locate(&text, &p)
             .map(|(s, _)| crate::scene::load::line_col(&text, s))
@@ -1262,36 +1302,206 @@ pub fn write_summary(
     envelope_plot(dir, c, rows).map_err(TrialsError::Io)
 }
 
-/// Outcome over the two leading parameters (`capture_envelope.png` and `.svg`); with a
-/// single parameter the vertical axis is the trial index.
-fn envelope_plot(dir: &Path, c: &Campaign, rows: &[Row]) -> Result<(), String> {
-    let paths: Vec<&str> = c.spec.parameters.iter().map(|p| p.label()).collect();
-    let mut cats: Vec<String> = rows.iter().map(|r| r.outcome.clone()).collect();
-    cats.sort();
-    cats.dedup();
-    let points: Vec<(f64, f64, usize)> = rows
+/// Colours of the five bins of a numeric `color_by` column, low to high (viridis), and of
+/// empty cells.
+const BIN_COLORS: [crate::report::Color; 5] = [
+    crate::report::Color::rgb(0x44, 0x01, 0x54),
+    crate::report::Color::rgb(0x3b, 0x52, 0x8b),
+    crate::report::Color::rgb(0x21, 0x91, 0x8c),
+    crate::report::Color::rgb(0x5e, 0xc9, 0x62),
+    crate::report::Color::rgb(0xfd, 0xe7, 0x25),
+];
+const NA_COLOR: crate::report::Color = crate::report::Color::rgb(0x99, 0x99, 0x99);
+
+/// A number with 3 significant digits and the Unicode minus sign, for legends and titles.
+fn fmt_sig(x: f64) -> String {
+    let s = if x == 0.0 || (1e-3..1e6).contains(&x.abs()) {
+        let d = (2 - x.abs().log10().floor() as i32).clamp(0, 6) as usize;
+        let t = format!("{x:.d$}");
+        if t.contains('.') {
+            t.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            t
+        }
+    } else {
+        format!("{x:.2e}")
+    };
+    s.replace('-', "\u{2212}")
+}
+
+/// Each row's category and the categories (name, colour) for the envelope plot.
+fn envelope_categories(
+    c: &Campaign,
+    rows: &[Row],
+) -> (Vec<usize>, Vec<(String, crate::report::Color)>) {
+    use crate::report::PALETTE;
+    let col = c.spec.plot.color_by.as_deref().unwrap_or("outcome");
+    let at = header(c).iter().position(|h| h == col);
+    let cell = |r: &Row| at.and_then(|i| r.cells.get(i)).cloned().unwrap_or_default();
+    let nums: Vec<Option<f64>> = rows
         .iter()
-        .map(|r| {
-            let y = if paths.len() > 1 {
-                r.values[1]
+        .map(|r| cell(r).parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect();
+    let numeric = !matches!(col, "outcome" | "success") && nums.iter().any(|x| x.is_some());
+    if !numeric {
+        let mut cats: Vec<String> = rows.iter().map(cell).collect();
+        cats.sort();
+        cats.dedup();
+        let ks = rows
+            .iter()
+            .map(|r| cats.iter().position(|c| *c == cell(r)).unwrap_or(0))
+            .collect();
+        let cats = cats
+            .into_iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let name = if s.is_empty() { "n/a".to_string() } else { s };
+                (name, PALETTE[i % PALETTE.len()])
+            })
+            .collect();
+        return (ks, cats);
+    }
+    let (lo, hi) = nums
+        .iter()
+        .flatten()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
+            (l.min(*x), h.max(*x))
+        });
+    let n = if hi > lo { BIN_COLORS.len() } else { 1 };
+    let w = (hi - lo) / n as f64;
+    let fmt = fmt_sig;
+    let mut cats: Vec<(String, crate::report::Color)> = (0..n)
+        .map(|b| {
+            let (a, z) = (
+                lo + w * b as f64,
+                if b + 1 == n {
+                    hi
+                } else {
+                    lo + w * (b + 1) as f64
+                },
+            );
+            let name = if n == 1 {
+                format!("{col} = {}", fmt(lo))
             } else {
-                r.index as f64
+                format!("{col} {} to {}", fmt(a), fmt(z))
             };
-            let k = cats.iter().position(|c| *c == r.outcome).expect("category");
-            (r.values[0], y, k)
+            (
+                name,
+                BIN_COLORS[b * (BIN_COLORS.len() - 1) / (n.max(2) - 1)],
+            )
         })
         .collect();
-    let plot =
-        crate::report::Plot::new(format!("{}: outcome of {} trials", c.spec.name, rows.len()))
-            .x_label(paths[0])
-            .y_label(if paths.len() > 1 {
-                paths[1]
+    let na = cats.len();
+    let mut any_na = false;
+    let ks = nums
+        .iter()
+        .map(|x| match x {
+            Some(x) if n > 1 => (((x - lo) / w) as usize).min(n - 1),
+            Some(_) => 0,
+            None => {
+                any_na = true;
+                na
+            }
+        })
+        .collect();
+    if any_na {
+        cats.push(("n/a".into(), NA_COLOR));
+    }
+    (ks, cats)
+}
+
+/// The envelope plot (`capture_envelope.png` and `.svg`): cells coloured by the outcome (or
+/// `plot.color_by`) over the two leading parameters; with one parameter the vertical axis is
+/// the trial index; with more than two, small multiples: one panel per value of the third
+/// parameter (a grid of at most six values), or per third of its range (the fourth and later
+/// parameters vary within each panel), the legend once, beside the last panel.
+fn envelope_plot(dir: &Path, c: &Campaign, rows: &[Row]) -> Result<(), String> {
+    use crate::report::Legend;
+    let params = &c.spec.parameters;
+    let labels: Vec<&str> = params.iter().map(|p| p.label()).collect();
+    let (ks, cats) = envelope_categories(c, rows);
+    let what = c.spec.plot.color_by.as_deref().unwrap_or("outcome");
+    // The legend (on one panel) counts the trials of every panel.
+    let totals: Vec<usize> = (0..cats.len())
+        .map(|k| ks.iter().filter(|x| **x == k).count())
+        .collect();
+    let panel = |title: String, sel: &dyn Fn(&Row) -> bool, legend: bool| {
+        let points: Vec<(f64, f64, usize)> = rows
+            .iter()
+            .zip(&ks)
+            .filter(|(r, _)| sel(r))
+            .map(|(r, k)| {
+                let y = if params.len() > 1 {
+                    r.values[1]
+                } else {
+                    r.index as f64
+                };
+                (r.values[0], y, *k)
+            })
+            .collect();
+        crate::report::Plot::new(title)
+            .x_label(labels[0])
+            .y_label(if params.len() > 1 {
+                labels[1]
             } else {
                 "trial index"
             })
-            .outcomes(points, &cats);
-    plot.write_png(&dir.join("capture_envelope.png"))
-        .and_then(|_| plot.write_svg(&dir.join("capture_envelope.svg")))
+            .outcomes_colored(points, &cats)
+            .outcome_counts(totals.clone())
+            .legend(if legend { Legend::Best } else { Legend::Off })
+    };
+    let title = format!("{}: {what} of {} trials", c.spec.name, rows.len());
+    let fig = if params.len() <= 2 {
+        panel(title, &|_| true, true).into_figure()
+    } else {
+        let fmt = fmt_sig;
+        let third: Vec<f64> = rows.iter().map(|r| r.values[2]).collect();
+        let mut fig = crate::report::Figure::new(format!(
+            "{title}, by {}{}",
+            labels[2],
+            if params.len() > 3 {
+                " (later parameters vary within each panel)"
+            } else {
+                ""
+            }
+        ));
+        let mut n_panels = 0;
+        match &params[2] {
+            Parameter::Grid { values, .. } if values.len() <= 6 => {
+                for (i, v) in values.iter().enumerate() {
+                    let v = *v;
+                    fig.push(panel(
+                        format!("{} = {}", labels[2], fmt(v)),
+                        &|r| r.values[2] == v,
+                        i + 1 == values.len(),
+                    ));
+                    n_panels += 1;
+                }
+            }
+            _ => {
+                let (lo, hi) = third
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
+                        (l.min(*x), h.max(*x))
+                    });
+                let w = (hi - lo) / 3.0;
+                for b in 0..3 {
+                    let a = lo + w * b as f64;
+                    let z = if b == 2 { hi } else { a + w };
+                    let last = b == 2;
+                    fig.push(panel(
+                        format!("{} {} to {}", labels[2], fmt(a), fmt(z)),
+                        &|r| r.values[2] >= a && (r.values[2] < z || (last && r.values[2] <= z)),
+                        last,
+                    ));
+                    n_panels += 1;
+                }
+            }
+        }
+        fig.cols(n_panels.min(3))
+    };
+    fig.write_png(&dir.join("capture_envelope.png"))
+        .and_then(|_| fig.write_svg(&dir.join("capture_envelope.svg")))
         .map_err(|e| e.to_string())
 }
 

@@ -493,3 +493,75 @@ fn regress_trials_file_limits_and_nesting_are_located() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// The envelope plot coloured by a numeric column, with small multiples over a third
+/// parameter: the SVG's legend holds the five bins of the column's recorded range (read back
+/// from `trials.csv`), one panel title per value of the third (grid) parameter; an unknown
+/// column is a located error.
+#[test]
+fn regress_envelope_plot_colours_by_a_column_and_draws_small_multiples() {
+    let d = tmp("envelope");
+    let scene = std::fs::canonicalize("scenes/docking_aligned.ron").unwrap();
+    let text = format!(
+        r#"Trials(
+    name: "multiples",
+    scene: "{}",
+    duration_s: 2.0,
+    seed: 3,
+    count: 8,
+    parameters: [
+        Grid(path: "bodies.chaser.initial.pos_m.1", values: [0.0, 0.05]),
+        Grid(path: "bodies.chaser.initial.pos_m.2", values: [0.0, 0.05]),
+        Grid(path: "bodies.chaser.initial.vel_m_s.0", values: [-0.03, -0.02]),
+    ],
+    success: Latched,
+    plot: (color_by: "min_clearance_non_docking_m"),
+)"#,
+        scene.display()
+    );
+    let f = d.join("multiples.ron");
+    std::fs::write(&f, &text).unwrap();
+    let out = d.join("out");
+    trials(&[f.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let svg = read(&out.join("capture_envelope.svg"));
+    assert!(out.join("capture_envelope.png").is_file());
+    // Panels: one per value of the third parameter.
+    for v in ["\u{2212}0.03", "\u{2212}0.02"] {
+        assert!(
+            svg.contains(&format!("bodies.chaser.initial.vel_m_s.0 = {v}")),
+            "panel {v} missing"
+        );
+    }
+    // Legend: five bins from the smallest to the largest recorded clearance.
+    let csv = read(&out.join("trials.csv"));
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = head
+        .iter()
+        .position(|h| *h == "min_clearance_non_docking_m")
+        .unwrap();
+    let vals: Vec<f64> = lines
+        .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(vals.len(), 8);
+    let (lo, hi) = vals
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(l, h), v| (l.min(*v), h.max(*v)));
+    assert!(hi > lo, "{vals:?}");
+    // The legend once, beside the last panel: five bins `COLUMN a to b`.
+    let bins = svg.matches(" to ").count();
+    assert_eq!(bins, 5, "{bins} bin labels");
+    let _ = std::fs::remove_dir_all(&out);
+    std::fs::write(
+        &f,
+        text.replace("min_clearance_non_docking_m\"", "clearance\""),
+    )
+    .unwrap();
+    let e = rpod::trials::load(&f).err().expect("refused");
+    assert_eq!(e.field, "plot.color_by", "{e}");
+    assert!(
+        e.line > 0 && e.message.contains("no trials.csv column"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -1323,6 +1323,16 @@ impl crate::guarantee::Guarantee for CorridorGuarantee {
     fn margin(&self, view: &crate::guarantee::MonitorView) -> f64 {
         self.corridor.signed_distance_m(&self.r1_target_m(view))
     }
+    /// A signed Euclidean distance is 1-Lipschitz in the point, and the chaser's centre of
+    /// mass in target body axes moves at most at |v_c − v_t| + Ω_t·|r_c − r_t|
+    /// ([`crate::guarantee::MotionBounds::rel_speed_in_body_bound`]): the corridor is judged
+    /// between samples too (to the distance's numerical precision, ~1e-9 m).
+    fn rate_bound(&self, m: &dyn crate::guarantee::MotionBounds) -> Option<f64> {
+        Some(m.rel_speed_in_body_bound(self.chaser, self.target))
+    }
+    fn reads(&self) -> crate::guarantee::Reads {
+        crate::guarantee::Reads::Bodies
+    }
 }
 
 /// Mean motion of the osculating two-body orbit through `(r, v)`, rad/s (0 if not bound).

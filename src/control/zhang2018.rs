@@ -1514,6 +1514,13 @@ impl crate::guarantee::Guarantee for CaptureDistance {
     fn margin(&self, v: &crate::guarantee::MonitorView) -> f64 {
         (v.bodies[self.a].pos_m - v.bodies[self.b].pos_m).norm() - self.capture_radius_m
     }
+    /// |r_a − r_b| changes at most at |v_a − v_b| (judged between samples too).
+    fn rate_bound(&self, m: &dyn crate::guarantee::MotionBounds) -> Option<f64> {
+        Some(m.rel_speed_bound(self.a, self.b))
+    }
+    fn reads(&self) -> crate::guarantee::Reads {
+        crate::guarantee::Reads::Bodies
+    }
 }
 
 /// One controlled spacecraft.

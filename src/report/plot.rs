@@ -178,6 +178,8 @@ enum Item {
     Outcomes {
         pts: Vec<(f64, f64, usize)>,
         cats: Vec<(String, Color)>,
+        /// Legend counts per category (default: the points drawn here).
+        totals: Option<Vec<usize>>,
     },
 }
 
@@ -438,7 +440,25 @@ impl Plot {
             .into_iter()
             .filter(|p| p.0.is_finite() && p.1.is_finite() && p.2 < cats.len())
             .collect();
-        self.items.push(Item::Outcomes { pts, cats });
+        self.items.push(Item::Outcomes {
+            pts,
+            cats,
+            totals: None,
+        });
+        self
+    }
+
+    /// The counts the legend shows for the last outcome map, per category (e.g. the totals over
+    /// every panel of small multiples, when only one panel carries the legend).
+    pub fn outcome_counts(mut self, totals: Vec<usize>) -> Self {
+        if let Some(Item::Outcomes { totals: t, .. }) = self
+            .items
+            .iter_mut()
+            .rev()
+            .find(|i| matches!(i, Item::Outcomes { .. }))
+        {
+            *t = Some(totals);
+        }
         self
     }
 
@@ -648,9 +668,12 @@ impl Plot {
                 } if !label.is_empty() => {
                     out.push((label.clone(), Swatch::Line(*color, *width, *dash)))
                 }
-                Item::Outcomes { pts, cats } => {
+                Item::Outcomes { pts, cats, totals } => {
                     for (k, (name, c)) in cats.iter().enumerate() {
-                        let n = pts.iter().filter(|p| p.2 == k).count();
+                        let n = totals
+                            .as_ref()
+                            .and_then(|t| t.get(k).copied())
+                            .unwrap_or_else(|| pts.iter().filter(|p| p.2 == k).count());
                         out.push((
                             format!("{name} ({n})"),
                             Swatch::Patch(Some((*c, 1.0)), None),
@@ -770,7 +793,7 @@ impl Plot {
         svg.begin_clip(f.x, f.y, f.w, f.h);
         let mut drawn: Vec<(f64, f64)> = Vec::new();
         for it in &self.items {
-            if let Item::Outcomes { pts, cats } = it {
+            if let Item::Outcomes { pts, cats, .. } = it {
                 let (dx, dy) = Self::cell_size(pts);
                 let (wpx, hpx) = (dx * f.sx(), self.cell_h_px(&f, dy));
                 for &(x, y, k) in pts {
