@@ -1440,6 +1440,18 @@ impl crate::guarantee::Guarantee for ThrustAuthority {
             view.t_s,
         )[self.axis]
     }
+    /// The margin a − |A sin(ωt + φ)|/m_t changes at most at |A ω|/m_t (a function of time
+    /// only): judged between samples too.
+    fn rate_bound(&self, _m: &dyn crate::guarantee::MotionBounds) -> Option<f64> {
+        let i = self.axis;
+        Some(
+            (self.maneuver.amplitude_n[i] * self.maneuver.omega_rad_s[i]).abs()
+                / self.mass_target_kg,
+        )
+    }
+    fn reads(&self) -> crate::guarantee::Reads {
+        crate::guarantee::Reads::Bodies
+    }
 }
 
 const AXES: [&str; 3] = ["x", "y", "z"];

@@ -1122,7 +1122,10 @@ dt = 0.02 s gives the same terminal RMS within the plant-difference bound below.
 - **Attitude.** Nobody controls it (the paper has none): both bodies start aligned with the tof and \
 turning with it at ḟ0 = 8.28e−5 rad/s; gravity-gradient torque acts.\n\
 - **Thrust-authority guarantee** (`thrust_authority_{x,y,z}`, m/s²): 5 N / m_c − |F_t,i(t)| / 200 kg, \
-checked every step by the monitor; negative = no law can hold the relative position on that axis.\n"
+judged by the monitor on every step interval (rate bound |A ω| / 200 kg); negative = no law can \
+hold the relative position on that axis. At 100 kg the x margin is exactly 0 at every peak of the \
+manoeuvre: the verdict there is `unresolved` (a rate bound cannot prove a margin that touches 0), \
+not `held`.\n"
         .to_string()
 }
 
