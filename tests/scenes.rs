@@ -34,6 +34,12 @@ fn every_bundled_scene_passes_check() {
 /// paths, duplicate names, docking that cannot dock, non-UTF-8 bytes, degenerate reference
 /// orbits and far-away bodies (once reported as overlaps).
 const CORPUS: &[(&str, usize, &str, &str)] = &[
+    (
+        "sensor_period_tiny",
+        72,
+        "controllers.0.0.vision.period_s",
+        "cannot expose faster than the scene step",
+    ),
     ("deep_brackets", 62, "", "nested deeper than 64 levels"),
     ("deep_parens", 45, "", "nested deeper than 64 levels"),
     (
@@ -500,4 +506,19 @@ fn regress_symlinked_model_files_and_folders_are_refused() {
         .unwrap();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A generic sensor faster than the scene step (found by the long fuzz run as 10³⁰⁶ exposures a
+/// step) is a located error through `--set` too.
+#[test]
+fn regress_sensor_faster_than_the_step_is_refused() {
+    let e = load_scene_file(
+        Path::new("scenes/orbit_approach_latch.ron"),
+        &["controllers.0.sensor=Some((period_s: 1e-308))".to_string()],
+    )
+    .and_then(|l| rpod::sim::Simulation::new(&l).map(|_| ()))
+    .err()
+    .expect("refused");
+    assert_eq!(e.field, "controllers.0.sensor.period_s", "{e}");
+    assert!(e.message.contains("1e-308 s"), "{e}");
 }

@@ -833,9 +833,11 @@ impl PySimulation {
             Some(s) => {
                 let spec: SensorSpec = ron::from_str(s)
                     .map_err(|e| PyValueError::new_err(format!("add_controller: sensor: {e}")))?;
-                spec.validate().map_err(|(f, m)| {
-                    PyValueError::new_err(format!("add_controller: sensor.{f}: {m}"))
-                })?;
+                spec.validate()
+                    .and_then(|_| spec.check_period(dt))
+                    .map_err(|(f, m)| {
+                        PyValueError::new_err(format!("add_controller: sensor.{f}: {m}"))
+                    })?;
                 Some(spec)
             }
         };

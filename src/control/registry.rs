@@ -361,6 +361,7 @@ impl LawEntry {
         };
         if let Some(s) = &self.sensor {
             s.validate()
+                .and_then(|_| s.check_period(ctx.scene.dt_s))
                 .map_err(|(f, m)| BuildError::at(format!("sensor.{f}"), m))?;
             if s.frame != crate::control::interface::MeasuredFrame::World && target.is_none() {
                 return Err(BuildError::at(

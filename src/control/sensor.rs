@@ -113,6 +113,22 @@ impl SensorSpec {
         }
         Ok(())
     }
+
+    /// The period against the scene step: a sensor exposes at most once per step (the truth
+    /// exists at the steps), so `period_s` ≥ `dt_s` (a period of 1e−308 s would otherwise ask
+    /// for 10³⁰⁶ exposures in one step).
+    pub fn check_period(&self, dt_s: f64) -> Result<(), (String, String)> {
+        if self.period_s < dt_s * (1.0 - 1e-9) {
+            return Err((
+                "period_s".to_string(),
+                format!(
+                    "a sensor cannot expose faster than the scene step dt_s = {dt_s} s, got {:?} s",
+                    self.period_s
+                ),
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// The truth a sensor measures at one step, in its frame.

@@ -1224,6 +1224,10 @@ impl crate::control::registry::LawSpec for SceneSpec {
         let chaser = ctx.body("0.chaser", &self.chaser)?;
         self.validate()
             .map_err(|(field, msg)| BuildError::at(format!("0.{field}"), msg))?;
+        self.vision
+            .sensor()
+            .check_period(ctx.scene.dt_s)
+            .map_err(|(field, msg)| BuildError::at(format!("0.vision.{field}"), msg))?;
         if !matches!(
             ctx.scene.environment,
             crate::scene::Environment::AirBearing(_)

@@ -126,15 +126,7 @@ pub fn install(app: &mut App) {
     // One condition per set (a condition on a tuple of sets would be evaluated once, before
     // the first of them, for the whole step): each stage runs only while no check has tripped,
     // so the step a check trips in goes no further.
-    for stage in [
-        Stage::Sense,
-        Stage::Control,
-        Stage::Actuate,
-        Stage::Environment,
-        Stage::Physics,
-        Stage::Monitor,
-        Stage::Record,
-    ] {
+    for stage in Stage::ALL {
         app.configure_sets(SimStep, stage.run_if(clear));
     }
     for check in [GuardCheck::Forces, GuardCheck::States, GuardCheck::Outputs] {

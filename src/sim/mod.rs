@@ -68,6 +68,19 @@ pub enum Stage {
     Record,
 }
 
+impl Stage {
+    /// Every stage, in pipeline order.
+    pub const ALL: [Stage; 7] = [
+        Stage::Sense,
+        Stage::Control,
+        Stage::Actuate,
+        Stage::Environment,
+        Stage::Physics,
+        Stage::Monitor,
+        Stage::Record,
+    ];
+}
+
 /// Simulated clock. `step` counts completed steps; `t_s = step · dt_s` (never accumulated).
 #[derive(Resource, Debug, Clone)]
 pub struct Clock {
