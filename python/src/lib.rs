@@ -817,7 +817,7 @@ impl PySimulation {
         let n = ratio.round();
         if !period_s.is_finite() || !(1.0..=1e12).contains(&n) || (ratio - n).abs() > 1e-9 * ratio {
             return Err(PyValueError::new_err(format!(
-                "add_controller: period_s must be a whole number (≥ 1) of scene steps dt_s = {dt} s, got {period_s} s"
+                "add_controller: period_s must be a whole number (≥ 1) of scene steps dt_s = {dt} s, got {period_s:?} s"
             )));
         }
         let actuator: ActuatorSpec = match actuator {
@@ -1051,6 +1051,15 @@ impl PySimulation {
             return Err(PyValueError::new_err(format!(
                 "finish: this run records into {} (the constructor's out_dir); call finish() without a folder",
                 rec.display()
+            )));
+        }
+        if let Some(out) = &out_dir
+            && out.exists()
+            && !out.is_dir()
+        {
+            return Err(pyo3::exceptions::PyOSError::new_err(format!(
+                "finish: {} exists and is not a folder (nothing was written; the run can still be finished elsewhere)",
+                out.display()
             )));
         }
         let sim = self.sim.take().ok_or_else(|| {

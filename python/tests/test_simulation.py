@@ -254,3 +254,15 @@ def test_same_scene_same_bits(tmp_path):
         sim.finish(d)
         outs.append((d / "trajectory.csv").read_bytes())
     assert outs[0] == outs[1]
+
+
+def test_finish_into_a_file_keeps_the_run(tmp_path):
+    not_a_folder = tmp_path / "file"
+    not_a_folder.write_text("x")
+    sim = rpod.Simulation(scene("docking_aligned.ron"), set={"duration_s": 0.5})
+    sim.run_until(0.5)
+    with pytest.raises(OSError, match="not a folder"):
+        sim.finish(not_a_folder)
+    assert not_a_folder.read_text() == "x"
+    summary = sim.finish(tmp_path / "out")
+    assert summary["steps"] == 50 and (tmp_path / "out" / "summary.json").is_file()

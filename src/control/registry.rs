@@ -220,7 +220,7 @@ impl<'a> BuildContext<'a> {
             return Err(BuildError::at(
                 field,
                 format!(
-                    "the period must be a whole number (≥ 1) of scene steps dt_s = {dt} s, got {period_s} s"
+                    "the period must be a whole number (≥ 1) of scene steps dt_s = {dt} s, got {period_s:?} s"
                 ),
             ));
         }
