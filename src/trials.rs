@@ -565,7 +565,7 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
             .iter()
             .filter(|h| !matches!(h.as_str(), "index" | "reason" | "campaign_id"))
             .collect();
-        if !allowed.iter().any(|h| *h == col) {
+        if !allowed.contains(&col) {
             let (line, col_no) = crate::scene::load::locate(&text, "plot.color_by")
                 .map(|(s, _)| crate::scene::load::line_col(&text, s))
                 .unwrap_or((0, 0));

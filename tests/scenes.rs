@@ -517,8 +517,7 @@ fn regress_sensor_faster_than_the_step_is_refused() {
         &["controllers.0.sensor=Some((period_s: 1e-308))".to_string()],
     )
     .and_then(|l| rpod::sim::Simulation::new(&l).map(|_| ()))
-    .err()
-    .expect("refused");
+    .expect_err("refused");
     assert_eq!(e.field, "controllers.0.sensor.period_s", "{e}");
     assert!(e.message.contains("1e-308 s"), "{e}");
 }
