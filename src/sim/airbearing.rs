@@ -171,7 +171,7 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         off_table_s: vec![None; n],
         table_collider,
     });
-    app.add_systems(SimStep, airbearing_forces.in_set(Stage::Environment));
+    app.add_systems(SimStep, airbearing_forces.in_set(super::Order::TableForces));
     app.add_systems(
         SimStep,
         airbearing_constrain

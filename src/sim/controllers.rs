@@ -909,7 +909,7 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
 /// nothing per step), and the post-step diagnostics system once a law asks for them. Called
 /// at install and by `Simulation::add_controller`.
 pub fn ensure_systems(app: &mut App) {
-    use super::{SimStep, Stage};
+    use super::SimStep;
     let host = app.world().resource::<ControllerHost>();
     let want_main = !(host.slots.is_empty() && host.disturbances.is_empty());
     let want_post = host
@@ -928,13 +928,16 @@ pub fn ensure_systems(app: &mut App) {
     }
     if add_post {
         app.world_mut().resource_mut::<ControllerHost>().post_added = true;
-        app.add_systems(SimStep, host_post_step.in_set(Stage::Monitor));
+        app.add_systems(
+            SimStep,
+            host_post_step.in_set(super::Order::PostStepDiagnostics),
+        );
     }
 }
 
-/// The host's systems, in their stages. Added by [`install`], after the docking mechanism's
-/// and the environment's systems, so that within a stage a controller's force is added after
-/// theirs (the order of floating-point sums is part of a run's bit-exact result).
+/// The host's systems, in their stages; within Actuate a controller's force is added after the
+/// docking mechanism's ([`super::Order`]: the order of floating-point sums is part of a run's
+/// bit-exact result).
 fn add_systems(app: &mut App) {
     use super::{SimStep, Stage};
     app.add_systems(
@@ -945,7 +948,7 @@ fn add_systems(app: &mut App) {
                 .in_set(Stage::Sense)
                 .after(super::environment::sync_l2_frame),
             host_control.in_set(Stage::Control),
-            host_actuate.in_set(Stage::Actuate),
+            host_actuate.in_set(super::Order::ControllerForces),
         ),
     );
 }

@@ -9,7 +9,7 @@
 use super::contact_model::{CompliantContact, ImpactRecord};
 use super::monitor::ContactState;
 use super::output::Diagnostics;
-use super::{BodyState, Clock, EventLog, Physics, SimBody, SimStep, Stage, Wrench, conv};
+use super::{BodyState, Clock, EventLog, Physics, SimBody, SimStep, Wrench, conv};
 use crate::scene::{DockingSpec, LoadedScene, SceneError};
 use bevy::prelude::*;
 use bevy_rapier3d::rapier::prelude as rp;
@@ -298,13 +298,11 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         prev_axial_error_m: None,
         cols,
     });
-    app.add_systems(SimStep, docking_actuate.in_set(Stage::Actuate));
     app.add_systems(
         SimStep,
-        docking_monitor
-            .in_set(Stage::Monitor)
-            .after(super::monitor::contacts),
+        docking_actuate.in_set(super::Order::MechanismForces),
     );
+    app.add_systems(SimStep, docking_monitor.in_set(super::Order::Mechanism));
     Ok(())
 }
 

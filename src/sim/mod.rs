@@ -81,6 +81,32 @@ impl Stage {
     ];
 }
 
+/// The order, inside a stage, of the systems of different features that write the same data
+/// (a body's `Wrench`, the event log, the docking state). Every such pair is ordered through
+/// these sets, so the order of floating-point sums — part of a run's bit-exact result — is
+/// stated here rather than left to insertion order (`tests/schedule.rs` fails on any unordered
+/// pair).
+#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
+pub enum Order {
+    /// Actuate, first: a docking mechanism's forces (the magnet).
+    MechanismForces,
+    /// Actuate, then: the controllers' commands.
+    ControllerForces,
+    /// Environment, first: an air-bearing table's forces (film, friction, tilt).
+    TableForces,
+    /// Environment, then: gravity (differential, J2, gravity gradient).
+    Gravity,
+    /// Monitor, first: the controllers' post-step diagnostics (they read the docking state the
+    /// step started with: the mechanism is updated below).
+    PostStepDiagnostics,
+    /// Monitor: full-geometry distances and contacts.
+    Geometry,
+    /// Monitor: mechanism states from the contacts (capture, latch).
+    Mechanism,
+    /// Monitor, last: guarantees (margins, verdicts, their events).
+    Guarantees,
+}
+
 /// Simulated clock. `step` counts completed steps; `t_s = step · dt_s` (never accumulated).
 #[derive(Resource, Debug, Clone)]
 pub struct Clock {
@@ -1133,17 +1159,71 @@ pub fn add_pipeline(app: &mut App) {
         )
             .chain(),
     );
-    schedule.add_systems((
-        environment_gravity.in_set(Stage::Environment),
-        (physics_step, advance_orbit).chain().in_set(Stage::Physics),
-        (monitor::distances, monitor::contacts, check_guarantees)
+    schedule.configure_sets((
+        (Order::MechanismForces, Order::ControllerForces)
+            .chain()
+            .in_set(Stage::Actuate),
+        (Order::TableForces, Order::Gravity)
+            .chain()
+            .in_set(Stage::Environment),
+        (
+            Order::PostStepDiagnostics,
+            Order::Geometry,
+            Order::Mechanism,
+            Order::Guarantees,
+        )
             .chain()
             .in_set(Stage::Monitor),
+    ));
+    schedule.add_systems((
+        environment_gravity.in_set(Order::Gravity),
+        (physics_step, advance_orbit).chain().in_set(Stage::Physics),
+        (monitor::distances, monitor::contacts)
+            .chain()
+            .in_set(Order::Geometry),
+        check_guarantees.in_set(Order::Guarantees),
         output::record.in_set(Stage::Record),
     ));
     app.add_schedule(schedule);
     guard::install(app);
     app.add_systems(Update, advance);
+}
+
+/// Every pair of `SimStep` systems that access the same data (a component, a resource or the
+/// whole world) with no order between them, as `"system_a <-> system_b: [data, ...]"` — Bevy's
+/// ambiguity detection. A pair in this list could run in either order, and with it the sums of
+/// forces and so the outputs could change between builds: the pipeline keeps the list empty
+/// (`tests/schedule.rs`). Call it before the first step (the check runs while the schedule is
+/// built); the schedule is then built with the default settings, ready to step.
+pub fn schedule_ambiguities(app: &mut App) -> Vec<String> {
+    use bevy::ecs::schedule::{LogLevel, ScheduleBuildSettings};
+    app.world_mut()
+        .resource_scope(|world, mut schedules: Mut<Schedules>| {
+            let Some(schedule) = schedules.get_mut(SimStep) else {
+                return Vec::new();
+            };
+            let default = schedule.get_build_settings();
+            schedule.set_build_settings(ScheduleBuildSettings {
+                ambiguity_detection: LogLevel::Error,
+                ..default.clone()
+            });
+            let found = match schedule.initialize(world) {
+                Ok(_) => Vec::new(),
+                Err(_) => {
+                    let graph = schedule.graph();
+                    graph
+                        .conflicting_systems()
+                        .to_string(graph, world.components())
+                        .map(|(a, b, data)| {
+                            let data: Vec<String> = data.iter().map(|d| d.to_string()).collect();
+                            format!("{a} <-> {b}: [{}]", data.join(", "))
+                        })
+                        .collect()
+                }
+            };
+            schedule.set_build_settings(default);
+            found
+        })
 }
 
 /// Helpers for `rpod bench`.
