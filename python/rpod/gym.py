@@ -516,8 +516,9 @@ class DockingEnv(gym.Env):
 
     def render(self):
         """The scene now as an RGB array (height 360, width 480) with ``render_mode="rgb_array"``:
-        seen from the side of the approach, a little from above (world x across, z up), the
-        framing fixed for the episode so that a video does not zoom."""
+        seen from the side of the approach, a little from above and from the chaser's side (the
+        slot's face and the cone visible; world z up), the framing fixed for the episode so
+        that a video does not zoom."""
         if self.render_mode is None:
             gym.logger.warn(
                 "render() without a render_mode: make the environment with "
@@ -526,19 +527,12 @@ class DockingEnv(gym.Env):
             return None
         if self.sim is None:
             raise ResetNeeded("call reset() before render()")
-        look = np.array([0.3, 1.0, -0.45])
+        look = (-0.35, 1.0, -0.45)
         if self._view is None:
-            # Centred between the target and the chaser at the start; wide enough for both
-            # bodies (their bounding spheres) wherever the approach takes the chaser.
-            c = self.sim.state(self._names[0])["pos_m"]
-            centre = 0.5 * (self._target_pos + np.asarray(c))
-            reach = max(
-                float(np.linalg.norm(self._target_pos - centre))
-                + self.params["target"]["bounding_radius_m"],
-                float(np.linalg.norm(np.asarray(c) - centre))
-                + self.params["chaser"]["bounding_radius_m"],
-            )
-            self._view = {"centre_m": centre, "span_m": 2.0 * reach * 4.0 / 3.0}
+            # Every part at the start, with room for the chaser to move: the fitted width
+            # grown by a third (the chaser starts at most 1.5 m from the seat).
+            fit = self.sim.render(480, 360, look_dir=look, up=(0.0, 0.0, 1.0), fit_only=True)
+            self._view = {"centre_m": fit["centre_m"], "span_m": fit["span_m"] * 4.0 / 3.0}
         return self.sim.render(480, 360, look_dir=look, up=(0.0, 0.0, 1.0), **self._view)
 
     def close(self):

@@ -1144,9 +1144,11 @@ impl PySimulation {
     /// A picture of every body's full geometry now (the colliders the contacts and the monitor
     /// use), orthographic, as a `(height, width, 3)` `uint8` RGB array: the camera looks along
     /// `look_dir` (world frame) with `up` upward, centred on `centre_m` (default: the middle of
-    /// the bodies) over `span_m` metres of width (default: every body fits). Flat-shaded by
+    /// the parts) over `span_m` metres of width (default: every part fits). Flat-shaded by
     /// the angle of each face to the view; a picture, not a measurement.
-    #[pyo3(signature = (width=480, height=360, look_dir=None, up=None, centre_m=None, span_m=None))]
+    /// With `fit_only=True` nothing is drawn: the view it would use, `{"centre_m", "span_m"}`
+    /// (pass them back to keep a framing fixed while the bodies move).
+    #[pyo3(signature = (width=480, height=360, look_dir=None, up=None, centre_m=None, span_m=None, fit_only=false))]
     #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &mut self,
@@ -1157,7 +1159,8 @@ impl PySimulation {
         up: Option<Bound<'_, PyAny>>,
         centre_m: Option<Bound<'_, PyAny>>,
         span_m: Option<f64>,
-    ) -> PyResult<Bound<'py, PyArray3<u8>>> {
+        fit_only: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let look_dir = match look_dir {
             Some(v) => extract_vec3(&v, "look_dir")?,
             None => Vector3::new(0.0, 1.0, 0.0),
@@ -1178,11 +1181,20 @@ impl PySimulation {
         let snap = self
             .snapshot
             .get_or_insert_with(|| rpod::sim::snapshot::Snapshot::new(&sim));
+        if fit_only {
+            let (c, span) = snap
+                .fit(&sim, width, height, &view)
+                .map_err(|e| PyValueError::new_err(format!("render: {e}")))?;
+            let d = PyDict::new(py);
+            d.set_item("centre_m", vec3(py, &c))?;
+            d.set_item("span_m", span)?;
+            return Ok(d.into_any());
+        }
         let rgb = snap
             .render(&sim, width, height, &view)
             .map_err(|e| PyValueError::new_err(format!("render: {e}")))?;
         numpy::ndarray::Array3::from_shape_vec((height, width, 3), rgb)
-            .map(|a| PyArray3::from_owned_array(py, a))
+            .map(|a| PyArray3::from_owned_array(py, a).into_any())
             .map_err(|e| SimulationError::new_err(format!("render: {e}")))
     }
 

@@ -30,8 +30,7 @@ pub struct View {
     pub look_dir: Vector3<f64>,
     /// The world direction shown upward (projected square to `look_dir`).
     pub up: Vector3<f64>,
-    /// World point at the picture's centre, m; `None`: the middle of every body's bounding
-    /// sphere, as seen.
+    /// World point at the picture's centre, m; `None`: the middle of every part, as seen.
     pub centre_m: Option<Vector3<f64>>,
     /// Width of the picture in the world, m; `None`: every body fits, with a 5 % border.
     pub span_m: Option<f64>,
@@ -136,9 +135,19 @@ pub fn primitive_triangles(p: &Primitive) -> Vec<[Point3<f64>; 3]> {
 struct BodyMesh {
     name: String,
     com_body_m: Vector3<f64>,
-    /// Radius of a sphere about the body-frame origin holding every part, m.
-    radius_m: f64,
     triangles: Vec<([Point3<f64>; 3], [f64; 3])>,
+}
+
+/// A camera: look direction f, right r, up u (world), the picture's centre (r, u coordinates)
+/// and width, m, and the body poses.
+struct Frame {
+    f: Vector3<f64>,
+    r: Vector3<f64>,
+    u: Vector3<f64>,
+    cr: f64,
+    cu: f64,
+    span: f64,
+    poses: Vec<Isometry3<f64>>,
 }
 
 /// The triangles of every body of a scene, built once (see [`Snapshot::render`]).
@@ -156,11 +165,8 @@ impl Snapshot {
             .map(|b| {
                 let parts: Vec<PartCollider> = expand_body(b);
                 let mut triangles = Vec::new();
-                let mut radius_m: f64 = 0.0;
                 for pc in &parts {
                     let rgb = part_rgb(b.role, pc.role);
-                    radius_m = radius_m
-                        .max(pc.pose_body.translation.vector.norm() + pc.shape.bounding_radius_m());
                     for t in primitive_triangles(&pc.shape) {
                         triangles.push((t.map(|p| pc.pose_body * p), rgb));
                     }
@@ -168,7 +174,6 @@ impl Snapshot {
                 BodyMesh {
                     name: b.name.clone(),
                     com_body_m: Vector3::from(b.com_m),
-                    radius_m,
                     triangles,
                 }
             })
@@ -176,16 +181,14 @@ impl Snapshot {
         Self { bodies }
     }
 
-    /// The picture now, `height` rows of `width` RGB pixels (row-major, top row first).
-    /// Errors: a side of 0 or above [`MAX_SIDE_PX`], a view direction or up vector that is
-    /// zero, non-finite or parallel, a span that is not a positive finite number.
-    pub fn render(
+    /// The camera axes, the picture's centre and width, and the body poses now.
+    fn frame(
         &self,
         sim: &Simulation,
         width: usize,
         height: usize,
         view: &View,
-    ) -> Result<Vec<u8>, String> {
+    ) -> Result<Frame, String> {
         if !(1..=MAX_SIDE_PX).contains(&width) || !(1..=MAX_SIDE_PX).contains(&height) {
             return Err(format!(
                 "width and height: 1 to {MAX_SIDE_PX} pixels, got {width} × {height}"
@@ -212,27 +215,21 @@ impl Snapshot {
                     .unwrap_or_else(Isometry3::identity)
             })
             .collect();
-        // Bounding circles in the picture plane: (centre r, centre u, radius).
-        let circles: Vec<(f64, f64, f64)> = self
-            .bodies
-            .iter()
-            .zip(&poses)
-            .map(|(b, p)| {
-                let c = p.translation.vector;
-                (c.dot(&r), c.dot(&u), b.radius_m)
-            })
-            .collect();
-        let (lo_r, hi_r, lo_u, hi_u) = circles.iter().fold(
-            (f64::MAX, f64::MIN, f64::MAX, f64::MIN),
-            |(a, b, c, d), &(x, y, rad)| {
-                (
-                    a.min(x - rad),
-                    b.max(x + rad),
-                    c.min(y - rad),
-                    d.max(y + rad),
-                )
-            },
-        );
+        // The picture-plane box of every vertex now.
+        let (mut lo_r, mut hi_r, mut lo_u, mut hi_u) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for (b, pose) in self.bodies.iter().zip(&poses) {
+            for (tri, _) in &b.triangles {
+                for p in tri {
+                    let w = (pose * p).coords;
+                    let (x, y) = (w.dot(&r), w.dot(&u));
+                    lo_r = lo_r.min(x);
+                    hi_r = hi_r.max(x);
+                    lo_u = lo_u.min(y);
+                    hi_u = hi_u.max(y);
+                }
+            }
+        }
+        let empty = lo_r > hi_r;
         let aspect = height as f64 / width as f64;
         let (cr, cu) = match view.centre_m {
             Some(c) => {
@@ -241,19 +238,62 @@ impl Snapshot {
                 }
                 (c.dot(&r), c.dot(&u))
             }
-            None if circles.is_empty() => (0.0, 0.0),
+            None if empty => (0.0, 0.0),
             None => (0.5 * (lo_r + hi_r), 0.5 * (lo_u + hi_u)),
         };
         let span = match view.span_m {
             Some(s) if s.is_finite() && s > 0.0 && s < 1e15 => s,
             Some(s) => return Err(format!("span_m: a positive finite width, got {s}")),
-            None if circles.is_empty() => 1.0,
+            None if empty => 1.0,
             None => {
                 let need_r = (hi_r - cr).abs().max((cr - lo_r).abs());
                 let need_u = (hi_u - cu).abs().max((cu - lo_u).abs());
                 (2.0 * need_r).max(2.0 * need_u / aspect).max(1e-6) * 1.05
             }
         };
+        Ok(Frame {
+            f,
+            r,
+            u,
+            cr,
+            cu,
+            span,
+            poses,
+        })
+    }
+
+    /// The view `render` would use with `view`: the world point at the picture's centre (on
+    /// the plane through the world origin square to the view) and the width, m.
+    pub fn fit(
+        &self,
+        sim: &Simulation,
+        width: usize,
+        height: usize,
+        view: &View,
+    ) -> Result<(Vector3<f64>, f64), String> {
+        let fr = self.frame(sim, width, height, view)?;
+        Ok((fr.r * fr.cr + fr.u * fr.cu, fr.span))
+    }
+
+    /// The picture now, `height` rows of `width` RGB pixels (row-major, top row first).
+    /// Errors: a side of 0 or above [`MAX_SIDE_PX`], a view direction or up vector that is
+    /// zero, non-finite or parallel, a span that is not a positive finite number.
+    pub fn render(
+        &self,
+        sim: &Simulation,
+        width: usize,
+        height: usize,
+        view: &View,
+    ) -> Result<Vec<u8>, String> {
+        let Frame {
+            f,
+            r,
+            u,
+            cr,
+            cu,
+            span,
+            poses,
+        } = self.frame(sim, width, height, view)?;
         let px = width as f64 / span;
         let mut rgb = vec![0u8; width * height * 3];
         for c in rgb.chunks_exact_mut(3) {
