@@ -18,8 +18,9 @@ evaluation is on the default ranges.
 
 Outputs in ``--out``: ``curve.csv`` (one row per rollout: environment steps, wall-clock
 minutes, the mean return and the LATCHED fraction of the training episodes that ended in it),
-``eval.json`` (the final evaluation: seeds, outcomes, success rate), ``model.zip`` (the policy,
-~150 kB) and ``learning_curve.png``.
+``train.json``, ``eval.json`` (the evaluation: seeds, outcomes, success rate; in
+``--eval-workers`` processes), ``model.zip`` (the policy, ~150 kB) and ``learning_curve.png``.
+``--evaluate-only`` evaluates and plots a model trained earlier.
 """
 
 from __future__ import annotations
@@ -49,16 +50,20 @@ def make_env(seed: int):
     return thunk
 
 
-def evaluate(model, episodes: int, first_seed: int):
-    """Deterministic policy on seeded episodes: outcome per seed."""
+def _evaluate_seeds(args):
+    """Deterministic policy on seeded episodes (one worker): an outcome per seed."""
+    model_path, seeds, deadline = args
     import gymnasium as gym
+    from stable_baselines3 import PPO
 
     import rpod.gym  # noqa: F401
 
+    model = PPO.load(model_path, device="cpu")
     env = gym.make("rpod/Docking-v0")
     out = []
-    for k in range(episodes):
-        seed = first_seed + k
+    for seed in seeds:
+        if deadline is not None and time.time() > deadline:
+            break
         obs, _ = env.reset(seed=seed)
         ret = 0.0
         while True:
@@ -82,7 +87,20 @@ def evaluate(model, episodes: int, first_seed: int):
     return out
 
 
-def plot(curve_csv: pathlib.Path, png: pathlib.Path, eval_rate: float, title: str):
+def evaluate(model_path, episodes: int, first_seed: int, workers: int, minutes=None):
+    """The seeds first_seed … first_seed + episodes − 1, split over `workers` processes
+    (seed k to worker k mod workers); with `minutes`, the episodes finished by then."""
+    import multiprocessing as mp
+
+    seeds = list(range(first_seed, first_seed + episodes))
+    deadline = None if minutes is None else time.time() + 60.0 * minutes
+    jobs = [(str(model_path), seeds[k::workers], deadline) for k in range(workers)]
+    with mp.get_context("forkserver").Pool(workers) as pool:
+        parts = pool.map(_evaluate_seeds, jobs)
+    return sorted((r for p in parts for r in p), key=lambda r: r["seed"])
+
+
+def plot(curve_csv: pathlib.Path, png: pathlib.Path, eval_rate: float, eval_n: int, title: str):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -99,20 +117,23 @@ def plot(curve_csv: pathlib.Path, png: pathlib.Path, eval_rate: float, title: st
         for a_ in ax:
             a_.axvline(steps[k + 1] / 1e3, color="0.6", lw=0.8)
         ax[0].text(steps[k + 1] / 1e3, 3, f" stage {stage[k + 1]}", fontsize=7, color="0.4")
-    ax[0].plot(steps / 1e3, 100 * succ, color="tab:green")
-    ax[0].axhline(100 * eval_rate, color="k", ls="--", lw=1,
-                  label=f"final evaluation, 100 seeded episodes: {100 * eval_rate:.0f} %")
+    ax[0].plot(steps / 1e3, 100 * succ, color="tab:green", marker="o", ms=3,
+               label="training episodes of each rollout")
+    if np.isfinite(eval_rate):
+        ax[0].axhline(100 * eval_rate, color="k", ls="--", lw=1,
+                      label=f"evaluation, {eval_n} seeded episodes: {100 * eval_rate:.0f} %")
     ax[0].axhline(80, color="tab:red", ls=":", lw=1, label="target 80 %")
     ax[0].set_xlabel("environment steps (thousands; one step = 0.5 s)")
     ax[0].set_ylabel("training episodes LATCHED, %")
     ax[0].set_ylim(-2, 102)
     ax[0].legend(loc="lower right", fontsize=8)
-    top = ax[0].secondary_xaxis(
-        "top",
-        functions=(lambda s: np.interp(s, steps / 1e3, minutes),
-                   lambda m: np.interp(m, minutes, steps / 1e3)),
-    )
-    top.set_xlabel("wall-clock minutes")
+    if len(steps) >= 2:
+        top = ax[0].secondary_xaxis(
+            "top",
+            functions=(lambda s: np.interp(s, steps / 1e3, minutes),
+                       lambda m: np.interp(m, minutes, steps / 1e3)),
+        )
+        top.set_xlabel("wall-clock minutes")
     ax[1].plot(steps / 1e3, ret, color="tab:blue")
     ax[1].set_xlabel("environment steps (thousands)")
     ax[1].set_ylabel("mean episode return")
@@ -136,7 +157,15 @@ def main():
     ap.add_argument("--plot", type=pathlib.Path, default=None, help="copy of the plot")
     ap.add_argument("--no-curriculum", dest="curriculum", action="store_false",
                     help="train on the default start ranges from the first step")
+    ap.add_argument("--eval-workers", type=int, default=2)
+    ap.add_argument("--eval-minutes", type=float, default=None,
+                    help="stop the evaluation after this (the episodes done are reported)")
+    ap.add_argument("--evaluate-only", action="store_true",
+                    help="evaluate OUT/model.zip (trained earlier) and plot; no training")
     a = ap.parse_args()
+    if a.evaluate_only:
+        finish_evaluation(a)
+        return
 
     import torch
     from stable_baselines3 import PPO
@@ -208,35 +237,43 @@ def main():
     train_min = (time.perf_counter() - t0) / 60.0
     model.save(a.out / "model.zip")
     venv.close()
+    (a.out / "train.json").write_text(json.dumps({
+        "seed": a.seed, "n_envs": a.n_envs, "training_minutes": round(train_min, 2),
+        "env_steps": int(model.num_timesteps)}, indent=1))
+    finish_evaluation(a)
 
-    results = evaluate(model, a.eval_episodes, a.eval_seed)
-    rate = float(np.mean([r["latched"] for r in results]))
-    summary = {
-        "seed": a.seed,
-        "n_envs": a.n_envs,
-        "training_minutes": round(train_min, 2),
-        "env_steps": int(model.num_timesteps),
+
+def finish_evaluation(a):
+    """Evaluates `a.out/model.zip` on the seeded episodes, writes eval.json and the plot."""
+    train = json.loads((a.out / "train.json").read_text())
+    results = evaluate(a.out / "model.zip", a.eval_episodes, a.eval_seed, a.eval_workers,
+                       a.eval_minutes)
+    rate = float(np.mean([r["latched"] for r in results])) if results else float("nan")
+    summary = dict(train)
+    summary.update({
         "eval_first_seed": a.eval_seed,
-        "eval_episodes": a.eval_episodes,
+        "eval_episodes_asked": a.eval_episodes,
+        "eval_episodes_done": len(results),
         "latched_rate": rate,
         "outcomes": {s: sum(r["docking_state"] == s for r in results)
                      for s in sorted({r["docking_state"] for r in results})},
         "departed": sum(r["departed"] for r in results),
         "collisions": sum(r["collision"] for r in results),
-        "mean_time_to_end_s": float(np.mean([r["t_s"] for r in results])),
+        "mean_time_to_end_s": float(np.mean([r["t_s"] for r in results])) if results else None,
         "episodes": results,
-    }
+    })
     (a.out / "eval.json").write_text(json.dumps(summary, indent=1))
-    title = (f"PPO (Stable-Baselines3, CPU) on rpod/Docking-v0, seed {a.seed}: "
-             f"{model.num_timesteps} steps in {train_min:.0f} min on {a.n_envs} workers")
+    title = (f"PPO (Stable-Baselines3, CPU) on rpod/Docking-v0, seed {train['seed']}: "
+             f"{train['env_steps']} steps in {train['training_minutes']:.0f} min on "
+             f"{train['n_envs']} workers")
     png = a.out / "learning_curve.png"
-    plot(curve_path, png, rate, title)
+    plot(a.out / "curve.csv", png, rate, len(results), title)
     if a.plot is not None:
         a.plot.parent.mkdir(parents=True, exist_ok=True)
         a.plot.write_bytes(png.read_bytes())
-    print(f"trained {train_min:.1f} min, {model.num_timesteps} env steps; "
-          f"evaluation: {100 * rate:.0f} % LATCHED of {a.eval_episodes} seeded episodes "
-          f"{summary['outcomes']}")
+    print(f"trained {train['training_minutes']:.1f} min, {train['env_steps']} env steps; "
+          f"evaluation: {100 * rate:.0f} % LATCHED of {len(results)} seeded episodes "
+          f"(of {a.eval_episodes} asked) {summary['outcomes']}")
     print(f"outputs in {os.fspath(a.out)}")
 
 
