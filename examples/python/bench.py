@@ -1,7 +1,8 @@
 """Python in the loop, measured: steps per second of the flagship scene with its chaser flown
 by HillPd called every step (period = dt = 10 ms), as rpod's Rust law and as the Python twin
 (python/tests/laws.py: HillPd, the same bits), in one run; and Gymnasium steps per second of
-rpod.gym.DockingEnv with random actions (one env step = 10 scene steps).
+rpod.gym.DockingEnv with random actions (one env step = control_period_s / dt_s scene steps,
+50 at the defaults).
 
     python examples/python/bench.py [--seconds S]
 """
@@ -73,6 +74,7 @@ def main():
     print(f"  Python HillPd            {pp:10.0f} steps/s   ratio Python/Rust = {pp / rr:.3f}")
 
     env = DockingEnv()
+    spa = env._steps_per_action
     env.reset(seed=0)
     rng = np.random.default_rng(0)
     n, t0 = 0, time.perf_counter()
@@ -82,27 +84,27 @@ def main():
         if term or trunc:
             env.reset()
     dt = time.perf_counter() - t0
-    print(f"rpod/Docking-v0 random actions: {n / dt:.0f} env steps/s "
-          f"({10 * n / dt:.0f} scene steps/s; resets included)")
-    # The env's own cost: 300 zero-action env steps against the same simulation stepped
-    # 3000 scene steps directly (same start, same law inside), best of 3 each.
+    print(f"rpod/Docking-v0 random actions: {n / dt:.1f} env steps/s "
+          f"({spa * n / dt:.0f} scene steps/s; resets included)")
+    # The env's own cost: 60 zero-action env steps against the same simulation stepped
+    # 60 × spa scene steps directly (same start, same law inside), best of 3 each.
     def env_steps():
         env.reset(seed=0)
         t0 = time.perf_counter()
-        for _ in range(300):
+        for _ in range(60):
             env.step(np.zeros(6))
         return time.perf_counter() - t0
 
     def sim_steps():
         env.reset(seed=0)
         t0 = time.perf_counter()
-        env.sim.step(3000)
+        env.sim.step(60 * spa)
         return time.perf_counter() - t0
 
     te = min(env_steps() for _ in range(3))
     ts = min(sim_steps() for _ in range(3))
-    print(f"  env step = 10 scene steps: {te / 300 * 1e3:.3f} ms against {ts / 300 * 1e3:.3f} ms "
-          f"stepping the simulation directly (env/direct = {te / ts:.3f})")
+    print(f"  env step = {spa} scene steps: {te / 60 * 1e3:.3f} ms against "
+          f"{ts / 60 * 1e3:.3f} ms stepping the simulation directly (env/direct = {te / ts:.3f})")
 
 
 if __name__ == "__main__":

@@ -51,23 +51,14 @@ __version__: str
 _Path = Union[str, PathLike]
 _Vec = Union[Sequence[float], npt.NDArray[np.float64]]
 
-class SceneError(Exception):
-    """A scene that cannot be loaded; ``str(e)`` is the CLI's message."""
-
-    file: str
-    line: int
-    column: int
-    field: str
-    message: str
-
-class NumericError(Exception):
-    """A non-finite or overflowing number: names the body, the quantity and the time."""
-
-class SimulationError(Exception):
-    """The simulation cannot go on (a failure inside rpod)."""
+# Defined in ``rpod/_errors.py`` (shown as ``rpod.SceneError``, …; they pickle).
+from ._errors import NumericError as NumericError
+from ._errors import SceneError as SceneError
+from ._errors import SimulationError as SimulationError
 
 class Simulation:
-    """One scene, stepped from Python (see the module docs of ``rpod``)."""
+    """One scene, stepped from Python (see the module docs of ``rpod``). Only the thread that
+    created it may use it (any other raises ``SimulationError``)."""
 
     def __init__(
         self,
@@ -91,6 +82,10 @@ class Simulation:
     @property
     def body_names(self) -> List[str]: ...
     def state(self, name: str) -> Dict[str, npt.NDArray[np.float64]]: ...
+    def body_info(self, name: str) -> Dict[str, Any]:
+        """``name``, ``role``, ``mass_kg``, ``inertia_kg_m2`` (3×3, body axes about the centre
+        of mass), ``com_body_m``, ``bounding_radius_m``, ``ports`` ({name: {``pos_body_m``,
+        ``axis_body``}})."""
     def hill_state(self, name: str) -> npt.NDArray[np.float64]: ...
     def port_relative(
         self, chaser: str, chaser_port: str, target: str, target_port: str
@@ -116,7 +111,22 @@ class Simulation:
     def step(self, n: int = 1) -> None: ...
     def run_until(self, t_s: float) -> None: ...
     def monitor(self) -> Dict[str, Any]: ...
-    def docking(self) -> Optional[Dict[str, Any]]: ...
+    def docking(self) -> Optional[Dict[str, Any]]:
+        """Names, ``seat_depth_m``, ``mouth_radius_m``, ``state``, ``reason``, ``t_latch_s``,
+        ``spec`` (the scene's ``docking`` entry: ``magnet``, ``latch``, ``miss``, ``contact``)
+        and ``contact_model``."""
+    def render(
+        self,
+        width: int = 480,
+        height: int = 360,
+        look_dir: Optional[_Vec] = None,
+        up: Optional[_Vec] = None,
+        centre_m: Optional[_Vec] = None,
+        span_m: Optional[float] = None,
+        fit_only: bool = False,
+    ) -> Any:
+        """A ``(height, width, 3)`` ``uint8`` orthographic picture of every collider (or, with
+        ``fit_only``, the fitted view ``{"centre_m", "span_m"}``)."""
     def events(self) -> List[Dict[str, Any]]: ...
     def summary(self) -> Dict[str, Any]: ...
     def finish(self, out_dir: Optional[_Path] = None) -> Dict[str, Any]: ...

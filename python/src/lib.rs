@@ -14,8 +14,8 @@
 //!   panic raises `SimulationError`.
 
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
-use numpy::{PyArray1, PyArray2, PyReadonlyArray1};
-use pyo3::exceptions::{PyException, PyKeyError, PyTypeError, PyValueError};
+use numpy::{PyArray1, PyArray2, PyArray3, PyReadonlyArray1};
+use pyo3::exceptions::{PyKeyError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString};
 use rpod::actuation::ActuatorSpec;
@@ -25,27 +25,20 @@ use rpod::control::interface::{
 };
 use rpod::control::registry::{BodyWrench, Disturbance, DisturbanceContext, Slot};
 use rpod::control::sensor::SensorSpec;
+use std::cell::RefCell;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
+use std::thread::ThreadId;
 
-pyo3::create_exception!(
-    _rpod,
-    SceneError,
-    PyException,
-    "A scene that cannot be loaded: `.file`, `.line`, `.column` (1-based, 0 when unknown), `.field` (e.g. `bodies.chaser.mass_kg`) and `.message`; `str(e)` is the CLI's message."
-);
-pyo3::create_exception!(
-    _rpod,
-    NumericError,
-    PyException,
-    "A non-finite or overflowing number (a command, a state): the message names the body, the quantity and the simulated time."
-);
-pyo3::create_exception!(
-    _rpod,
-    SimulationError,
-    PyException,
-    "The simulation cannot go on (a failure inside rpod); the message says why."
-);
+// Defined in Python (`rpod/_errors.py`, shown as `rpod.SceneError`, …), so that they pickle by
+// name with their attributes: an error raised in a worker process (multiprocessing, Gymnasium's
+// AsyncVectorEnv) reaches the parent.
+pyo3::import_exception!(rpod._errors, SceneError);
+pyo3::import_exception!(rpod._errors, NumericError);
+pyo3::import_exception!(rpod._errors, SimulationError);
 
 /// Most steps one call may ask for (a count has a limit: 10¹² steps is 300 years at 10 ms).
 const MAX_STEPS: u64 = 1_000_000_000_000;
@@ -438,10 +431,67 @@ impl Disturbance for ApplyQueue {
     }
 }
 
-/// A simulation of one scene (see the module `rpod` docs).
-#[pyclass(name = "Simulation", module = "rpod._rpod", unsendable)]
+/// A simulation held by the thread that created it.
+type SimCell = Rc<RefCell<rpod::sim::Simulation>>;
+
+thread_local! {
+    /// The simulations this thread created, by id. A Bevy app is not `Send`: a simulation is
+    /// built, stepped and dropped on its own thread, and a handle used from another thread finds
+    /// nothing here (a `SimulationError`). One still held when its Python object is collected on
+    /// another thread is dropped with this thread's locals, on its own thread.
+    static SIMS: RefCell<HashMap<u64, SimCell>> = RefCell::new(HashMap::new());
+}
+
+static NEXT_SIM: AtomicU64 = AtomicU64::new(0);
+
+/// Staging folders in use, with the process that made them: removed by `Drop`, by `finish`, and
+/// at interpreter exit for any simulation still alive then (`atexit`). A forked child inherits
+/// the list but removes only its own folders.
+static STAGING_DIRS: Mutex<Vec<(u32, PathBuf)>> = Mutex::new(Vec::new());
+
+fn staging_register(dir: &Path) {
+    if let Ok(mut v) = STAGING_DIRS.lock() {
+        v.push((std::process::id(), dir.to_path_buf()));
+    }
+}
+
+/// Removes a staging folder and forgets it.
+fn staging_remove(dir: &Path) {
+    if let Ok(mut v) = STAGING_DIRS.lock() {
+        v.retain(|(_, d)| d != dir);
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// Removes this process's staging folders still in use (registered with `atexit` by the
+/// module; a run recorded into its own `out_dir` is not touched).
+#[pyfunction]
+fn _remove_staging_folders() {
+    let pid = std::process::id();
+    let mine: Vec<PathBuf> = match STAGING_DIRS.lock() {
+        Ok(mut v) => {
+            let (mine, rest): (Vec<_>, Vec<_>) = v.drain(..).partition(|(p, _)| *p == pid);
+            *v = rest;
+            mine.into_iter().map(|(_, d)| d).collect()
+        }
+        Err(_) => Vec::new(),
+    };
+    for d in mine {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
+/// A simulation of one scene (see the module `rpod` docs). The handle may be passed between
+/// threads, but only the thread that created it may use it: any other raises
+/// `SimulationError` (checked here rather than by PyO3's `unsendable`, which panics).
+#[pyclass(name = "Simulation", module = "rpod")]
 pub struct PySimulation {
-    sim: Option<rpod::sim::Simulation>,
+    /// Key of the simulation in its thread's `SIMS`.
+    id: u64,
+    /// The thread that created it.
+    owner: ThreadId,
+    /// Its name, for the message.
+    owner_name: String,
     scene_file: String,
     /// Where rows are being written (the constructor's `out_dir`, or a private staging folder).
     recording: Option<PathBuf>,
@@ -453,37 +503,74 @@ pub struct PySimulation {
     python_laws: usize,
     /// A step was taken.
     started: bool,
+    /// `finish()` took the simulation.
+    finished: bool,
+    /// Why the run stopped (a law's exception, a non-finite number): no further step, and no
+    /// summary written as if the run were whole.
+    stopped: Option<String>,
+    /// The scene's triangles for `render` (built at the first picture).
+    snapshot: Option<rpod::sim::snapshot::Snapshot>,
     applied: Option<Arc<Mutex<Vec<Applied>>>>,
 }
 
-impl PySimulation {
-    fn sim(&self) -> PyResult<&rpod::sim::Simulation> {
-        self.sim.as_ref().ok_or_else(|| {
-            SimulationError::new_err("this simulation has finished (finish() was called)")
-        })
+fn finished_error() -> PyErr {
+    SimulationError::new_err("this simulation has finished (finish() was called)")
+}
+
+impl Drop for PySimulation {
+    fn drop(&mut self) {
+        // On its own thread the simulation goes now (its files closed before its staging folder
+        // is removed); elsewhere it stays in its thread's locals until that thread ends.
+        if std::thread::current().id() == self.owner {
+            let sim = SIMS
+                .try_with(|m| m.try_borrow_mut().ok().and_then(|mut m| m.remove(&self.id)))
+                .ok()
+                .flatten();
+            drop(sim);
+        }
+        if self.staging
+            && let Some(dir) = self.recording.take()
+        {
+            staging_remove(&dir);
+        }
     }
-    fn sim_mut(&mut self) -> PyResult<&mut rpod::sim::Simulation> {
-        self.sim.as_mut().ok_or_else(|| {
-            SimulationError::new_err("this simulation has finished (finish() was called)")
-        })
+}
+
+impl PySimulation {
+    /// The simulation, on its own thread.
+    fn cell(&self) -> PyResult<SimCell> {
+        if std::thread::current().id() != self.owner {
+            let here = Python::attach(python_thread_name);
+            return Err(SimulationError::new_err(format!(
+                "this Simulation belongs to thread {:?}, which created it; it was used from thread {:?}. A simulation (a Bevy app) cannot move between threads: create one in each thread that steps it",
+                self.owner_name, here
+            )));
+        }
+        if self.finished {
+            return Err(finished_error());
+        }
+        SIMS.try_with(|m| m.try_borrow().ok().and_then(|m| m.get(&self.id).cloned()))
+            .ok()
+            .flatten()
+            .ok_or_else(finished_error)
+    }
+    /// Runs `f` on the simulation (its own thread only).
+    fn with<T>(&self, f: impl FnOnce(&rpod::sim::Simulation) -> PyResult<T>) -> PyResult<T> {
+        let cell = self.cell()?;
+        let sim = cell.try_borrow().map_err(|_| busy_error())?;
+        f(&sim)
+    }
+    /// Runs `f` on the simulation, mutably (its own thread only).
+    fn with_mut<T>(
+        &self,
+        f: impl FnOnce(&mut rpod::sim::Simulation) -> PyResult<T>,
+    ) -> PyResult<T> {
+        let cell = self.cell()?;
+        let mut sim = cell.try_borrow_mut().map_err(|_| busy_error())?;
+        f(&mut sim)
     }
     fn body_index(&self, name: &str) -> PyResult<usize> {
-        let sim = self.sim()?;
-        sim.controllers()
-            .info
-            .iter()
-            .position(|b| b.name == name)
-            .ok_or_else(|| {
-                PyKeyError::new_err(format!(
-                    "no body named {name:?} in the scene (bodies: {})",
-                    sim.controllers()
-                        .info
-                        .iter()
-                        .map(|b| b.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ))
-            })
+        self.with(|sim| body_index_in(sim, name))
     }
     fn start_recording(&mut self) -> PyResult<()> {
         if self.recording.is_some() || !self.record {
@@ -497,14 +584,20 @@ impl PySimulation {
             std::process::id(),
             STAGING.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
         ));
-        self.begin(&dir)?;
+        staging_register(&dir);
         self.staging = true;
-        Ok(())
+        let begun = self.begin(&dir);
+        if begun.is_err() {
+            self.staging = false;
+            staging_remove(&dir);
+        }
+        begun
     }
     fn begin(&mut self, dir: &Path) -> PyResult<()> {
-        let sim = self.sim_mut()?;
-        guarded("recording", || sim.record_to(dir))?.map_err(|e| {
-            pyo3::exceptions::PyOSError::new_err(format!("cannot write {}: {e}", dir.display()))
+        self.with_mut(|sim| {
+            guarded("recording", || sim.record_to(dir))?.map_err(|e| {
+                pyo3::exceptions::PyOSError::new_err(format!("cannot write {}: {e}", dir.display()))
+            })
         })?;
         self.recording = Some(dir.to_path_buf());
         Ok(())
@@ -517,6 +610,13 @@ impl PySimulation {
                 "at most {MAX_STEPS} steps per call, got {n}"
             )));
         }
+        // Refused from another thread before anything starts (recording included).
+        let cell = self.cell()?;
+        if let Some(why) = &self.stopped {
+            return Err(SimulationError::new_err(format!(
+                "the run stopped: {why}; it cannot go on (make a new Simulation)"
+            )));
+        }
         self.start_recording()?;
         self.started = true;
         let chunk = if self.python_laws > 0 { 1 } else { 10_000 };
@@ -524,14 +624,28 @@ impl PySimulation {
         let mut left = n;
         while left > 0 {
             let k = left.min(chunk);
-            let sim = self.sim_mut()?;
-            guarded("step", || sim.step(k))?;
-            left -= k;
-            if let Some(e) = errors.lock().ok().and_then(|mut s| s.take()) {
-                return Err(e);
-            }
-            if let Some(trip) = sim.guard_trip() {
-                return Err(NumericError::new_err(trip.to_string()));
+            {
+                let mut sim = cell.try_borrow_mut().map_err(|_| busy_error())?;
+                let sim = &mut *sim;
+                let t_before = sim.t_s();
+                let stepped = guarded("step", || sim.step(k));
+                if let Err(e) = stepped {
+                    self.stopped = Some(format!("at t = {t_before} s, {e}"));
+                    return Err(e);
+                }
+                left -= k;
+                if let Some(e) = errors.lock().ok().and_then(|mut s| s.take()) {
+                    let what: String = e.to_string().chars().take(500).collect();
+                    self.stopped = Some(format!(
+                        "at t = {} s, a Python law raised {what}",
+                        sim.t_s()
+                    ));
+                    return Err(e);
+                }
+                if let Some(trip) = sim.guard_trip() {
+                    self.stopped = Some(trip.to_string());
+                    return Err(NumericError::new_err(trip.to_string()));
+                }
             }
             if (n - left) % 10_000 < k {
                 py.check_signals()?;
@@ -539,6 +653,39 @@ impl PySimulation {
         }
         Ok(())
     }
+}
+
+/// The Python name of the calling thread (`threading.current_thread().name`).
+fn python_thread_name(py: Python<'_>) -> String {
+    py.import("threading")
+        .and_then(|t| t.call_method0("current_thread"))
+        .and_then(|t| t.getattr("name"))
+        .and_then(|n| n.extract::<String>())
+        .unwrap_or_else(|_| "unknown".into())
+}
+
+fn busy_error() -> PyErr {
+    SimulationError::new_err(
+        "this simulation is in use (called from inside one of its own laws or callbacks)",
+    )
+}
+
+fn body_index_in(sim: &rpod::sim::Simulation, name: &str) -> PyResult<usize> {
+    sim.controllers()
+        .info
+        .iter()
+        .position(|b| b.name == name)
+        .ok_or_else(|| {
+            PyKeyError::new_err(format!(
+                "no body named {name:?} in the scene (bodies: {})",
+                sim.controllers()
+                    .info
+                    .iter()
+                    .map(|b| b.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+        })
 }
 
 static STAGING: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
@@ -595,8 +742,22 @@ impl PySimulation {
             rpod::sim::Simulation::from_file(&scene, &overrides)
         })?;
         let sim = built.map_err(|e| scene_error(py, &e))?;
+        let id = NEXT_SIM.fetch_add(1, Ordering::Relaxed);
+        SIMS.try_with(|m| {
+            m.try_borrow_mut()
+                .map(|mut m| m.insert(id, Rc::new(RefCell::new(sim))))
+                .is_ok()
+        })
+        .ok()
+        .filter(|ok| *ok)
+        .ok_or_else(|| SimulationError::new_err("this thread is shutting down"))?;
         let mut s = PySimulation {
-            sim: Some(sim),
+            id,
+            owner: std::thread::current().id(),
+            owner_name: python_thread_name(py),
+            finished: false,
+            stopped: None,
+            snapshot: None,
             scene_file: scene.display().to_string(),
             recording: None,
             staging: false,
@@ -616,31 +777,31 @@ impl PySimulation {
     /// Simulated time, s.
     #[getter]
     fn t_s(&self) -> PyResult<f64> {
-        Ok(self.sim()?.t_s())
+        self.with(|s| Ok(s.t_s()))
     }
 
     /// Completed steps.
     #[getter]
     fn steps(&self) -> PyResult<u64> {
-        Ok(self.sim()?.steps())
+        self.with(|s| Ok(s.steps()))
     }
 
     /// The scene's fixed step, s.
     #[getter]
     fn dt_s(&self) -> PyResult<f64> {
-        Ok(self.sim()?.scene.dt_s)
+        self.with(|s| Ok(s.scene.dt_s))
     }
 
     /// The scene's duration, s.
     #[getter]
     fn duration_s(&self) -> PyResult<f64> {
-        Ok(self.sim()?.scene.duration_s)
+        self.with(|s| Ok(s.scene.duration_s))
     }
 
     /// The scene's name.
     #[getter]
     fn name(&self) -> PyResult<String> {
-        Ok(self.sim()?.scene.name.clone())
+        self.with(|s| Ok(s.scene.name.clone()))
     }
 
     /// The scene file.
@@ -652,21 +813,65 @@ impl PySimulation {
     /// Body names, scene order.
     #[getter]
     fn body_names(&self) -> PyResult<Vec<String>> {
-        Ok(self
-            .sim()?
-            .controllers()
-            .info
-            .iter()
-            .map(|b| b.name.clone())
-            .collect())
+        self.with(|s| {
+            Ok(s.controllers()
+                .info
+                .iter()
+                .map(|b| b.name.clone())
+                .collect())
+        })
+    }
+
+    /// A body's constant parameters: `mass_kg`, `inertia_kg_m2` (3×3 about the centre of
+    /// mass, body axes), `com_body_m` (centre of mass in the body frame), `bounding_radius_m`
+    /// (a sphere about the centre of mass holding every part), `role` and `ports`
+    /// ({name: {`pos_body_m`, `axis_body`}}: origin and unit outward axis, body frame).
+    fn body_info<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyDict>> {
+        let b = self.body_index(name)?;
+        let cell = self.cell()?;
+        let sim = cell.try_borrow().map_err(|_| busy_error())?;
+        let info = &sim.controllers().info[b];
+        let d = PyDict::new(py);
+        d.set_item("name", info.name.as_str())?;
+        d.set_item("role", format!("{:?}", info.role))?;
+        d.set_item("mass_kg", info.mass_kg)?;
+        d.set_item("inertia_kg_m2", mat3(py, &info.inertia_kg_m2)?)?;
+        d.set_item("com_body_m", vec3(py, &info.com_body_m))?;
+        // Radius of a sphere about the centre of mass holding every part (the colliders).
+        let radius = sim
+            .scene
+            .bodies
+            .get(b)
+            .map(|spec| {
+                rpod::scene::parts::expand_body(spec)
+                    .iter()
+                    .map(|pc| {
+                        (pc.pose_body.translation.vector - info.com_body_m).norm()
+                            + pc.shape.bounding_radius_m()
+                    })
+                    .fold(0.0, f64::max)
+            })
+            .unwrap_or(0.0);
+        d.set_item("bounding_radius_m", radius)?;
+        let ports = PyDict::new(py);
+        for (n, o, a) in &info.ports {
+            let p = PyDict::new(py);
+            p.set_item("pos_body_m", vec3(py, o))?;
+            p.set_item("axis_body", vec3(py, a))?;
+            ports.set_item(n.as_str(), p)?;
+        }
+        d.set_item("ports", ports)?;
+        Ok(d)
     }
 
     /// A body's state, world frame: `pos_m`, `vel_m_s` (centre of mass), `quat_wxyz` (body →
     /// world), `omega_rad_s` (world components).
     fn state<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyDict>> {
         self.body_index(name)?;
-        let s = self.sim()?.body(name).ok_or_else(|| {
-            SimulationError::new_err(format!("body {name:?} has no state (internal)"))
+        let s = self.with(|s| {
+            s.body(name).ok_or_else(|| {
+                SimulationError::new_err(format!("body {name:?} has no state (internal)"))
+            })
         })?;
         let d = PyDict::new(py);
         d.set_item("pos_m", vec3(py, &s.pos_m))?;
@@ -681,7 +886,8 @@ impl PySimulation {
     /// in the rotating frame), as the trajectory's `NAME.hill_*` columns. Orbit scenes only.
     fn hill_state<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyArray1<f64>>> {
         self.body_index(name)?;
-        let sim = self.sim()?;
+        let cell = self.cell()?;
+        let sim = cell.try_borrow().map_err(|_| busy_error())?;
         let (r, v) = sim.reference_state().ok_or_else(|| {
             PyValueError::new_err("hill_state: the scene is not in orbit (no reference orbit)")
         })?;
@@ -707,7 +913,8 @@ impl PySimulation {
         target_port: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
         let (a, b) = (self.body_index(chaser)?, self.body_index(target)?);
-        let sim = self.sim()?;
+        let cell = self.cell()?;
+        let sim = cell.try_borrow().map_err(|_| busy_error())?;
         let info = &sim.controllers().info;
         let pa = info[a].port(chaser_port).ok_or_else(|| {
             PyKeyError::new_err(format!("body {chaser:?} has no port {chaser_port:?}"))
@@ -766,8 +973,10 @@ impl PySimulation {
         };
         if self.applied.is_none() {
             let q = Arc::new(Mutex::new(Vec::new()));
-            let sim = self.sim_mut()?;
-            sim.add_disturbance(Box::new(ApplyQueue { queue: q.clone() }));
+            self.with_mut(|sim| {
+                sim.add_disturbance(Box::new(ApplyQueue { queue: q.clone() }));
+                Ok(())
+            })?;
             self.applied = Some(q);
         }
         if let Some(q) = &self.applied
@@ -800,6 +1009,8 @@ impl PySimulation {
         ports: Option<(String, String)>,
         columns: Option<Vec<String>>,
     ) -> PyResult<usize> {
+        // Refused from another thread (or after finish) before anything else.
+        self.cell()?;
         if !func.is_callable() {
             return Err(PyTypeError::new_err(
                 "add_controller: `func` must be callable (obs -> command dict)",
@@ -812,7 +1023,7 @@ impl PySimulation {
         }
         let b = self.body_index(body)?;
         let t = target.map(|t| self.body_index(t)).transpose()?;
-        let dt = self.sim()?.scene.dt_s;
+        let dt = self.with(|s| Ok(s.scene.dt_s))?;
         let ratio = period_s / dt;
         let n = ratio.round();
         if !period_s.is_finite() || !(1.0..=1e12).contains(&n) || (ratio - n).abs() > 1e-9 * ratio {
@@ -845,21 +1056,22 @@ impl PySimulation {
         // scene's controller entry).
         let ports = match (ports, target) {
             (Some(p), _) => Some(p),
-            (None, Some(t)) => self
-                .sim()?
-                .app
-                .world()
-                .get_resource::<rpod::sim::docking::Docking>()
-                .and_then(|k| {
-                    let s = &k.spec;
-                    if s.chaser == body && s.target == t {
-                        Some((s.chaser_port.clone(), s.target_port.clone()))
-                    } else if s.target == body && s.chaser == t {
-                        Some((s.target_port.clone(), s.chaser_port.clone()))
-                    } else {
-                        None
-                    }
-                }),
+            (None, Some(t)) => self.with(|sim| {
+                Ok(sim
+                    .app
+                    .world()
+                    .get_resource::<rpod::sim::docking::Docking>()
+                    .and_then(|k| {
+                        let s = &k.spec;
+                        if s.chaser == body && s.target == t {
+                            Some((s.chaser_port.clone(), s.target_port.clone()))
+                        } else if s.target == body && s.chaser == t {
+                            Some((s.target_port.clone(), s.chaser_port.clone()))
+                        } else {
+                            None
+                        }
+                    }))
+            })?,
             (None, None) => None,
         };
         let columns = columns.unwrap_or_default();
@@ -898,10 +1110,10 @@ impl PySimulation {
             ports,
             law: Box::new(law),
         };
-        let sim = self.sim_mut()?;
-        let k = sim
-            .add_controller(slot)
-            .map_err(|e| PyValueError::new_err(format!("add_controller: {e}")))?;
+        let k = self.with_mut(|sim| {
+            sim.add_controller(slot)
+                .map_err(|e| PyValueError::new_err(format!("add_controller: {e}")))
+        })?;
         self.python_laws += 1;
         Ok(k)
     }
@@ -919,13 +1131,71 @@ impl PySimulation {
                 "run_until: t_s must be finite, got {t_s}"
             )));
         }
-        let sim = self.sim()?;
-        let now = sim.t_s();
+        let (now, n) = self.with(|sim| {
+            let now = sim.t_s();
+            Ok((now, sim.steps_for((t_s - now).max(0.0))))
+        })?;
         if t_s <= now {
             return Ok(());
         }
-        let n = sim.steps_for(t_s - now);
         self.advance(py, n)
+    }
+
+    /// A picture of every body's full geometry now (the colliders the contacts and the monitor
+    /// use), orthographic, as a `(height, width, 3)` `uint8` RGB array: the camera looks along
+    /// `look_dir` (world frame) with `up` upward, centred on `centre_m` (default: the middle of
+    /// the parts) over `span_m` metres of width (default: every part fits). Flat-shaded by
+    /// the angle of each face to the view; a picture, not a measurement.
+    /// With `fit_only=True` nothing is drawn: the view it would use, `{"centre_m", "span_m"}`
+    /// (pass them back to keep a framing fixed while the bodies move).
+    #[pyo3(signature = (width=480, height=360, look_dir=None, up=None, centre_m=None, span_m=None, fit_only=false))]
+    #[allow(clippy::too_many_arguments)]
+    fn render<'py>(
+        &mut self,
+        py: Python<'py>,
+        width: usize,
+        height: usize,
+        look_dir: Option<Bound<'_, PyAny>>,
+        up: Option<Bound<'_, PyAny>>,
+        centre_m: Option<Bound<'_, PyAny>>,
+        span_m: Option<f64>,
+        fit_only: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let look_dir = match look_dir {
+            Some(v) => extract_vec3(&v, "look_dir")?,
+            None => Vector3::new(0.0, 1.0, 0.0),
+        };
+        let up = match up {
+            Some(v) => extract_vec3(&v, "up")?,
+            None => Vector3::new(0.0, 0.0, 1.0),
+        };
+        let centre_m = centre_m.map(|v| extract_vec3(&v, "centre_m")).transpose()?;
+        let view = rpod::sim::snapshot::View {
+            look_dir,
+            up,
+            centre_m,
+            span_m,
+        };
+        let cell = self.cell()?;
+        let sim = cell.try_borrow().map_err(|_| busy_error())?;
+        let snap = self
+            .snapshot
+            .get_or_insert_with(|| rpod::sim::snapshot::Snapshot::new(&sim));
+        if fit_only {
+            let (c, span) = snap
+                .fit(&sim, width, height, &view)
+                .map_err(|e| PyValueError::new_err(format!("render: {e}")))?;
+            let d = PyDict::new(py);
+            d.set_item("centre_m", vec3(py, &c))?;
+            d.set_item("span_m", span)?;
+            return Ok(d.into_any());
+        }
+        let rgb = snap
+            .render(&sim, width, height, &view)
+            .map_err(|e| PyValueError::new_err(format!("render: {e}")))?;
+        numpy::ndarray::Array3::from_shape_vec((height, width, 3), rgb)
+            .map(|a| PyArray3::from_owned_array(py, a).into_any())
+            .map_err(|e| SimulationError::new_err(format!("render: {e}")))
     }
 
     /// The monitor now: `min_distance_m` and `closest_parts` (the closest part pair at the
@@ -933,7 +1203,8 @@ impl PySimulation {
     /// `verdict`, `worst_margin`, …, in its unit), the docking state and the contacts in
     /// progress.
     fn monitor<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let sim = self.sim()?;
+        let cell = self.cell()?;
+        let sim = cell.try_borrow().map_err(|_| busy_error())?;
         let m = sim.monitor();
         let d = PyDict::new(py);
         let name = |b: usize, p: usize| {
@@ -996,9 +1267,13 @@ impl PySimulation {
 
     /// The scene's docking mechanism, or None: `chaser`, `chaser_port`, `target`,
     /// `target_port`, `seat_depth_m` (chaser port above the target port when seated, m),
-    /// `state`, `reason`, `t_latch_s`.
+    /// `mouth_radius_m`, `state`, `reason`, `t_latch_s`, `spec` (the scene's whole `docking`
+    /// entry as a dict: `magnet` (`f0_n`, `g0_m`, `max_force_n`, `activation_distance_m`, …),
+    /// `latch` (`axial_tolerance_m`, `lateral_tolerance_m`, `angle_tolerance_deg`, `dwell_s`,
+    /// `break_force_n`), `miss`, `contact`) and `contact_model` (its description).
     fn docking<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        let sim = self.sim()?;
+        let cell = self.cell()?;
+        let sim = cell.try_borrow().map_err(|_| busy_error())?;
         let Some(k) = sim
             .app
             .world()
@@ -1015,19 +1290,24 @@ impl PySimulation {
         d.set_item("state", k.state.name())?;
         d.set_item("reason", k.reason.as_str())?;
         d.set_item("t_latch_s", k.t_latch_s)?;
+        d.set_item("mouth_radius_m", k.spec.mouth_radius_m)?;
+        let spec =
+            serde_json::to_string(&k.spec).map_err(|e| SimulationError::new_err(e.to_string()))?;
+        d.set_item("spec", json_loads(py, &spec)?)?;
+        d.set_item("contact_model", rpod::contact::describe(&k.spec.contact))?;
         Ok(Some(d))
     }
 
     /// Every event so far, as dicts (`t_s`, `kind`, details), as in `events.jsonl`.
     fn events<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let ev = self.sim()?.events();
+        let ev = self.with(|s| Ok(s.events()))?;
         let s = serde_json::to_string(&ev).map_err(|e| SimulationError::new_err(e.to_string()))?;
         json_loads(py, &s)
     }
 
     /// The run summary so far (what `summary.json` would hold now), as a dict.
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let s = self.sim()?.summary();
+        let s = self.with(|s| Ok(s.summary()))?;
         json_loads(py, &s.to_string())
     }
 
@@ -1041,6 +1321,31 @@ impl PySimulation {
         py: Python<'py>,
         out_dir: Option<PathBuf>,
     ) -> PyResult<Bound<'py, PyAny>> {
+        // Refused from another thread, or a second time, before anything is written.
+        let cell = self.cell()?;
+        if Rc::strong_count(&cell) > 2 {
+            return Err(busy_error());
+        }
+        drop(cell);
+        if let Some(why) = &self.stopped {
+            // Rows written so far stay in the constructor's out_dir as `NAME.partial` (no
+            // summary.json: the output contract's mark of a whole run), the simulation is
+            // dropped (its files closed, the folder's lock released); a staging folder goes.
+            let sim = SIMS
+                .try_with(|m| m.try_borrow_mut().ok().and_then(|mut m| m.remove(&self.id)))
+                .ok()
+                .flatten();
+            drop(sim);
+            self.finished = true;
+            if self.staging
+                && let Some(dir) = self.recording.take()
+            {
+                staging_remove(&dir);
+            }
+            return Err(SimulationError::new_err(format!(
+                "finish: the run stopped ({why}); no summary is written as if it were whole"
+            )));
+        }
         if self.record {
             self.start_recording()?;
         }
@@ -1062,9 +1367,13 @@ impl PySimulation {
                 out.display()
             )));
         }
-        let sim = self.sim.take().ok_or_else(|| {
-            SimulationError::new_err("this simulation has finished (finish() was called)")
-        })?;
+        let cell = SIMS
+            .try_with(|m| m.try_borrow_mut().ok().and_then(|mut m| m.remove(&self.id)))
+            .ok()
+            .flatten()
+            .ok_or_else(finished_error)?;
+        self.finished = true;
+        let sim = Rc::try_unwrap(cell).map_err(|_| busy_error())?.into_inner();
         let summary = guarded("finish", move || sim.finish())?.map_err(|e| {
             pyo3::exceptions::PyOSError::new_err(format!("writing the outputs: {e}"))
         })?;
@@ -1075,7 +1384,7 @@ impl PySimulation {
                 Some(out) => move_outputs(&rec, out),
                 None => Ok(()),
             };
-            let _ = std::fs::remove_dir_all(&rec);
+            staging_remove(&rec);
             moved.map_err(|e| {
                 pyo3::exceptions::PyOSError::new_err(format!(
                     "writing the outputs into {}: {e}",
@@ -1089,14 +1398,16 @@ impl PySimulation {
     }
 
     fn __repr__(&self) -> String {
-        match &self.sim {
-            Some(s) => format!(
-                "rpod.Simulation({:?}, t_s={}, steps={})",
-                self.scene_file,
-                s.t_s(),
-                s.steps()
-            ),
-            None => format!("rpod.Simulation({:?}, finished)", self.scene_file),
+        if std::thread::current().id() != self.owner {
+            return format!(
+                "rpod.Simulation({:?}, owned by thread {:?})",
+                self.scene_file, self.owner_name
+            );
+        }
+        match self.with(|s| Ok((s.t_s(), s.steps()))) {
+            Ok((t, n)) => format!("rpod.Simulation({:?}, t_s={t}, steps={n})", self.scene_file),
+            Err(_) if self.finished => format!("rpod.Simulation({:?}, finished)", self.scene_file),
+            Err(_) => format!("rpod.Simulation({:?}, in use)", self.scene_file),
         }
     }
 }
@@ -1137,6 +1448,11 @@ fn json_loads<'py>(py: Python<'py>, s: &str) -> PyResult<Bound<'py, PyAny>> {
 #[pymodule]
 fn _rpod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PySimulation>()?;
+    m.add_function(wrap_pyfunction!(_remove_staging_folders, m)?)?;
+    // Staging folders of simulations still alive at exit are removed then.
+    m.py()
+        .import("atexit")?
+        .call_method1("register", (m.getattr("_remove_staging_folders")?,))?;
     m.add("SceneError", m.py().get_type::<SceneError>())?;
     m.add("NumericError", m.py().get_type::<NumericError>())?;
     m.add("SimulationError", m.py().get_type::<SimulationError>())?;

@@ -35,6 +35,7 @@ pub mod monitor;
 pub mod motion;
 pub mod output;
 pub mod overlap;
+pub mod snapshot;
 
 use crate::guarantee::{BodyView, Guarantee, GuaranteeStatus, MonitorView, PairDistance};
 use crate::scene::{BodyRole, PartRole};
