@@ -343,8 +343,11 @@ fn trials(cmd: TrialsCmd) -> ExitCode {
                 st.ran as f64 / st.wall_s.max(1e-9),
                 st.steps as f64 / st.wall_s.max(1e-9)
             );
-            if let Ok(text) = std::fs::read_to_string(out.join("summary.json"))
-                && let Ok(v) = serde_json::from_str::<serde_json::Value>(&text)
+            if let Ok(text) = rpod::report::fsio::read_regular_string(
+                &out.join("summary.json"),
+                64 << 20,
+                "summary",
+            ) && let Ok(v) = serde_json::from_str::<serde_json::Value>(&text)
             {
                 let ci = &v["success_probability_95ci_wilson"];
                 let what = if v["capture_probability"].is_null() {
@@ -693,6 +696,15 @@ fn default_out(name: &str) -> PathBuf {
 
 fn reproduce(name: Option<String>, out: &std::path::Path) -> ExitCode {
     let names: Vec<String> = match name {
+        // An unknown name (a path among them) is refused before any folder is made.
+        Some(n) if !rpod::reproduce::PAPERS.contains(&n.as_str()) => {
+            eprintln!(
+                "error: unknown paper `{}`; known: {}",
+                n.escape_debug(),
+                rpod::reproduce::PAPERS.join(", ")
+            );
+            return ExitCode::from(2);
+        }
         Some(n) => vec![n],
         None => rpod::reproduce::PAPERS
             .iter()
@@ -716,9 +728,13 @@ fn reproduce(name: Option<String>, out: &std::path::Path) -> ExitCode {
             failed = true;
             continue;
         }
-        let claims = std::fs::read_to_string(dir.join("claims.json"))
-            .ok()
-            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+        let claims = rpod::report::fsio::read_regular_string(
+            &dir.join("claims.json"),
+            64 << 20,
+            "claims table",
+        )
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
         bar.suspend(|| {
             for c in claims
                 .as_ref()

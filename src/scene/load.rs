@@ -169,8 +169,9 @@ fn whole_file_error(file: &str, message: String) -> SceneError {
 pub fn read_text(path: &Path, what: &str) -> Result<String, SceneError> {
     use std::io::Read;
     let file = path.display().to_string();
-    let f = std::fs::File::open(path)
-        .map_err(|e| whole_file_error(&file, format!("cannot read the {what}: {e}")))?;
+    // A FIFO, socket or device is refused before anything is read (no hang, no endless read).
+    let f = crate::report::fsio::open_regular(path, what)
+        .map_err(|e| whole_file_error(&file, e.to_string()))?;
     let mut bytes = Vec::new();
     f.take(MAX_FILE_BYTES as u64 + 1)
         .read_to_end(&mut bytes)

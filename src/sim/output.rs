@@ -75,12 +75,14 @@ impl FolderLock {
         use std::io::{Read, Seek};
         std::fs::create_dir_all(dir)?;
         let path = dir.join(".rpod.lock");
-        let mut file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(&path)?;
+        // A link planted at `.rpod.lock` is refused, not followed (truncating its target).
+        let mut file = crate::report::fsio::open_write_nofollow(
+            &path,
+            std::fs::OpenOptions::new()
+                .read(true)
+                .create(true)
+                .truncate(false),
+        )?;
         match file.try_lock() {
             Ok(()) => {}
             Err(std::fs::TryLockError::WouldBlock) => {
@@ -150,10 +152,7 @@ pub fn safe_dir_name(name: &str) -> String {
 
 /// Creates a new file: fails if something (a file, a planted symlink) is already there.
 fn create_new(path: &Path) -> std::io::Result<File> {
-    std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(path)
+    crate::report::fsio::create_new_nofollow(path)
         .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))
 }
 
