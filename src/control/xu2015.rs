@@ -1219,7 +1219,7 @@ mod tests {
     /// Independent reference for PD: with the reference constant, the quasi-static error of
     /// m_nom[−k_p e − k_d ė]/m_c = F_t/m_t is e_i = (F_t,i/m_t)·m_c/(m_nom k_p); the dynamic
     /// correction |1 + iω k_d/k_p − ω²/k_p| − 1 ≤ 1e−3 at ω ≤ 0.1 rad/s, so the per-axis PD
-    /// peak must match F_max,i m_c/(m_t m_nom k_p) within 5 % (margin for the brief x-axis
+    /// peak must match F_max,i m_c/(m_t m_nom k_p) within 5 % (margin for the short x-axis
     /// saturation at 100 kg and the 0.1 s sampling of the peak).
     /// Findings asserted as measured (see the printed table; do not re-tune to pass):
     /// - 90 and 100 kg: ACCM is more than 10× more accurate than PD (measured ≈ 50×) at the
