@@ -1,6 +1,6 @@
 //! Guo, Song, Li (2016), "Attitude and orbit coupled control for non-cooperative rendezvous and
 //! docking", Control Theory & Applications: coupled attitude–orbit sliding-mode control with an
-//! elliptic-cissoid approach corridor (SPEC.md, P0).
+//! elliptic-cissoid approach corridor.
 //!
 //! # Model (eqs 6–28), as implemented
 //! State `x = [σ_e; r_e]` (MRP, m), in the **chaser body frame** B:
