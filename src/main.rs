@@ -123,7 +123,7 @@ enum Cmd {
     },
     /// Write an N-body swarm scene (tumbling winged spacecraft on a 20 m grid in orbit).
     Swarm {
-        /// Number of spacecraft (1 … 4096).
+        /// Number of spacecraft (1 … 64, the most bodies a scene may have).
         n: usize,
         /// Output file (default: print to stdout).
         #[arg(long)]
@@ -460,8 +460,10 @@ fn main() -> ExitCode {
             win.options(at),
         )),
         Cmd::Swarm { n, out, seed } => {
-            if !(1..=4096).contains(&n) {
-                eprintln!("error: the swarm size must be 1 … 4096, got {n}");
+            // A swarm is a scene like any other: no larger than `rpod check` accepts.
+            let max = rpod::scene::validate::MAX_BODIES;
+            if !(1..=max).contains(&n) {
+                eprintln!("error: the swarm size must be 1 … {max} (the scene limit), got {n}");
                 return ExitCode::from(2);
             }
             let text = rpod::bench::swarm_scene(n, seed);
