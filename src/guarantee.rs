@@ -25,6 +25,7 @@
 
 pub mod builtin;
 pub mod registry;
+pub mod requirements;
 
 pub use registry::{GuaranteeParams, GuaranteeSpec, register_guarantee};
 

@@ -160,10 +160,17 @@ static REGISTRY: LazyLock<RwLock<BTreeMap<String, ParamsFn>>> = LazyLock::new(||
 /// The kinds this crate registers: one line per kind.
 fn builtin() -> Vec<(&'static str, ParamsFn)> {
     use super::builtin::{ApproachConeParams, KeepOutSphereParams, MinDistanceParams};
+    use super::requirements::{
+        ClosingSpeedGateParams, KeepOutEllipsoidParams, LineOfSightParams, PassiveSafetyParams,
+    };
     vec![
         ("MinDistance", de_params::<MinDistanceParams>),
         ("KeepOutSphere", de_params::<KeepOutSphereParams>),
         ("ApproachCone", de_params::<ApproachConeParams>),
+        ("KeepOutEllipsoid", de_params::<KeepOutEllipsoidParams>),
+        ("ClosingSpeedGate", de_params::<ClosingSpeedGateParams>),
+        ("PassiveSafety", de_params::<PassiveSafetyParams>),
+        ("LineOfSight", de_params::<LineOfSightParams>),
     ]
 }
 
