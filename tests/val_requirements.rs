@@ -327,3 +327,39 @@ fn line_of_sight_from_inside_a_part_is_a_located_error() {
     assert!(e.message.contains("inside part `ball`"), "{e}");
     assert!(e.line > 0);
 }
+
+/// In the Hill frame: the chaser placed at Hill (3, −10, 0) m from the target at t = 0, an
+/// ellipsoid (5, 20, 5) m: s = √(0.6² + 0.5²), margin (s − 1)·5 m exactly (to the rounding of
+/// the Hill ↔ world conversions, 1e-9 m); judged on intervals with the Hill frame's rate bound.
+#[test]
+fn val_keep_out_ellipsoid_in_the_hill_frame() {
+    let mut sim = sim_of(&orbit_scene(
+        (3.0, -10.0, 0.0, 0.0),
+        r#"KeepOutEllipsoid(name: "koz", body: "chaser", around: "target",
+              semi_axes_m: (5.0, 20.0, 5.0), frame: Hill)"#,
+        1.0,
+        false,
+    ));
+    let want = ((0.6_f64.powi(2) + 0.5_f64.powi(2)).sqrt() - 1.0) * 5.0;
+    let m0 = sim.guarantees().status[0].last_margin;
+    assert!((m0 - want).abs() < 1e-9, "{m0} vs {want}");
+    sim.step(10);
+    let g = &sim.guarantees().status[0];
+    assert_eq!(g.judged, "interval");
+    assert_eq!(g.verdict, "violated");
+}
+
+#[test]
+fn keep_out_ellipsoid_in_hill_needs_an_orbit() {
+    let text = format!(
+        r#"Scene(name: "req", dt_s: 0.01, duration_s: 1.0, environment: FreeSpace,
+           bodies: [{}, {}],
+           guarantees: [KeepOutEllipsoid(name: "koz", body: "chaser", around: "target",
+              semi_axes_m: (5.0, 20.0, 5.0), frame: Hill)])"#,
+        body("target", BALL, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), ""),
+        body("chaser", BALL, (5.0, 0.0, 0.0), (0.0, 0.0, 0.0), ""),
+    );
+    let e = load_scene_str(&text, "req", &[]).unwrap_err();
+    assert_eq!(e.field, "guarantees.koz.frame", "{e}");
+    assert!(e.message.contains("orbit scene"), "{e}");
+}
