@@ -17,12 +17,10 @@
 //! this set keeps every one of those unambiguous without quoting. Names are unique in their
 //! list (bodies, parts of a body, ports of a body, guarantees).
 
-use super::{
-    AttitudeSpec, BodySpec, Environment, GuaranteeSpec, OrbitSpec, PartSpec, Scene, ShapeSpec, V3,
-};
+use super::{AttitudeSpec, BodySpec, Environment, OrbitSpec, PartSpec, Scene, ShapeSpec, V3};
 use crate::orbit::constants::R_EARTH_M;
 
-type Check = Result<(), (String, String)>;
+pub(crate) type Check = Result<(), (String, String)>;
 
 /// Most bodies in a scene.
 pub const MAX_BODIES: usize = 64;
@@ -118,7 +116,7 @@ pub fn num(v: f64) -> String {
     }
 }
 
-fn in_range(path: &str, v: f64, (lo, hi): (f64, f64), unit: &str) -> Check {
+pub(crate) fn in_range(path: &str, v: f64, (lo, hi): (f64, f64), unit: &str) -> Check {
     if !(v.is_finite() && v >= lo && v <= hi) {
         return fail(
             path,
@@ -163,7 +161,7 @@ fn fail(path: impl Into<String>, msg: impl Into<String>) -> Check {
     Err((path.into(), msg.into()))
 }
 
-fn positive(path: &str, v: f64, unit: &str) -> Check {
+pub(crate) fn positive(path: &str, v: f64, unit: &str) -> Check {
     if !(v.is_finite() && v > 0.0) {
         return fail(
             path,
@@ -373,91 +371,10 @@ pub fn validate(s: &Scene) -> Check {
     }
     for g in &s.guarantees {
         let p = format!("guarantees.{}", g.name());
-        let body_exists = |n: &str| s.bodies.iter().any(|b| b.name == n);
-        match g {
-            GuaranteeSpec::MinDistance { a, b, min_m, .. } => {
-                for (f, n) in [("a", a), ("b", b)] {
-                    if !body_exists(n) {
-                        return fail(format!("{p}.{f}"), format!("no body named `{n}`"));
-                    }
-                }
-                if a == b {
-                    return fail(format!("{p}.b"), "must name a different body than `a`");
-                }
-                if !(min_m.is_finite() && *min_m >= 0.0 && *min_m <= MAX_POSITION_M) {
-                    return fail(
-                        format!("{p}.min_m"),
-                        format!("must be from 0 to {MAX_POSITION_M:e} m"),
-                    );
-                }
-            }
-            GuaranteeSpec::KeepOutSphere {
-                body,
-                around,
-                radius_m,
-                ..
-            } => {
-                for (f, n) in [("body", body), ("around", around)] {
-                    if !body_exists(n) {
-                        return fail(format!("{p}.{f}"), format!("no body named `{n}`"));
-                    }
-                }
-                in_range(
-                    &format!("{p}.radius_m"),
-                    *radius_m,
-                    (f64::MIN_POSITIVE, MAX_POSITION_M),
-                    "m",
-                )?;
-            }
-            GuaranteeSpec::ApproachCone {
-                body,
-                around,
-                port,
-                half_angle_deg,
-                from_range_m,
-                to_range_m,
-                ..
-            } => {
-                for (f, n) in [("body", body), ("around", around)] {
-                    if !body_exists(n) {
-                        return fail(format!("{p}.{f}"), format!("no body named `{n}`"));
-                    }
-                }
-                if body == around {
-                    return fail(
-                        format!("{p}.around"),
-                        "must name a different body than `body`",
-                    );
-                }
-                let has_port = s
-                    .bodies
-                    .iter()
-                    .find(|b| &b.name == around)
-                    .is_some_and(|b| b.ports.iter().any(|q| &q.name == port));
-                if !has_port {
-                    return fail(
-                        format!("{p}.port"),
-                        format!("body `{around}` has no port `{port}`"),
-                    );
-                }
-                if !(half_angle_deg.is_finite() && *half_angle_deg > 0.0 && *half_angle_deg < 90.0)
-                {
-                    return fail(
-                        format!("{p}.half_angle_deg"),
-                        format!("must be an angle in (0, 90) deg, got {half_angle_deg}"),
-                    );
-                }
-                positive(&format!("{p}.from_range_m"), *from_range_m, "metres")?;
-                if !(to_range_m.is_finite() && *to_range_m >= 0.0 && to_range_m < from_range_m) {
-                    return fail(
-                        format!("{p}.to_range_m"),
-                        format!(
-                            "must be ≥ 0 m and below from_range_m ({from_range_m} m), got {to_range_m}"
-                        ),
-                    );
-                }
-            }
-        }
+        g.check(s).map_err(|e| {
+            let e = e.within(&p);
+            (e.field, e.message)
+        })?;
     }
     Ok(())
 }

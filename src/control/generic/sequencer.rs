@@ -274,7 +274,7 @@ impl LawParams for SequencerParams {
         let prefix = super::unique_prefix(ctx, "seq");
         let mut phases = Vec::with_capacity(self.phases.len());
         for (i, p) in self.phases.iter().enumerate() {
-            let mut build = |spec: &Option<LawParamsSpec>, field: &str| {
+            let build = |ctx: &mut LawContext, spec: &Option<LawParamsSpec>, field: &str| {
                 spec.as_ref()
                     .map(|s| {
                         s.params
@@ -284,8 +284,13 @@ impl LawParams for SequencerParams {
                     })
                     .transpose()
             };
-            let translation = build(&p.translation, "translation")?;
-            let attitude = build(&p.attitude, "attitude")?;
+            let translation = build(ctx, &p.translation, "translation")?;
+            // The entry's sensor feeds the translation laws (relative state); the attitude
+            // laws fly on the truth of the attitude.
+            let sensor = ctx.sensor.take();
+            let attitude = build(ctx, &p.attitude, "attitude");
+            ctx.sensor = sensor;
+            let attitude = attitude?;
             phases.push(RunningPhase {
                 name: p.name.clone(),
                 translation,
