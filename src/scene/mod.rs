@@ -166,10 +166,72 @@ pub struct LatchSpec {
     pub dwell_s: f64,
     /// The latch breaks when the joint force exceeds this, N.
     pub break_force_n: f64,
+    /// Relative rates beyond which the latch refuses to engage (default: the IDSS initial
+    /// contact conditions, see [`CaptureRates`]).
+    #[serde(default)]
+    pub capture_rates: CaptureRates,
 }
 
 fn dwell() -> f64 {
     0.2
+}
+
+/// Capture rate limits: the latch engages only when, at the end of the dwell, the relative
+/// motion of the chaser port with respect to the target port is within all three, else it
+/// stays open (the mechanism keeps waiting while seated) and an event names the rate.
+///
+/// Rates, world frame, taken at the chaser port origin p_c with a_t the target port axis:
+/// - axial: |v_rel·a_t|, v_rel the chaser's velocity at p_c less the target's material point
+///   velocity there;
+/// - lateral: |v_rel − (v_rel·a_t)·a_t|;
+/// - angular: |ω_c − ω_t| (the magnitude of the relative angular velocity vector, all axes).
+///
+/// Defaults: the International Docking System Standard's initial contact conditions as
+/// quoted in `ANCHORS.md` (closing speed ≤ 0.10 m/s, lateral rate ≤ 0.04 m/s, pitch/yaw/roll
+/// rates ≤ 0.2 °/s), applied here to the relative motion at the moment of capture. The
+/// standard bounds each angular axis at 0.2 °/s; the default bounds the vector's magnitude at
+/// √3 · 0.2 °/s ≈ 0.346 °/s, the largest magnitude the standard's per-axis box admits, so
+/// that every state the standard requires a mechanism to capture is accepted.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CaptureRates {
+    /// Largest |axial rate|, m/s.
+    #[serde(default = "CaptureRates::idss_axial")]
+    pub max_axial_rate_m_s: f64,
+    /// Largest lateral rate, m/s.
+    #[serde(default = "CaptureRates::idss_lateral")]
+    pub max_lateral_rate_m_s: f64,
+    /// Largest relative angular rate magnitude, deg/s.
+    #[serde(default = "CaptureRates::idss_angular")]
+    pub max_angular_rate_deg_s: f64,
+}
+
+impl CaptureRates {
+    /// IDSS closing speed upper bound, m/s.
+    pub const IDSS_AXIAL_M_S: f64 = 0.10;
+    /// IDSS lateral rate bound, m/s.
+    pub const IDSS_LATERAL_M_S: f64 = 0.04;
+    /// IDSS per-axis angular rate bound, deg/s.
+    pub const IDSS_ANGULAR_PER_AXIS_DEG_S: f64 = 0.2;
+    fn idss_axial() -> f64 {
+        Self::IDSS_AXIAL_M_S
+    }
+    fn idss_lateral() -> f64 {
+        Self::IDSS_LATERAL_M_S
+    }
+    fn idss_angular() -> f64 {
+        Self::IDSS_ANGULAR_PER_AXIS_DEG_S * 3f64.sqrt()
+    }
+}
+
+impl Default for CaptureRates {
+    fn default() -> Self {
+        Self {
+            max_axial_rate_m_s: Self::idss_axial(),
+            max_lateral_rate_m_s: Self::idss_lateral(),
+            max_angular_rate_deg_s: Self::idss_angular(),
+        }
+    }
 }
 
 /// Failure criteria.

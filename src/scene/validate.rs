@@ -1037,6 +1037,14 @@ fn validate_docking(s: &Scene, d: &super::DockingSpec) -> Check {
         return fail("docking.latch.dwell_s", "must be ≥ 0 s");
     }
     positive("docking.latch.break_force_n", l.break_force_n, "newtons")?;
+    let r = &l.capture_rates;
+    for (f, v, unit) in [
+        ("max_axial_rate_m_s", r.max_axial_rate_m_s, "m/s"),
+        ("max_lateral_rate_m_s", r.max_lateral_rate_m_s, "m/s"),
+        ("max_angular_rate_deg_s", r.max_angular_rate_deg_s, "deg/s"),
+    ] {
+        positive(&format!("docking.latch.capture_rates.{f}"), v, unit)?;
+    }
     positive("docking.miss.jam_time_s", d.miss.jam_time_s, "seconds")?;
     positive("docking.miss.jam_speed_m_s", d.miss.jam_speed_m_s, "m/s")?;
     positive(

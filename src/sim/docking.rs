@@ -151,6 +151,49 @@ pub struct PortGeometry {
     pub axial_rate_m_s: f64,
     /// Relative speed of the chaser port point w.r.t. the target's material point there, m/s.
     pub rel_speed_m_s: f64,
+    /// Part of that relative velocity perpendicular to the target port axis, m/s.
+    pub lateral_rate_m_s: f64,
+    /// Magnitude of the relative angular velocity |ω_c − ω_t|, deg/s.
+    pub angular_rate_deg_s: f64,
+}
+
+/// Which capture rate limit, if any, the relative motion `g` exceeds: the first of axial,
+/// lateral, angular (in that order) whose value is strictly above its limit, as an event
+/// payload (`rate`, `value`, `limit`) and a sentence naming the rate. A rate equal to its limit
+/// is accepted.
+pub fn capture_rate_violation(
+    limits: &crate::scene::CaptureRates,
+    g: &PortGeometry,
+) -> Option<(serde_json::Value, String)> {
+    [
+        (
+            "axial_rate_m_s",
+            g.axial_rate_m_s.abs(),
+            limits.max_axial_rate_m_s,
+            "m/s",
+        ),
+        (
+            "lateral_rate_m_s",
+            g.lateral_rate_m_s,
+            limits.max_lateral_rate_m_s,
+            "m/s",
+        ),
+        (
+            "angular_rate_deg_s",
+            g.angular_rate_deg_s,
+            limits.max_angular_rate_deg_s,
+            "deg/s",
+        ),
+    ]
+    .into_iter()
+    // A NaN rate is refused too.
+    .find(|(_, v, lim, _)| v.is_nan() || v > lim)
+    .map(|(name, v, lim, unit)| {
+        (
+            serde_json::json!({"rate": name, "value": v, "limit": lim}),
+            format!("latch refused: relative {name} {v:.6} {unit} > limit {lim:.6} {unit}"),
+        )
+    })
 }
 
 /// The mechanism's state and results.
@@ -195,6 +238,13 @@ pub struct Docking {
     pub armed: bool,
     /// The chaser port's axial error at the previous step, m (positive: in front of the seat).
     pub prev_axial_error_m: Option<f64>,
+    /// The rate the latch is refusing on now (`None`: not refusing); a refusal is an event when
+    /// it starts or the rate named changes.
+    pub refusing: Option<String>,
+    /// Latch refusals (events `capture_refused`) in the run.
+    pub refusals: u64,
+    /// Relative rates when the latch engaged: axial, lateral (m/s), angular (deg/s).
+    pub latch_rates: Option<[f64; 3]>,
     /// Diagnostics column indices: gap, axial, lateral, misalignment, magnet, state, joint force,
     /// joint torque.
     cols: [usize; 8],
@@ -228,6 +278,7 @@ pub fn geometry(
     // Rate of the axial error: d/dt[(p_c − p_t)·a_t] = (v_c(p_c) − v_t(p_t))·a_t
     // + (p_c − p_t)·(ω_t × a_t), which reduces to v_rel·a_t with v_rel taken at p_c.
     let axial_rate = v_rel.dot(&at);
+    let w_rel = chaser.0.omega_rad_s - target.0.omega_rad_s;
     let g = PortGeometry {
         gap_m: (pc - seat).norm(),
         axial_error_m: axial - spec.seat_depth_m,
@@ -235,6 +286,8 @@ pub fn geometry(
         misalignment_deg: ac.dot(&(-at)).clamp(-1.0, 1.0).acos().to_degrees(),
         axial_rate_m_s: axial_rate,
         rel_speed_m_s: v_rel.norm(),
+        lateral_rate_m_s: (v_rel - at * axial_rate).norm(),
+        angular_rate_deg_s: w_rel.norm().to_degrees(),
     };
     (g, pc, at)
 }
@@ -296,6 +349,9 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         last_docking_contact_s: None,
         armed: false,
         prev_axial_error_m: None,
+        refusing: None,
+        refusals: 0,
+        latch_rates: None,
         cols,
     });
     app.add_systems(
@@ -542,7 +598,26 @@ fn docking_monitor(
                         "seated: axial {:.4} m, lateral {:.4} m, misalignment {:.2}°",
                         g.axial_error_m, g.lateral_m, g.misalignment_deg
                     );
+                } else if t - dock.seated_since.unwrap_or(t) >= spec.latch.dwell_s - 1e-9
+                    && let Some((payload, why)) =
+                        capture_rate_violation(&spec.latch.capture_rates, &g)
+                {
+                    let rate = payload["rate"].as_str().unwrap_or_default().to_string();
+                    if dock.refusing.as_deref() != Some(rate.as_str()) {
+                        dock.refusals += 1;
+                        let mut payload = payload;
+                        payload["reason"] = why.clone().into();
+                        log.push(t, "capture_refused", payload);
+                        dock.refusing = Some(rate);
+                    }
+                    dock.reason = why;
                 } else if t - dock.seated_since.unwrap_or(t) >= spec.latch.dwell_s - 1e-9 {
+                    dock.refusing = None;
+                    dock.latch_rates = Some([
+                        g.axial_rate_m_s.abs(),
+                        g.lateral_rate_m_s,
+                        g.angular_rate_deg_s,
+                    ]);
                     new = Latched;
                     reason = format!(
                         "latched after {:.2} s seated (axial {:.4} m, lateral {:.4} m, misalignment {:.2}°)",
@@ -614,6 +689,7 @@ fn docking_monitor(
         }
     }
     if new != old {
+        dock.refusing = None;
         dock.state = new;
         dock.reason = reason.clone();
         log.push(
@@ -663,6 +739,11 @@ pub fn summary(dock: &Docking) -> serde_json::Value {
         "t_latch_s": dock.t_latch_s,
         "max_misalignment_in_contact_deg": dock.max_misalignment_deg,
         "peak_latch_force_n": dock.peak_joint_force_n,
+        "capture_rate_limits": dock.spec.latch.capture_rates,
+        "capture_rates_at_latch": dock.latch_rates.map(|[a, l, w]| serde_json::json!({
+            "axial_rate_m_s": a, "lateral_rate_m_s": l, "angular_rate_deg_s": w,
+        })),
+        "capture_refusals": dock.refusals,
         "final_geometry": dock.geometry,
         "contact": dock.loads,
     })
