@@ -170,6 +170,41 @@ pub struct LatchSpec {
     /// contact conditions, see [`CaptureRates`]).
     #[serde(default)]
     pub capture_rates: CaptureRates,
+    /// What holds the latched bodies: `Rigid` (the default, a rapier fixed joint) or
+    /// `Compliant((...))`, a stiff spring–damper ([`CompliantLatch`]).
+    #[serde(default)]
+    pub joint: LatchJoint,
+}
+
+/// The latch joint.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub enum LatchJoint {
+    /// A rapier fixed joint: stops the relative motion within one step, so its peak load is an
+    /// impulse over dt and depends on the step.
+    #[default]
+    Rigid,
+    /// A spring–damper between the chaser port frame and where the latch caught it in the
+    /// target's frame, integrated in f64 with the compliant contact's sub-steps (the scene's
+    /// contact must be `Compliant`): its loads converge in dt.
+    Compliant(CompliantLatch),
+}
+
+/// A compliant latch: on the chaser, at its port origin p_c, the force
+/// F = −k·Δx − c·Δv and the moment M = −k_θ·θ − c_θ·Δω, where Δx is p_c less the point where the
+/// latch caught it (carried by the target), Δv the velocity of the chaser's material point at
+/// p_c less the target's there, θ the rotation vector from the caught attitude to the present
+/// one and Δω = ω_c − ω_t (world frame); the target gets −F at p_c and −M.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CompliantLatch {
+    /// k, N/m.
+    pub stiffness_n_m: f64,
+    /// c, N·s/m.
+    pub damping_n_s_m: f64,
+    /// k_θ, N·m/rad.
+    pub rot_stiffness_nm_rad: f64,
+    /// c_θ, N·m·s/rad.
+    pub rot_damping_nm_s_rad: f64,
 }
 
 fn dwell() -> f64 {

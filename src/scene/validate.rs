@@ -1045,6 +1045,23 @@ fn validate_docking(s: &Scene, d: &super::DockingSpec) -> Check {
     ] {
         positive(&format!("docking.latch.capture_rates.{f}"), v, unit)?;
     }
+    if let super::LatchJoint::Compliant(j) = &l.joint {
+        if !matches!(d.contact, crate::contact::ContactModelSpec::Compliant(_)) {
+            return fail(
+                "docking.latch.joint",
+                "a Compliant latch is integrated with the compliant contact's sub-steps: the \
+                 docking contact must be Compliant too",
+            );
+        }
+        for (f, v, unit) in [
+            ("stiffness_n_m", j.stiffness_n_m, "N/m"),
+            ("damping_n_s_m", j.damping_n_s_m, "N·s/m"),
+            ("rot_stiffness_nm_rad", j.rot_stiffness_nm_rad, "N·m/rad"),
+            ("rot_damping_nm_s_rad", j.rot_damping_nm_s_rad, "N·m·s/rad"),
+        ] {
+            positive(&format!("docking.latch.joint.{f}"), v, unit)?;
+        }
+    }
     positive("docking.miss.jam_time_s", d.miss.jam_time_s, "seconds")?;
     positive("docking.miss.jam_speed_m_s", d.miss.jam_speed_m_s, "m/s")?;
     positive(

@@ -6,11 +6,11 @@
 //! [`crate::scene::MagnetSpec`]. Contact is real: the cone and the slot's wall pieces are rapier
 //! colliders, and the monitor says which parts touch.
 
-use super::contact_model::{CompliantContact, ImpactRecord};
+use super::contact_model::{CompliantContact, ImpactRecord, LatchSpring};
 use super::monitor::ContactState;
 use super::output::Diagnostics;
 use super::{BodyState, Clock, EventLog, Physics, SimBody, SimStep, Wrench, conv};
-use crate::scene::{DockingSpec, LoadedScene, SceneError};
+use crate::scene::{DockingSpec, LatchJoint, LoadedScene, SceneError};
 use bevy::prelude::*;
 use bevy_rapier3d::rapier::prelude as rp;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -82,6 +82,24 @@ impl DockingLoads {
         }
         self.peak_force_n = self.peak_force_n.max(f.norm());
     }
+}
+
+/// Loads of a compliant latch at the interface (the chaser port origin), from the f64
+/// spring–damper force evaluated at every sub-step.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct InterfaceLoads {
+    /// Largest force on the chaser at its port, N.
+    pub peak_force_n: f64,
+    /// When (end of the step that held it), s.
+    pub peak_force_t_s: Option<f64>,
+    /// Largest moment on the chaser about its port, N·m.
+    pub peak_moment_nm: f64,
+    /// When, s.
+    pub peak_moment_t_s: Option<f64>,
+    /// Force on the chaser at its port at the end of the last latched step, world, N.
+    pub last_force_n: [f64; 3],
+    /// Moment on the chaser about its port then, world, N·m.
+    pub last_moment_nm: [f64; 3],
 }
 
 /// Docking state.
@@ -245,6 +263,8 @@ pub struct Docking {
     pub refusals: u64,
     /// Relative rates when the latch engaged: axial, lateral (m/s), angular (deg/s).
     pub latch_rates: Option<[f64; 3]>,
+    /// A compliant latch's interface loads (absent for a rigid latch).
+    pub interface: Option<InterfaceLoads>,
     /// Diagnostics column indices: gap, axial, lateral, misalignment, magnet, state, joint force,
     /// joint torque.
     cols: [usize; 8],
@@ -352,6 +372,7 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         refusing: None,
         refusals: 0,
         latch_rates: None,
+        interface: None,
         cols,
     });
     app.add_systems(
@@ -511,6 +532,39 @@ fn docking_monitor(
     use DockState::*;
     match old {
         Missed => {}
+        Latched if dock.interface.is_some() => {
+            let ls = compliant
+                .as_deref()
+                .map(|c| c.link_step)
+                .unwrap_or_default();
+            joint_now = (ls.peak_force_n, ls.peak_moment_nm);
+            let il = dock.interface.get_or_insert_with(Default::default);
+            if ls.peak_force_n > il.peak_force_n {
+                il.peak_force_n = ls.peak_force_n;
+                il.peak_force_t_s = Some(t);
+            }
+            if ls.peak_moment_nm > il.peak_moment_nm {
+                il.peak_moment_nm = ls.peak_moment_nm;
+                il.peak_moment_t_s = Some(t);
+            }
+            il.last_force_n = ls.force_end_n.into();
+            il.last_moment_nm = ls.moment_end_nm.into();
+            dock.peak_joint_force_n = dock.peak_joint_force_n.max(ls.peak_force_n);
+            dock.loads.peak_joint_force_n = dock.peak_joint_force_n;
+            dock.loads.peak_joint_torque_nm =
+                dock.loads.peak_joint_torque_nm.max(ls.peak_moment_nm);
+            if ls.peak_force_n > spec.latch.break_force_n {
+                if let Some(c) = compliant.as_deref_mut() {
+                    c.link.latch = None;
+                    c.enabled = true;
+                }
+                new = Free;
+                reason = format!(
+                    "latch broke: joint force {:.1} N > break force {:.1} N",
+                    ls.peak_force_n, spec.latch.break_force_n
+                );
+            }
+        }
         Latched => {
             if let Some(h) = dock.joint
                 && let Some(j) = phys.world.impulse_joints.get(h)
@@ -623,9 +677,24 @@ fn docking_monitor(
                         "latched after {:.2} s seated (axial {:.4} m, lateral {:.4} m, misalignment {:.2}°)",
                         spec.latch.dwell_s, g.axial_error_m, g.lateral_m, g.misalignment_deg
                     );
-                    let joint = latch_joint(cs, cb, ts, tb);
-                    let h = phys.world.insert_impulse_joint(tb.handle, cb.handle, joint);
-                    dock.joint = Some(h);
+                    match (&spec.latch.joint, compliant.as_deref_mut()) {
+                        (LatchJoint::Compliant(j), Some(c)) => {
+                            let pt: Isometry3<f64> = ts.body_pose(&tb.com_body_m);
+                            let pc: Isometry3<f64> = cs.body_pose(&cb.com_body_m);
+                            c.link.chaser_is_b = c.indices.1 == cb.index;
+                            c.link.latch = Some(LatchSpring {
+                                spec: j.clone(),
+                                port_c_body_m: dock.ports.0.0,
+                                caught: pt.inv_mul(&pc),
+                            });
+                            dock.interface = Some(InterfaceLoads::default());
+                        }
+                        _ => {
+                            let joint = latch_joint(cs, cb, ts, tb);
+                            let h = phys.world.insert_impulse_joint(tb.handle, cb.handle, joint);
+                            dock.joint = Some(h);
+                        }
+                    }
                     dock.t_latch_s = Some(t);
                     // The latched pair is one structure: no more docking contact (the joint
                     // carries the loads, reported as joint loads).
@@ -732,7 +801,7 @@ fn latch_joint(cs: &BodyState, cb: &SimBody, ts: &BodyState, tb: &SimBody) -> rp
 
 /// The docking section of `summary.json`.
 pub fn summary(dock: &Docking) -> serde_json::Value {
-    serde_json::json!({
+    let mut v = serde_json::json!({
         "state": dock.state.name(),
         "reason": dock.reason,
         "first_docking_contact_s": dock.t_first_contact_s,
@@ -746,5 +815,11 @@ pub fn summary(dock: &Docking) -> serde_json::Value {
         "capture_refusals": dock.refusals,
         "final_geometry": dock.geometry,
         "contact": dock.loads,
-    })
+    });
+    // A compliant latch's loads at the interface (a rigid latch's are `peak_latch_force_n`
+    // and `contact.peak_joint_*`).
+    if let Some(il) = &dock.interface {
+        v["interface_loads"] = serde_json::to_value(il).unwrap_or_default();
+    }
+    v
 }
