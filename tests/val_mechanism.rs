@@ -261,3 +261,120 @@ fn val_compliant_latch_bad_input_is_located() {
     .unwrap_err();
     assert_eq!(e.field, "docking.latch.joint", "{e}");
 }
+
+/// Separation speed of the pair from the springs' energy E = ½(F + F_pre)·L shared by the
+/// two masses with zero total momentum: v_rel = √(2E/m_r), v_c = v_rel·m_t/(m_c + m_t),
+/// v_t = −v_rel·m_c/(m_c + m_t).
+fn separation_closed_form(f: f64, f_pre: f64, l: f64, m_c: f64, m_t: f64) -> (f64, f64, f64) {
+    let e = 0.5 * (f + f_pre) * l;
+    let m_r = m_c * m_t / (m_c + m_t);
+    let v_rel = (2.0 * e / m_r).sqrt();
+    (v_rel, v_rel * m_t / (m_c + m_t), -v_rel * m_c / (m_c + m_t))
+}
+
+fn check_undock(set: &[String]) {
+    let mut s = sim("undock_depart", set);
+    let sep = s.scene.docking.clone().unwrap().separation.unwrap();
+    s.step(s.steps_for(120.0));
+    let d = dock(&s);
+    assert_eq!(d.state, DockState::Released, "{}", d.reason);
+    assert_eq!(d.t_release_s, Some(2.0));
+    let (v_rel, v_c, v_t) =
+        separation_closed_form(sep.force_n, sep.preload_n, sep.stroke_m, 300.0, 800.0);
+    let (vel, t_end) = d.separation_end.expect("the springs reached their stops");
+    let c = s.body("chaser").unwrap();
+    let t = s.body("target").unwrap();
+    println!(
+        "{set:?}: springs extended at {t_end} s; relative {:.6} m/s (closed form {v_rel:.6}); chaser {:.6} m/s ({v_c:.6}), target {:.6} m/s ({v_t:.6}); centres of mass {:.2} m apart",
+        vel[0],
+        c.vel_m_s.x,
+        t.vel_m_s.x,
+        (c.pos_m - t.pos_m).norm()
+    );
+    // The separation speed: 0.5 % (the sub-steps cross the end of the stroke within 0.5 % of
+    // it, and the force there is the preload: an energy error below 0.5 %·F_pre·L/E).
+    assert!((vel[0] / v_rel - 1.0).abs() < 5e-3, "{vel:?} vs {v_rel}");
+    assert!((c.vel_m_s.x / v_c - 1.0).abs() < 5e-3);
+    assert!((t.vel_m_s.x / v_t - 1.0).abs() < 5e-3);
+    // Momentum: the springs are internal forces (rapier's f32 joint held the pair before).
+    let p = c.vel_m_s * 300.0 + t.vel_m_s * 800.0;
+    assert!(p.norm() < 1e-6 * 300.0 * v_c, "momentum {p}");
+    // Along the docking axis only.
+    assert!(c.vel_m_s.y.abs() + c.vel_m_s.z.abs() < 1e-9 && c.omega_rad_s.norm() < 1e-9);
+    // Nothing touched after the release, nothing collided, ≥ 10 m apart, every guarantee held.
+    assert_eq!(d.loads.impact_count, 0);
+    assert_eq!(d.loads.contact_duration_s, 0.0);
+    assert!(s.contacts().first_collision_s.is_none());
+    assert!(s.contacts().active.is_empty());
+    assert!(s.min_clearance_non_docking_m() > 0.0);
+    // Apart by at least 10 m: the centres of mass, less the bodies' bounding extents along the
+    // docking axis (target: 0.82 m to its port's slot face; chaser: 0.5 m bus to port plus the
+    // 0.25 m cone, and 0.8 m of bus and wings behind it are not in between; a conservative
+    // 1.6 m in all).
+    assert!((c.pos_m - t.pos_m).norm() - 1.6 > 10.0);
+    for g in &s.guarantees().status {
+        assert!(g.held, "{} violated at {:?}", g.name, g.first_violation_s);
+    }
+}
+
+#[test]
+fn val_undock_separation_speed_matches_spring_energy_and_momentum() {
+    // Rigid latch (the scene's), then the compliant latch.
+    check_undock(&[]);
+    check_undock(&[LATCH.into()]);
+}
+
+#[test]
+fn val_release_when_not_docked_is_an_event_and_bad_scenes_are_located() {
+    let mut s = sim("docking_aligned", &[]);
+    assert!(s.release_docking("test"));
+    s.step(1);
+    let ev: Vec<_> = s
+        .events()
+        .into_iter()
+        .filter(|e| e.kind == "docking_release_ignored")
+        .collect();
+    assert_eq!(ev.len(), 1);
+    assert!(
+        ev[0].data["reason"]
+            .as_str()
+            .unwrap()
+            .contains("not docked")
+    );
+    assert_ne!(dock(&s).state, DockState::Released);
+    // Scene errors: not seated at the start; bad separation springs; release without a mechanism.
+    let e = load_scene_file(
+        "scenes/undock_depart.ron".as_ref(),
+        &["bodies.chaser.initial.pos_m=(1.6, 0.0, 0.0)".into()],
+    )
+    .and_then(|l| Simulation::new(&l).map(|_| ()))
+    .unwrap_err();
+    assert_eq!(e.field, "docking.start_latched", "{e}");
+    assert!(e.message.contains("not seated"), "{e}");
+    for (set, field) in [
+        (
+            "docking.separation=Some((stroke_m: 0.0, force_n: 40.0, preload_n: 20.0))",
+            "docking.separation.stroke_m",
+        ),
+        (
+            "docking.separation=Some((stroke_m: 0.05, force_n: -1.0, preload_n: 0.0))",
+            "docking.separation.force_n",
+        ),
+        (
+            "docking.separation=Some((stroke_m: 0.05, force_n: 40.0, preload_n: 50.0))",
+            "docking.separation.preload_n",
+        ),
+        ("docking.contact=Rigid", "docking.separation"),
+    ] {
+        let e = load_scene_file("scenes/undock_depart.ron".as_ref(), &[set.into()]).unwrap_err();
+        assert_eq!(e.field, field, "{e}");
+        assert!(e.line > 0, "{e}");
+    }
+    let e = load_scene_file(
+        "scenes/undock_depart.ron".as_ref(),
+        &["docking=None".into()],
+    )
+    .and_then(|l| Simulation::new(&l).map(|_| ()))
+    .unwrap_err();
+    assert!(e.field.contains("release_docking"), "{e}");
+}

@@ -130,6 +130,30 @@ pub struct DockingSpec {
     /// values documented in [`crate::contact`]) or `Rigid` (rapier's impulses).
     #[serde(default)]
     pub contact: crate::contact::ContactModelSpec,
+    /// Start latched: the chaser must be seated within the latch tolerances at t = 0 (checked
+    /// when the scene loads); the latch closes before the first step. For undocking scenes.
+    #[serde(default)]
+    pub start_latched: bool,
+    /// Separation springs between the ports, compressed while latched, that push the vehicles
+    /// apart when the latch is released (needs the `Compliant` contact, whose sub-steps
+    /// integrate them).
+    #[serde(default)]
+    pub separation: Option<SeparationSpec>,
+}
+
+/// Separation springs (all of them together, acting along the target port axis at the chaser
+/// port origin): the force falls linearly from `force_n` at full compression to `preload_n`
+/// at the end of the stroke, where they rest on their stops. Energy released:
+/// ½·(`force_n` + `preload_n`)·`stroke_m`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SeparationSpec {
+    /// Stroke, m.
+    pub stroke_m: f64,
+    /// Force at full compression, N.
+    pub force_n: f64,
+    /// Force at the end of the stroke (the preload the stops hold), N.
+    pub preload_n: f64,
 }
 
 /// Electromagnet: attractive force F(gap) = min(F0 / (1 + gap/g0)², F_max) on the chaser port,

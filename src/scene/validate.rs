@@ -1045,6 +1045,35 @@ fn validate_docking(s: &Scene, d: &super::DockingSpec) -> Check {
     ] {
         positive(&format!("docking.latch.capture_rates.{f}"), v, unit)?;
     }
+    if let Some(sp) = &d.separation {
+        if !matches!(d.contact, crate::contact::ContactModelSpec::Compliant(_)) {
+            return fail(
+                "docking.separation",
+                "separation springs are integrated with the compliant contact's sub-steps: the \
+                 docking contact must be Compliant",
+            );
+        }
+        positive("docking.separation.stroke_m", sp.stroke_m, "metres")?;
+        if !(sp.force_n.is_finite() && sp.force_n > 0.0 && sp.force_n <= MAX_FORCE_N) {
+            return fail(
+                "docking.separation.force_n",
+                format!(
+                    "must be a positive force up to {MAX_FORCE_N:e} N, got {}",
+                    num(sp.force_n)
+                ),
+            );
+        }
+        if !(sp.preload_n.is_finite() && sp.preload_n >= 0.0 && sp.preload_n <= sp.force_n) {
+            return fail(
+                "docking.separation.preload_n",
+                format!(
+                    "must be from 0 N to force_n ({} N), got {}",
+                    num(sp.force_n),
+                    num(sp.preload_n)
+                ),
+            );
+        }
+    }
     if let super::LatchJoint::Compliant(j) = &l.joint {
         if !matches!(d.contact, crate::contact::ContactModelSpec::Compliant(_)) {
             return fail(

@@ -6,7 +6,7 @@
 //! [`crate::scene::MagnetSpec`]. Contact is real: the cone and the slot's wall pieces are rapier
 //! colliders, and the monitor says which parts touch.
 
-use super::contact_model::{CompliantContact, ImpactRecord, LatchSpring};
+use super::contact_model::{CompliantContact, ImpactRecord, LatchSpring, SeparationSpring};
 use super::monitor::ContactState;
 use super::output::Diagnostics;
 use super::{BodyState, Clock, EventLog, Physics, SimBody, SimStep, Wrench, conv};
@@ -123,6 +123,8 @@ pub enum DockState {
     Jammed,
     /// Failed: passed beside the slot, or another part collided.
     Missed,
+    /// Released from the latch by a command (undocking); final.
+    Released,
 }
 
 impl DockState {
@@ -137,6 +139,7 @@ impl DockState {
             DockState::Rebound => 5.0,
             DockState::Jammed => 6.0,
             DockState::Missed => 7.0,
+            DockState::Released => 8.0,
         }
     }
     /// The name used in events and summaries.
@@ -150,8 +153,17 @@ impl DockState {
             DockState::Rebound => "REBOUND",
             DockState::Jammed => "JAMMED",
             DockState::Missed => "MISSED",
+            DockState::Released => "RELEASED",
         }
     }
+}
+
+/// Commands to the mechanism, acted on at the start of the next mechanism step: the Sequencer
+/// (a phase with `release_docking`) and [`crate::sim::Simulation::release_docking`] push here.
+#[derive(Resource, Debug, Clone, Default)]
+pub struct DockingCommands {
+    /// Release commands not yet acted on, each with where it came from.
+    pub release: Vec<String>,
 }
 
 /// Port geometry at one instant (world frame).
@@ -265,6 +277,11 @@ pub struct Docking {
     pub latch_rates: Option<[f64; 3]>,
     /// A compliant latch's interface loads (absent for a rigid latch).
     pub interface: Option<InterfaceLoads>,
+    /// The release time, s.
+    pub t_release_s: Option<f64>,
+    /// Relative velocity of the chaser port w.r.t. the target when the separation springs
+    /// reached the end of their stroke (world, m/s), and when, s.
+    pub separation_end: Option<([f64; 3], f64)>,
     /// Diagnostics column indices: gap, axial, lateral, misalignment, magnet, state, joint force,
     /// joint torque.
     cols: [usize; 8],
@@ -342,11 +359,44 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
     ];
     let magnet_on = spec.magnet.on_at_start;
     let spec_contact = spec.contact.clone();
+    let start_latched = spec.start_latched;
+    if start_latched {
+        let state = |e: Entity| {
+            let w = app.world();
+            (w.get::<BodyState>(e).cloned(), w.get::<SimBody>(e).cloned())
+        };
+        let (e_c, e_t) = (roster.bodies[ci], roster.bodies[ti]);
+        if let ((Some(cs), Some(cb)), (Some(ts), Some(tb))) = (state(e_c), state(e_t)) {
+            let (g, _, _) = geometry(&spec, (&cs, &cb), (&ts, &tb), &ports);
+            let l = &spec.latch;
+            if !(g.axial_error_m.abs() <= l.axial_tolerance_m
+                && g.lateral_m <= l.lateral_tolerance_m
+                && g.misalignment_deg <= l.angle_tolerance_deg)
+            {
+                return Err(loaded.error_at(
+                    "docking.start_latched",
+                    format!(
+                        "the chaser is not seated at t = 0 (axial error {:.4} m, lateral {:.4} m, misalignment {:.2}°; tolerances {} m, {} m, {}°): place its port on the seat",
+                        g.axial_error_m,
+                        g.lateral_m,
+                        g.misalignment_deg,
+                        l.axial_tolerance_m,
+                        l.lateral_tolerance_m,
+                        l.angle_tolerance_deg
+                    ),
+                ));
+            }
+        }
+    }
+    app.init_resource::<DockingCommands>();
     app.insert_resource(Docking {
         spec,
         bodies: (roster.bodies[ci], roster.bodies[ti]),
         ports,
-        state: if magnet_on {
+        state: if start_latched {
+            // The latch closes at the first mechanism step ([`docking_actuate`]).
+            DockState::Latched
+        } else if magnet_on {
             DockState::Attracting
         } else {
             DockState::Free
@@ -373,6 +423,8 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         refusals: 0,
         latch_rates: None,
         interface: None,
+        t_release_s: None,
+        separation_end: None,
         cols,
     });
     app.add_systems(
@@ -384,15 +436,84 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
 }
 
 /// Actuate: the magnet's force on the chaser port and its reaction on the target.
-fn docking_actuate(mut dock: ResMut<Docking>, mut q: Query<(&SimBody, &BodyState, &mut Wrench)>) {
+/// Actuate: a latch that starts closed, release commands, and the magnet's force on the chaser
+/// port and its reaction on the target.
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it uses
+fn docking_actuate(
+    mut dock: ResMut<Docking>,
+    mut q: Query<(&SimBody, &BodyState, &mut Wrench)>,
+    clock: Res<Clock>,
+    mut phys: ResMut<Physics>,
+    mut compliant: Option<ResMut<CompliantContact>>,
+    mut cmds: ResMut<DockingCommands>,
+    mut log: ResMut<EventLog>,
+) {
     let (ce, te) = dock.bodies;
+    let t = clock.t_s();
     let [(cb, cs, _), (tb, ts, _)] = q.get_many([ce, te]).expect("docking bodies");
+    if dock.state == DockState::Latched && dock.t_latch_s.is_none() {
+        // `start_latched`: close the latch where the scene placed the chaser.
+        engage_latch(
+            &mut dock,
+            (cs, cb),
+            (ts, tb),
+            &mut phys,
+            compliant.as_deref_mut(),
+        );
+        dock.t_latch_s = Some(t);
+        dock.reason = "started latched (docking.start_latched)".into();
+    }
+    for source in std::mem::take(&mut cmds.release) {
+        if dock.state != DockState::Latched {
+            log.push(
+                t,
+                "docking_release_ignored",
+                serde_json::json!({"state": dock.state.name(), "source": source,
+                    "reason": format!("release commanded while {}: not docked", dock.state.name())}),
+            );
+            continue;
+        }
+        if let Some(h) = dock.joint.take() {
+            phys.world.impulse_joints.remove(h, true);
+        }
+        let (pc, _) = port_world(cs, &cb.com_body_m, &dock.ports.0);
+        let (pt, at) = port_world(ts, &tb.com_body_m, &dock.ports.1);
+        if let Some(c) = compliant.as_deref_mut() {
+            c.link.latch = None;
+            c.link.chaser_is_b = c.indices.1 == cb.index;
+            c.link.separation = dock.spec.separation.as_ref().map(|sp| SeparationSpring {
+                stroke_m: sp.stroke_m,
+                force_n: sp.force_n,
+                preload_n: sp.preload_n,
+                x0_m: (pc - pt).dot(&at),
+                ports_body_m: (dock.ports.0.0, dock.ports.1.0, dock.ports.1.1),
+            });
+            c.enabled = true;
+        }
+        let reason = format!(
+            "released ({source}){}",
+            if dock.spec.separation.is_some() {
+                "; separation springs pushing"
+            } else {
+                ""
+            }
+        );
+        log.push(
+            t,
+            "docking_state",
+            serde_json::json!({"from": "LATCHED", "to": "RELEASED", "reason": reason}),
+        );
+        dock.state = DockState::Released;
+        dock.reason = reason;
+        dock.t_release_s = Some(t);
+        dock.magnet_on = false;
+    }
     let (g, pc, at) = geometry(&dock.spec, (cs, cb), (ts, tb), &dock.ports);
     let m = dock.spec.magnet.clone();
     if !dock.magnet_on && m.activation_distance_m > 0.0 && g.gap_m < m.activation_distance_m {
         dock.magnet_on = true;
     }
-    let on = dock.magnet_on && dock.state != DockState::Latched;
+    let on = dock.magnet_on && !matches!(dock.state, DockState::Latched | DockState::Released);
     let f = if on {
         (m.f0_n / (1.0 + g.gap_m / m.g0_m).powi(2)).min(m.max_force_n)
     } else {
@@ -532,6 +653,21 @@ fn docking_monitor(
     use DockState::*;
     match old {
         Missed => {}
+        Released => {
+            if let Some(c) = compliant.as_deref()
+                && c.link_step.separation_ended
+            {
+                let (pc, _) = port_world(cs, &cb.com_body_m, &dock.ports.0);
+                let v = point_velocity(cs, &pc) - point_velocity(ts, &pc);
+                dock.separation_end = Some((v.into(), t));
+                log.push(
+                    t,
+                    "separation_complete",
+                    serde_json::json!({"relative_velocity_m_s": [v.x, v.y, v.z],
+                        "axial_rate_m_s": v.dot(&at)}),
+                );
+            }
+        }
         Latched if dock.interface.is_some() => {
             let ls = compliant
                 .as_deref()
@@ -677,33 +813,14 @@ fn docking_monitor(
                         "latched after {:.2} s seated (axial {:.4} m, lateral {:.4} m, misalignment {:.2}°)",
                         spec.latch.dwell_s, g.axial_error_m, g.lateral_m, g.misalignment_deg
                     );
-                    match (&spec.latch.joint, compliant.as_deref_mut()) {
-                        (LatchJoint::Compliant(j), Some(c)) => {
-                            let pt: Isometry3<f64> = ts.body_pose(&tb.com_body_m);
-                            let pc: Isometry3<f64> = cs.body_pose(&cb.com_body_m);
-                            c.link.chaser_is_b = c.indices.1 == cb.index;
-                            c.link.latch = Some(LatchSpring {
-                                spec: j.clone(),
-                                port_c_body_m: dock.ports.0.0,
-                                caught: pt.inv_mul(&pc),
-                            });
-                            dock.interface = Some(InterfaceLoads::default());
-                        }
-                        _ => {
-                            let joint = latch_joint(cs, cb, ts, tb);
-                            let h = phys.world.insert_impulse_joint(tb.handle, cb.handle, joint);
-                            dock.joint = Some(h);
-                        }
-                    }
+                    engage_latch(
+                        &mut dock,
+                        (cs, cb),
+                        (ts, tb),
+                        &mut phys,
+                        compliant.as_deref_mut(),
+                    );
                     dock.t_latch_s = Some(t);
-                    // The latched pair is one structure: no more docking contact (the joint
-                    // carries the loads, reported as joint loads).
-                    if let Some(c) = compliant.as_deref_mut() {
-                        c.enabled = false;
-                        for p in &mut c.pairs {
-                            p.in_contact = false;
-                        }
-                    }
                 }
             } else if docking_contact {
                 if old != Contact && old != Jammed {
@@ -783,6 +900,47 @@ fn docking_monitor(
     dock.geometry = g;
 }
 
+/// Closes the latch where the chaser is: a rapier fixed joint, or the compliant latch's spring.
+/// The latched pair is one structure: no more docking contact (the joint carries the loads,
+/// reported as joint loads).
+fn engage_latch(
+    dock: &mut Docking,
+    (cs, cb): (&BodyState, &SimBody),
+    (ts, tb): (&BodyState, &SimBody),
+    phys: &mut Physics,
+    compliant: Option<&mut CompliantContact>,
+) {
+    match (&dock.spec.latch.joint, compliant) {
+        (LatchJoint::Compliant(j), Some(c)) => {
+            let pt: Isometry3<f64> = ts.body_pose(&tb.com_body_m);
+            let pc: Isometry3<f64> = cs.body_pose(&cb.com_body_m);
+            c.link.chaser_is_b = c.indices.1 == cb.index;
+            c.link.latch = Some(LatchSpring {
+                spec: j.clone(),
+                port_c_body_m: dock.ports.0.0,
+                caught: pt.inv_mul(&pc),
+            });
+            dock.interface = Some(InterfaceLoads::default());
+            disable_contact(c);
+        }
+        (_, c) => {
+            let joint = latch_joint(cs, cb, ts, tb);
+            let h = phys.world.insert_impulse_joint(tb.handle, cb.handle, joint);
+            dock.joint = Some(h);
+            if let Some(c) = c {
+                disable_contact(c);
+            }
+        }
+    }
+}
+
+fn disable_contact(c: &mut CompliantContact) {
+    c.enabled = false;
+    for p in &mut c.pairs {
+        p.in_contact = false;
+    }
+}
+
 /// A fixed joint holding the chaser where it is relative to the target: frame 1 is the target's
 /// body frame, frame 2 the same frame expressed in the chaser's body frame.
 fn latch_joint(cs: &BodyState, cb: &SimBody, ts: &BodyState, tb: &SimBody) -> rp::FixedJoint {
@@ -820,6 +978,13 @@ pub fn summary(dock: &Docking) -> serde_json::Value {
     // and `contact.peak_joint_*`).
     if let Some(il) = &dock.interface {
         v["interface_loads"] = serde_json::to_value(il).unwrap_or_default();
+    }
+    if let Some(tr) = dock.t_release_s {
+        v["t_release_s"] = tr.into();
+        v["separation_end"] = dock
+            .separation_end
+            .map(|(vel, te)| serde_json::json!({"t_s": te, "relative_velocity_m_s": vel}))
+            .unwrap_or_default();
     }
     v
 }
