@@ -1,6 +1,8 @@
-//! The docking mechanism: electromagnetic capture, soft capture, latch (a rapier fixed joint
-//! with a finite break force), and the state machine FREE → ATTRACTING → CONTACT →
-//! SOFT_CAPTURE → LATCHED, with REBOUND, JAMMED and MISSED. Every change is an event.
+//! The docking mechanism: electromagnetic capture, soft capture, latch (a rapier fixed joint,
+//! or a compliant spring–damper, with a finite break force) that engages only within the
+//! capture rate limits, release with separation springs, and the state machine FREE →
+//! ATTRACTING → CONTACT → SOFT_CAPTURE → LATCHED → RELEASED, with REBOUND, JAMMED and MISSED.
+//! Every change is an event; `docs/mechanisms.md` describes the issue-28 additions.
 //!
 //! Geometry and the magnet law are documented on [`crate::scene::DockingSpec`] and
 //! [`crate::scene::MagnetSpec`]. Contact is real: the cone and the slot's wall pieces are rapier

@@ -52,7 +52,7 @@ pub enum Condition {
     /// A guarantee's margin (end of the previous step) below a value, in the guarantee's unit.
     MarginBelow(String, f64),
     /// The docking mechanism in one of these states (`FREE`, `ATTRACTING`, `CONTACT`,
-    /// `SOFT_CAPTURE`, `LATCHED`, `REBOUND`, `JAMMED`, `MISSED`).
+    /// `SOFT_CAPTURE`, `LATCHED`, `REBOUND`, `JAMMED`, `MISSED`, `RELEASED`).
     DockingState(Vec<String>),
     /// The phase's translation law tracks its reference within these errors.
     Settled {
