@@ -35,6 +35,18 @@ fn every_bundled_scene_passes_check() {
 /// orbits and far-away bodies (once reported as overlaps).
 const CORPUS: &[(&str, usize, &str, &str)] = &[
     (
+        "unknown_field_contact_law",
+        65,
+        "docking.contact.law.exponent",
+        "unknown field `exponent`",
+    ),
+    (
+        "unknown_field_law_params",
+        102,
+        "controllers.1.params.phases.hold100.translation.0.0.gains.integral_gain",
+        "integral_gain",
+    ),
+    (
         "sensor_period_tiny",
         72,
         "controllers.0.0.vision.period_s",

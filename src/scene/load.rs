@@ -169,8 +169,9 @@ fn whole_file_error(file: &str, message: String) -> SceneError {
 pub fn read_text(path: &Path, what: &str) -> Result<String, SceneError> {
     use std::io::Read;
     let file = path.display().to_string();
-    let f = std::fs::File::open(path)
-        .map_err(|e| whole_file_error(&file, format!("cannot read the {what}: {e}")))?;
+    // A FIFO, socket or device is refused before anything is read (no hang, no endless read).
+    let f = crate::report::fsio::open_regular(path, what)
+        .map_err(|e| whole_file_error(&file, e.to_string()))?;
     let mut bytes = Vec::new();
     f.take(MAX_FILE_BYTES as u64 + 1)
         .read_to_end(&mut bytes)
@@ -375,9 +376,13 @@ fn parse_ron_mapped<T: serde::de::DeserializeOwned>(
     original: &str,
     edits: &[Edit],
 ) -> Result<T, SceneError> {
-    ron::Options::default()
+    let mut ignored: Vec<Vec<String>> = Vec::new();
+    let value = ron::Options::default()
         .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
-        .from_str(text)
+        .from_str_seed(
+            text,
+            RefuseIgnored::<T>(&mut ignored, std::marker::PhantomData),
+        )
         .map_err(|e| {
             let offset = offset_of(text, e.span.start.line, e.span.start.col);
             let (file, line, col) = if e.span.start.line == 0 {
@@ -392,7 +397,63 @@ fn parse_ron_mapped<T: serde::de::DeserializeOwned>(
                 field: field_at_offset(text, offset),
                 message: e.code.to_string(),
             }
+        })?;
+    // A field no type consumed: every struct and variant refuses unknown fields, at any depth
+    // (law and Sequencer params, contact laws, `--set` included), whatever its serde attributes.
+    if let Some(path) = ignored.first() {
+        let joined = path.join(".");
+        let offset = locate(text, &joined).map_or(0, |(s, _)| s);
+        let (file, line, col) = position(original, file, edits, offset);
+        let name = path.last().map_or("", String::as_str);
+        return Err(SceneError {
+            file,
+            line,
+            col,
+            field: joined.clone(),
+            message: format!(
+                "unknown field `{}` here: it is not a field of this struct or variant, so it \
+                 would be silently ignored; check its spelling against the scene format",
+                name.escape_debug()
+            ),
+        });
+    }
+    Ok(value)
+}
+
+/// Deserialises a `T` and records the path of every field the types did not consume.
+struct RefuseIgnored<'a, T>(&'a mut Vec<Vec<String>>, std::marker::PhantomData<T>);
+
+impl<'de, T: serde::de::DeserializeOwned> serde::de::DeserializeSeed<'de> for RefuseIgnored<'_, T> {
+    type Value = T;
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<T, D::Error> {
+        let sink = self.0;
+        serde_ignored::deserialize(d, |path| {
+            if sink.len() < 16 {
+                let mut segs = Vec::new();
+                ignored_segments(&path, &mut segs);
+                sink.push(segs);
+            }
         })
+    }
+}
+
+/// The path of an ignored field as the segments [`locate`] walks (field names and indices).
+fn ignored_segments(p: &serde_ignored::Path<'_>, out: &mut Vec<String>) {
+    use serde_ignored::Path;
+    match p {
+        Path::Root => {}
+        Path::Seq { parent, index } => {
+            ignored_segments(parent, out);
+            out.push(index.to_string());
+        }
+        Path::Map { parent, key } => {
+            ignored_segments(parent, out);
+            out.push(key.clone());
+        }
+        Path::Some { parent }
+        | Path::NewtypeStruct { parent }
+        | Path::NewtypeVariant { parent } => ignored_segments(parent, out),
+    }
 }
 
 /// Applies one `path=value` override to scene text. The value is one RON value (`3.5`, `true`,

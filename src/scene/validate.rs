@@ -41,6 +41,9 @@ pub const MAX_SLOT_SEGMENTS: u32 = 256;
 pub const MAX_PRISM_SEGMENTS: u32 = 1024;
 /// Most guarantees in a scene.
 pub const MAX_GUARANTEES: usize = 256;
+/// Most controllers in a scene (a few per body of [`MAX_BODIES`], with room to spare; checking
+/// and building stay linear in the count).
+pub const MAX_CONTROLLERS: usize = 4096;
 /// Most rapier substeps per step.
 pub const MAX_SUBSTEPS: u32 = 1000;
 /// Longest fixed step, s. The reference orbit and the L2 formation centre are propagated in
@@ -228,6 +231,15 @@ pub fn validate(s: &Scene) -> Check {
             format!(
                 "at most {MAX_GUARANTEES} guarantees, got {}",
                 s.guarantees.len()
+            ),
+        );
+    }
+    if s.controllers.len() > MAX_CONTROLLERS {
+        return fail(
+            "controllers",
+            format!(
+                "at most {MAX_CONTROLLERS} controllers, got {}",
+                s.controllers.len()
             ),
         );
     }

@@ -114,8 +114,8 @@ impl Simulation {
         // contact points, normal and lever arms and only advances their separations along the
         // frozen normal. A speculative contact made 2 cm above the slot's rim (its normal along
         // the rim edge) then stops the cone when it crosses the mouth plane, millimetres clear of
-        // the real wall (issue 22, trial 17 of the capture envelope). Every pair is recomputed
-        // every step instead: `tests/val_contact_normals.rs`.
+        // the real wall (trial 17 of `scenes/trials/capture_envelope.ron`). Every pair is
+        // recomputed every step instead: `tests/val_contact_normals.rs`.
         pw.integration_parameters.contact_recycling = false;
 
         let reference = super::environment::install(&mut app, &scene.environment, dt);

@@ -1,4 +1,4 @@
-//! Compliant docking contact (issue 18): the cone–slot contact force computed by rpod from
+//! Compliant docking contact: the cone–slot contact force computed by rpod from
 //! parry's contact manifolds with the scene's law ([`crate::contact`]), integrated in f64 with
 //! sub-steps only while the docking parts can touch.
 //!

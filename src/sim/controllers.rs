@@ -777,7 +777,7 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
         let mut diag = world.resource_mut::<Diagnostics>();
         let mut cols = Vec::with_capacity(names.len());
         for n in &names {
-            if diag.names.iter().any(|m| m == n) {
+            if diag.contains(n) {
                 return Err(format!(
                     "controller `{kind}`: column `{n}` is already written by another controller or mechanism"
                 ));
