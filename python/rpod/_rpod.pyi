@@ -131,6 +131,10 @@ class Simulation:
         """Names, ``seat_depth_m``, ``mouth_radius_m``, ``state``, ``reason``, ``t_latch_s``,
         ``spec`` (the scene's ``docking`` entry: ``magnet``, ``latch``, ``miss``, ``contact``)
         and ``contact_model``."""
+    def release_docking(self) -> None:
+        """Commands the docking mechanism to release at the next step (``RELEASED`` and the
+        separation springs when latched, else a ``docking_release_ignored`` event); ValueError
+        without a docking mechanism."""
     def render(
         self,
         width: int = 480,

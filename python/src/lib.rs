@@ -1442,6 +1442,22 @@ impl PySimulation {
         Ok(d)
     }
 
+    /// Commands the docking mechanism to release, acted on at the next step: when latched,
+    /// the latch opens (state `RELEASED`, a `docking_state` event) and the separation springs
+    /// push the vehicles apart; otherwise a `docking_release_ignored` event. ValueError when
+    /// the scene has no docking mechanism.
+    fn release_docking(&self) -> PyResult<()> {
+        self.with_mut(|sim| {
+            if sim.release_docking("python") {
+                Ok(())
+            } else {
+                Err(PyValueError::new_err(
+                    "release_docking: the scene has no docking mechanism",
+                ))
+            }
+        })
+    }
+
     /// The scene's docking mechanism, or None: `chaser`, `chaser_port`, `target`,
     /// `target_port`, `seat_depth_m` (chaser port above the target port when seated, m),
     /// `mouth_radius_m`, `state`, `reason`, `t_latch_s`, `spec` (the scene's whole `docking`

@@ -966,6 +966,60 @@ fn validate_docking(s: &Scene, d: &super::DockingSpec) -> Check {
         return fail("docking.latch.dwell_s", "must be ≥ 0 s");
     }
     positive("docking.latch.break_force_n", l.break_force_n, "newtons")?;
+    let r = &l.capture_rates;
+    for (f, v, unit) in [
+        ("max_axial_rate_m_s", r.max_axial_rate_m_s, "m/s"),
+        ("max_lateral_rate_m_s", r.max_lateral_rate_m_s, "m/s"),
+        ("max_angular_rate_deg_s", r.max_angular_rate_deg_s, "deg/s"),
+    ] {
+        positive(&format!("docking.latch.capture_rates.{f}"), v, unit)?;
+    }
+    if let Some(sp) = &d.separation {
+        if !matches!(d.contact, crate::contact::ContactModelSpec::Compliant(_)) {
+            return fail(
+                "docking.separation",
+                "separation springs are integrated with the compliant contact's sub-steps: the \
+                 docking contact must be Compliant",
+            );
+        }
+        positive("docking.separation.stroke_m", sp.stroke_m, "metres")?;
+        if !(sp.force_n.is_finite() && sp.force_n > 0.0 && sp.force_n <= MAX_FORCE_N) {
+            return fail(
+                "docking.separation.force_n",
+                format!(
+                    "must be a positive force up to {MAX_FORCE_N:e} N, got {}",
+                    num(sp.force_n)
+                ),
+            );
+        }
+        if !(sp.preload_n.is_finite() && sp.preload_n >= 0.0 && sp.preload_n <= sp.force_n) {
+            return fail(
+                "docking.separation.preload_n",
+                format!(
+                    "must be from 0 N to force_n ({} N), got {}",
+                    num(sp.force_n),
+                    num(sp.preload_n)
+                ),
+            );
+        }
+    }
+    if let super::LatchJoint::Compliant(j) = &l.joint {
+        if !matches!(d.contact, crate::contact::ContactModelSpec::Compliant(_)) {
+            return fail(
+                "docking.latch.joint",
+                "a Compliant latch is integrated with the compliant contact's sub-steps: the \
+                 docking contact must be Compliant too",
+            );
+        }
+        for (f, v, unit) in [
+            ("stiffness_n_m", j.stiffness_n_m, "N/m"),
+            ("damping_n_s_m", j.damping_n_s_m, "N·s/m"),
+            ("rot_stiffness_nm_rad", j.rot_stiffness_nm_rad, "N·m/rad"),
+            ("rot_damping_nm_s_rad", j.rot_damping_nm_s_rad, "N·m·s/rad"),
+        ] {
+            positive(&format!("docking.latch.joint.{f}"), v, unit)?;
+        }
+    }
     positive("docking.miss.jam_time_s", d.miss.jam_time_s, "seconds")?;
     positive("docking.miss.jam_speed_m_s", d.miss.jam_speed_m_s, "m/s")?;
     positive(

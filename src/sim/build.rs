@@ -491,6 +491,23 @@ impl Simulation {
             .map(|d| d.state.name())
     }
 
+    /// Commands the docking mechanism to release (acted on at the next step: RELEASED and the
+    /// separation springs if latched, else a `docking_release_ignored` event). `false` when the
+    /// scene has no docking mechanism.
+    pub fn release_docking(&mut self, source: &str) -> bool {
+        match self
+            .app
+            .world_mut()
+            .get_resource_mut::<super::docking::DockingCommands>()
+        {
+            Some(mut c) => {
+                c.release.push(source.to_string());
+                true
+            }
+            None => false,
+        }
+    }
+
     /// The smallest clearance so far between parts that are not both docking parts, over every
     /// body pair, m (0 when they touched).
     pub fn min_clearance_non_docking_m(&self) -> f64 {

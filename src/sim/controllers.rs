@@ -515,6 +515,7 @@ pub fn host_control(
     guarantees: Res<Guarantees>,
     mut host: ResMut<ControllerHost>,
     mut log: ResMut<EventLog>,
+    mut dock_cmds: Option<ResMut<super::docking::DockingCommands>>,
 ) {
     if host.slots.is_empty() {
         return;
@@ -553,6 +554,11 @@ pub fn host_control(
         slot.held = slot.law.command(&obs);
         slot.calls += 1;
         for e in slot.law.take_events() {
+            if e.kind == crate::control::generic::sequencer::DOCKING_RELEASE_EVENT
+                && let Some(d) = dock_cmds.as_deref_mut()
+            {
+                d.release.push(format!("controller event {}", e.data));
+            }
             log.push(t, &e.kind, e.data);
         }
     }
