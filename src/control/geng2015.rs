@@ -76,10 +76,7 @@ fn sgn6(v: &Vector6<f64>) -> Vector6<f64> {
     v.map(sgn)
 }
 
-/// Skew matrix [v×] with [v×] w = v × w.
-pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
-}
+pub use crate::math::mrp::skew;
 
 /// Which of the four laws of the paper.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

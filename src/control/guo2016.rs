@@ -1335,16 +1335,7 @@ impl crate::guarantee::Guarantee for CorridorGuarantee {
     }
 }
 
-/// Mean motion of the osculating two-body orbit through `(r, v)`, rad/s (0 if not bound).
-fn mean_motion_rad_s(r: &Vector3<f64>, v: &Vector3<f64>) -> f64 {
-    use crate::orbit::constants::MU_EARTH_M3_S2;
-    let inv_a = 2.0 / r.norm() - v.norm_squared() / MU_EARTH_M3_S2;
-    if inv_a > 0.0 {
-        (MU_EARTH_M3_S2 * inv_a * inv_a * inv_a).sqrt()
-    } else {
-        0.0
-    }
-}
+use crate::control::generic::mean_motion_rad_s;
 
 impl crate::control::registry::LawSpec for SceneSpec {
     fn build(

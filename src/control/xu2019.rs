@@ -213,10 +213,7 @@ pub struct Xu2019Controller {
     pub params: Xu2019Params,
 }
 
-fn wrap_pi(a: f64) -> f64 {
-    let w = (a + PI).rem_euclid(2.0 * PI) - PI;
-    if w == -PI { PI } else { w }
-}
+use crate::control::sensor::wrap_pi;
 
 /// One repulsor as the law sees it: `(Q diag, P diag, r_co (m), ∂r_co/∂p)`.
 type Repulsor = ([f64; 3], [f64; 3], Vector2<f64>, Matrix2<f64>);

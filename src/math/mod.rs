@@ -6,4 +6,3 @@ pub mod mrp;
 pub mod ode;
 pub mod polygon;
 pub mod rng;
-pub mod rot;
