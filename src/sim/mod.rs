@@ -31,6 +31,7 @@ pub mod controllers;
 pub mod docking;
 pub mod environment;
 pub mod guard;
+pub mod mesh;
 pub mod monitor;
 pub mod motion;
 pub mod output;
