@@ -43,7 +43,11 @@ pub struct MeshComponent {
     pub decomposition: std::sync::OnceLock<Decomposition>,
     /// Name (glTF node, OBJ object, or the STL file's stem).
     pub name: String,
-    /// Vertices, part frame, m.
+    /// Where the component's frame sits in the part frame, m: the centre of its vertices'
+    /// bounding box, so that bounding spheres about the collider origin are tight (the
+    /// monitor prunes part pairs by them). Zero until [`MeshComponent::recentre`].
+    pub offset_m: Vector3<f64>,
+    /// Vertices, component frame (the part frame shifted by `offset_m`), m.
     pub vertices_m: Vec<Point3<f64>>,
     /// Triangles (indices into `vertices_m`), counter-clockwise seen from outside for a closed
     /// mesh.
@@ -63,6 +67,23 @@ impl std::fmt::Debug for MeshComponent {
 }
 
 impl MeshComponent {
+    /// Moves the component's frame to the centre of its bounding box (`offset_m`).
+    pub fn recentre(&mut self) {
+        let (mut lo, mut hi) = (Vector3::repeat(f64::MAX), Vector3::repeat(f64::MIN));
+        for v in &self.vertices_m {
+            lo = lo.inf(&v.coords);
+            hi = hi.sup(&v.coords);
+        }
+        if self.vertices_m.is_empty() {
+            return;
+        }
+        let c = (lo + hi) / 2.0;
+        for v in &mut self.vertices_m {
+            v.coords -= c;
+        }
+        self.offset_m += c;
+    }
+
     /// Radius of a sphere about the part-frame origin holding every vertex (and so every
     /// triangle), m.
     pub fn bounding_radius_m(&self) -> f64 {
@@ -247,6 +268,7 @@ pub fn load_mesh_file(
             *v *= scale;
         }
         check_component(c).map_err(|e| format!("{file}: component `{}`: {e}", c.name))?;
+        c.recentre();
     }
     Ok(MeshFile {
         components: selected.into_iter().map(std::sync::Arc::new).collect(),
@@ -323,6 +345,7 @@ fn read_obj(bytes: &[u8]) -> Result<Vec<MeshComponent>, String> {
         }
         out.push(MeshComponent {
             decomposition: Default::default(),
+            offset_m: Vector3::zeros(),
             name,
             vertices_m: p
                 .chunks_exact(3)
@@ -352,6 +375,7 @@ fn read_stl(bytes: &[u8], name: String) -> Result<Vec<MeshComponent>, String> {
     }
     Ok(vec![MeshComponent {
         decomposition: Default::default(),
+        offset_m: Vector3::zeros(),
         name,
         vertices_m: mesh
             .vertices
@@ -440,6 +464,7 @@ fn read_gltf(bytes: &[u8], path: &Path) -> Result<Vec<MeshComponent>, String> {
         if let Some(mesh) = node.mesh() {
             let mut comp = MeshComponent {
                 decomposition: Default::default(),
+                offset_m: Vector3::zeros(),
                 name: name.clone(),
                 vertices_m: Vec::new(),
                 triangles: Vec::new(),
@@ -623,6 +648,7 @@ mod tests {
         }
         MeshComponent {
             decomposition: Default::default(),
+            offset_m: Vector3::zeros(),
             name: "box".into(),
             vertices_m: v,
             triangles: t,
@@ -669,6 +695,7 @@ mod tests {
         let t = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
         let m = MeshComponent {
             decomposition: Default::default(),
+            offset_m: Vector3::zeros(),
             name: "tet".into(),
             vertices_m: v,
             triangles: t,

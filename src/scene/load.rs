@@ -343,7 +343,11 @@ fn resolve_meshes(loaded: &mut LoadedScene) -> Result<bool, SceneError> {
                                 ),
                             )
                         })?;
-                        mass_sources.push((c.name.clone(), mesh::mass_properties(c, *rho), pose));
+                        mass_sources.push((
+                            c.name.clone(),
+                            mesh::mass_properties(c, *rho),
+                            pose * nalgebra::Translation3::from(c.offset_m),
+                        ));
                     }
                 }
                 *data = Some(std::sync::Arc::new(m));

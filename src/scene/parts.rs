@@ -231,7 +231,8 @@ fn expand_part(body: &BodySpec, part: &PartSpec, out: &mut Vec<PartCollider>) {
                             mesh: c.clone(),
                             decomposition: *decomposition,
                         },
-                        iso(Vector3::from(*pos_m), attitude.to_quat()),
+                        iso(Vector3::from(*pos_m), attitude.to_quat())
+                            * Translation3::from(c.offset_m),
                     );
                 }
                 return;

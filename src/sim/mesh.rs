@@ -179,6 +179,7 @@ mod tests {
         }
         MeshComponent {
             decomposition: Default::default(),
+            offset_m: Vector3::zeros(),
             name: name.into(),
             vertices_m: v,
             triangles: t,
