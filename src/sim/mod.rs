@@ -36,6 +36,7 @@ pub mod monitor;
 pub mod motion;
 pub mod output;
 pub mod overlap;
+pub mod plume;
 pub mod snapshot;
 
 use crate::guarantee::{BodyView, Guarantee, GuaranteeStatus, MonitorView, PairDistance};
