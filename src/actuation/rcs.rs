@@ -156,14 +156,7 @@ pub fn allocate(jets: &[JetSpec], w: &Vector6<f64>) -> Allocation {
                 continue;
             }
             let g = c.dot(&r); // −∂/∂u_j of ½‖r‖²
-            let new = (u[j] + g / cc).clamp(0.0, jets[j].max_thrust_n);
-            let du = new - u[j];
-            if du != 0.0 {
-                r -= c * du;
-                u[j] = new;
-            }
-            // KKT violation of jet j at its (new) value.
-            let g = c.dot(&r);
+            // KKT violation of jet j before its update (the projected gradient).
             let v = if u[j] <= 0.0 {
                 g.max(0.0)
             } else if u[j] >= jets[j].max_thrust_n {
@@ -171,6 +164,12 @@ pub fn allocate(jets: &[JetSpec], w: &Vector6<f64>) -> Allocation {
             } else {
                 g.abs()
             };
+            let new = (u[j] + g / cc).clamp(0.0, jets[j].max_thrust_n);
+            let du = new - u[j];
+            if du != 0.0 {
+                r -= c * du;
+                u[j] = new;
+            }
             worst = worst.max(v);
         }
         if worst <= tol {
