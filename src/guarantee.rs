@@ -16,6 +16,18 @@
 //! interval, and the first violation to a time tolerance. A guarantee without a rate bound is
 //! judged at the samples only and says so ([`GuaranteeStatus::judged`] = `"samples only"`):
 //! between samples it is not known to hold.
+//!
+//! # Open registration
+//! A scene's `guarantees` entries name registered kinds ([`registry`]): the built-in kinds
+//! ([`builtin`]) and a user crate's ([`register_guarantee`]) are read, checked (located errors)
+//! and built the same way; a law's own guarantees ([`crate::control::Controller::guarantees`])
+//! and a Python callable (`Simulation.add_guarantee`) implement the same [`Guarantee`] trait.
+
+pub mod builtin;
+pub mod registry;
+pub mod requirements;
+
+pub use registry::{GuaranteeParams, GuaranteeSpec, register_guarantee};
 
 use crate::geometry::bounds::Bracket;
 use nalgebra::{UnitQuaternion, Vector3};
@@ -69,6 +81,29 @@ pub struct MonitorView<'a> {
     pub bodies: &'a [BodyView],
     /// Full-geometry distances for every body pair (a < b).
     pub pairs: &'a [PairDistance],
+    /// The reference orbit at `t_s` (orbit scenes; `None` elsewhere).
+    pub reference: Option<ReferenceView>,
+}
+
+/// The reference orbit of an orbit scene at one instant: the ECI state of the world frame's
+/// origin (whose Hill frame the scene's `Hill` quantities use).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReferenceView {
+    /// Position, ECI, m.
+    pub pos_eci_m: Vector3<f64>,
+    /// Velocity, ECI, m/s.
+    pub vel_eci_m_s: Vector3<f64>,
+}
+
+impl ReferenceView {
+    /// The reference's Hill frame at this instant (rate r×v/|r|²).
+    pub fn hill(&self) -> crate::orbit::lvlh::LocalFrame {
+        crate::orbit::lvlh::LocalFrame::new(
+            crate::orbit::lvlh::LocalFrameKind::Hill,
+            &self.pos_eci_m,
+            &self.vel_eci_m_s,
+        )
+    }
 }
 
 impl MonitorView<'_> {
@@ -109,6 +144,12 @@ pub trait MotionBounds {
     /// (about j's centre of mass): |v_i − v_j| + Ω_j·|r_i − r_j|, m/s.
     fn rel_speed_in_body_bound(&self, i: usize, j: usize) -> f64 {
         self.rel_speed_bound(i, j) + self.omega_bound(j) * self.separation_bound(i, j)
+    }
+    /// Bound on the angular speed of the reference orbit's Hill frame over the step, rad/s
+    /// (orbit scenes; `None` elsewhere, or when the step is too long to bound it; see
+    /// [`crate::orbit::lvlh::hill_rate_bound_rad_s`]).
+    fn hill_rate_bound_rad_s(&self) -> Option<f64> {
+        None
     }
 }
 

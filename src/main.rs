@@ -123,7 +123,7 @@ enum Cmd {
     },
     /// Write an N-body swarm scene (tumbling winged spacecraft on a 20 m grid in orbit).
     Swarm {
-        /// Number of spacecraft (1 … 4096).
+        /// Number of spacecraft (1 … 64, the most bodies a scene may have).
         n: usize,
         /// Output file (default: print to stdout).
         #[arg(long)]
@@ -343,8 +343,11 @@ fn trials(cmd: TrialsCmd) -> ExitCode {
                 st.ran as f64 / st.wall_s.max(1e-9),
                 st.steps as f64 / st.wall_s.max(1e-9)
             );
-            if let Ok(text) = std::fs::read_to_string(out.join("summary.json"))
-                && let Ok(v) = serde_json::from_str::<serde_json::Value>(&text)
+            if let Ok(text) = rpod::report::fsio::read_regular_string(
+                &out.join("summary.json"),
+                64 << 20,
+                "summary",
+            ) && let Ok(v) = serde_json::from_str::<serde_json::Value>(&text)
             {
                 let ci = &v["success_probability_95ci_wilson"];
                 let what = if v["capture_probability"].is_null() {
@@ -457,8 +460,10 @@ fn main() -> ExitCode {
             win.options(at),
         )),
         Cmd::Swarm { n, out, seed } => {
-            if !(1..=4096).contains(&n) {
-                eprintln!("error: the swarm size must be 1 … 4096, got {n}");
+            // A swarm is a scene like any other: no larger than `rpod check` accepts.
+            let max = rpod::scene::validate::MAX_BODIES;
+            if !(1..=max).contains(&n) {
+                eprintln!("error: the swarm size must be 1 … {max} (the scene limit), got {n}");
                 return ExitCode::from(2);
             }
             let text = rpod::bench::swarm_scene(n, seed);
@@ -693,6 +698,15 @@ fn default_out(name: &str) -> PathBuf {
 
 fn reproduce(name: Option<String>, out: &std::path::Path) -> ExitCode {
     let names: Vec<String> = match name {
+        // An unknown name (a path among them) is refused before any folder is made.
+        Some(n) if !rpod::reproduce::PAPERS.contains(&n.as_str()) => {
+            eprintln!(
+                "error: unknown paper `{}`; known: {}",
+                n.escape_debug(),
+                rpod::reproduce::PAPERS.join(", ")
+            );
+            return ExitCode::from(2);
+        }
         Some(n) => vec![n],
         None => rpod::reproduce::PAPERS
             .iter()
@@ -716,9 +730,13 @@ fn reproduce(name: Option<String>, out: &std::path::Path) -> ExitCode {
             failed = true;
             continue;
         }
-        let claims = std::fs::read_to_string(dir.join("claims.json"))
-            .ok()
-            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+        let claims = rpod::report::fsio::read_regular_string(
+            &dir.join("claims.json"),
+            64 << 20,
+            "claims table",
+        )
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
         bar.suspend(|| {
             for c in claims
                 .as_ref()

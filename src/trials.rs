@@ -517,9 +517,12 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
     let spec: TrialsSpec = crate::scene::load::parse_ron(&text, &file)?;
     spec.validate(&file, &text)?;
     let scene_path = path.parent().unwrap_or(Path::new(".")).join(&spec.scene);
-    let scene_bytes = std::fs::read(&scene_path)
-        .ok()
-        .filter(|_| scene_path.is_file());
+    let scene_bytes = crate::report::fsio::read_regular(
+        &scene_path,
+        crate::scene::load::MAX_FILE_BYTES as u64,
+        "scene",
+    )
+    .ok();
     let Some(scene_bytes) = scene_bytes else {
         let (line, col) = crate::scene::load::locate(&text, "scene")
             .map(|(s, _)| crate::scene::load::line_col(&text, s))
@@ -685,7 +688,7 @@ pub fn run_trial(c: &Campaign, k: usize, keep: Option<&Path>) -> TrialResult {
         }
     };
     if let Some(dir) = keep
-        && let Err(e) = sim.record_to(dir)
+        && let Err(e) = crate::report::fsio::ensure_own_dir(dir).and_then(|()| sim.record_to(dir))
     {
         let reason = format!("cannot write {}: {e}", dir.display());
         return TrialResult::not_run(c, k, values, "IO_ERROR", reason, 0);
@@ -929,9 +932,12 @@ pub fn read_checked(
     shard: Option<(usize, usize)>,
     drop_torn_tail: bool,
 ) -> Result<(Vec<Row>, usize), TrialsError> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        TrialsError::Refused(format!("{}: cannot read it as text: {e}", path.display()))
-    })?;
+    let text = crate::report::fsio::read_regular_string(
+        path,
+        crate::report::fsio::MAX_OUTPUT_READ_BYTES,
+        "trials table",
+    )
+    .map_err(|e| TrialsError::Refused(format!("{e}; cannot read it as text")))?;
     let at = |line: usize, why: String| {
         TrialsError::Refused(format!(
             "{}:{line}: {why}; this file cannot be resumed or merged as it is (fix or remove \
@@ -1080,9 +1086,12 @@ fn write_campaign_json(dir: &Path, c: &Campaign) -> Result<(), TrialsError> {
 
 /// Refuses a folder whose `campaign.json` names another campaign, saying what differs.
 fn check_campaign_json(dir: &Path, c: &Campaign) -> Result<(), TrialsError> {
-    let Ok(text) = std::fs::read_to_string(dir.join("campaign.json")) else {
+    let path = dir.join("campaign.json");
+    if std::fs::symlink_metadata(&path).is_err() {
         return Ok(());
-    };
+    }
+    let text = crate::report::fsio::read_regular_string(&path, 16 << 20, "campaign record")
+        .map_err(|e| TrialsError::Refused(e.to_string()))?;
     let other: Option<Fingerprint> = serde_json::from_str::<serde_json::Value>(&text)
         .ok()
         .and_then(|v| serde_json::from_value(v["fingerprint"].clone()).ok());
@@ -1111,10 +1120,9 @@ pub fn run(c: &Campaign, opts: &RunOptions) -> Result<RunStats, TrialsError> {
     let done: Vec<usize> = if csv_path.exists() {
         let (rows, accepted) = read_checked(&csv_path, c, Some((si, sn)), true)?;
         // A torn last line from a crash is dropped: that trial runs again.
-        let f = std::fs::OpenOptions::new()
-            .write(true)
-            .open(&csv_path)
-            .map_err(io_err)?;
+        let f =
+            crate::report::fsio::open_write_nofollow(&csv_path, &mut std::fs::OpenOptions::new())
+                .map_err(io_err)?;
         f.set_len(accepted as u64).map_err(io_err)?;
         if accepted == 0 {
             drop(f);
@@ -1130,12 +1138,13 @@ pub fn run(c: &Campaign, opts: &RunOptions) -> Result<RunStats, TrialsError> {
         .filter(|k| k % sn == si && !done_set.contains(k))
         .collect();
     let mut file = if csv_path.exists() {
-        std::fs::OpenOptions::new()
-            .append(true)
-            .open(&csv_path)
-            .map_err(|e| TrialsError::Io(format!("{}: {e}", csv_path.display())))?
+        crate::report::fsio::open_write_nofollow(
+            &csv_path,
+            std::fs::OpenOptions::new().append(true),
+        )
+        .map_err(|e| TrialsError::Io(e.to_string()))?
     } else {
-        let mut f = std::fs::File::create(&csv_path)
+        let mut f = crate::report::fsio::create_new_nofollow(&csv_path)
             .map_err(|e| TrialsError::Io(format!("{}: {e}", csv_path.display())))?;
         f.write_all(csv_line(&header(c)).as_bytes())
             .map_err(io_err)?;
@@ -1160,6 +1169,10 @@ pub fn run(c: &Campaign, opts: &RunOptions) -> Result<RunStats, TrialsError> {
     let id = c.fingerprint.campaign_id.clone();
     let runs_dir = opts.out.join("runs");
     let keep_runs = opts.keep_runs;
+    if keep_runs {
+        // A link planted at OUT/runs would send every trial's files outside the output folder.
+        crate::report::fsio::ensure_own_dir(&runs_dir).map_err(io_err)?;
+    }
     std::thread::scope(|s| -> Result<(), TrialsError> {
         for _ in 0..jobs {
             let tx = tx.clone();

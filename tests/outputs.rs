@@ -5,7 +5,11 @@
 //! infinity in any output of a bundled scene (undefined controller and mechanism columns are
 //! empty cells).
 //!
-//! Reference: the output contract in the README ("Outputs"); the file lists are read back
+//! Links and special files planted where rpod writes or reads are refused with exit 2 and the
+//! outside file untouched (`.rpod.lock`, `runs/`, `plots/`, a FIFO as scene, a run file linked
+//! to `/dev/zero`); `rpod reproduce` with a path as the paper's name makes no folder.
+//!
+//! Reference: the output contract in docs/outputs.md; the file lists are read back
 //! from the folder itself.
 
 use std::path::{Path, PathBuf};
@@ -171,6 +175,94 @@ fn regress_planted_symlink_in_the_output_folder_is_not_followed() {
     assert!(!d.join("summary.json").is_symlink());
     let _ = std::fs::remove_dir_all(&d);
     let _ = std::fs::remove_file(&victim);
+}
+
+#[test]
+fn regress_links_planted_at_the_lock_runs_and_plots_are_refused() {
+    let d = tmp("links2");
+    std::fs::create_dir_all(&d).unwrap();
+    let victim = d.with_extension("victim2");
+    std::fs::write(&victim, "precious\n").unwrap();
+    std::os::unix::fs::symlink(&victim, d.join(".rpod.lock")).unwrap();
+    let r = rpod()
+        .args(["run", "scenes/free_drift.ron", "--duration", "1", "--out"])
+        .arg(&d)
+        .output()
+        .unwrap();
+    assert!(!r.status.success());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("symbolic link"), "{err}");
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious\n");
+    // A run, then RUN/plots as a link to a folder outside: `rpod plot` refuses it.
+    std::fs::remove_file(d.join(".rpod.lock")).unwrap();
+    let r = rpod()
+        .args(["run", "scenes/free_drift.ron", "--duration", "1", "--out"])
+        .arg(&d)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let outside = d.with_extension("outside");
+    std::fs::create_dir_all(&outside).unwrap();
+    std::os::unix::fs::symlink(&outside, d.join("plots")).unwrap();
+    let r = rpod().arg("plot").arg(&d).output().unwrap();
+    assert_eq!(
+        r.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    assert!(std::fs::read_dir(&outside).unwrap().next().is_none());
+    // contacts.csv replaced by a link to /dev/zero: refused, not read.
+    std::fs::remove_file(d.join("plots")).unwrap();
+    std::fs::remove_file(d.join("trajectory.csv")).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", d.join("trajectory.csv")).unwrap();
+    let r = rpod().arg("plot").arg(&d).output().unwrap();
+    assert_eq!(r.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("not a regular file"));
+    for p in [&d, &outside] {
+        let _ = std::fs::remove_dir_all(p);
+    }
+    let _ = std::fs::remove_file(&victim);
+}
+
+#[test]
+fn regress_fifo_scene_and_path_as_paper_name_are_refused_without_waiting() {
+    let d = tmp("fifo");
+    std::fs::create_dir_all(&d).unwrap();
+    let fifo = d.join("scene.ron");
+    assert!(
+        Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success()
+    );
+    for cmd in ["check", "run"] {
+        let mut c = rpod();
+        c.arg(cmd).arg(&fifo);
+        if cmd == "run" {
+            c.arg("--out").arg(d.join("out"));
+        }
+        // Nobody ever opens the FIFO for writing: a reader that waited would never return.
+        let r = c.stdin(Stdio::null()).output().unwrap();
+        assert_eq!(r.status.code(), Some(2), "rpod {cmd}");
+        assert!(
+            String::from_utf8_lossy(&r.stderr).contains("not a regular file"),
+            "{}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+    }
+    let target = d.join("made_by_reproduce");
+    let r = rpod()
+        .args(["reproduce"])
+        .arg(&target)
+        .arg("--out")
+        .arg(d.join("rep"))
+        .output()
+        .unwrap();
+    assert_eq!(r.status.code(), Some(2));
+    assert!(!target.exists() && !d.join("rep").join(&target).exists());
+    let _ = std::fs::remove_dir_all(&d);
 }
 
 #[test]

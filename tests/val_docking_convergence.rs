@@ -1,4 +1,4 @@
-//! Docking loads converge with the step (issue 18).
+//! Docking loads converge with the step (compliant cone–slot contact).
 //!
 //! - `docking_aligned`'s peak contact force at dt = 2, 1 and 0.5 ms agrees within 10 % (the
 //!   issue's criterion; rigid contact spreads over 2.3× there), and agrees within 2 % with the

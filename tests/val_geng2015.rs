@@ -532,7 +532,7 @@ fn val_geng2015_full_geometry_collides_before_the_ports_meet() {
 
 #[test]
 fn val_geng2015_seated_pair_touches_only_docking_parts() {
-    // Geometry (issue 20): seated (ports coincident, q_r = 1) the chaser's bus face, where the
+    // Geometry: seated (ports coincident, q_r = 1) the chaser's bus face, where the
     // cone stands, must clear the slot rim axially. Cone 0.20 m long on the bus face at
     // x = −0.55 m; slot 0.18 m deep from P_t = 0.50 m: the face is 0.20 − 0.18 = 0.02 m
     // outside the rim plane. Placed 1 cm short of seated (so the cone tip does not rest on the

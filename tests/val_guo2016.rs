@@ -1,5 +1,6 @@
 //! Guo, Song, Li (2016) in the full simulation (scenes `guo2016_corridor.ron`,
-//! `guo2016_no_avoidance.ron`), each claim of issue 5 asserted as it turns out.
+//! `guo2016_no_avoidance.ron`), each claim of the paper's Section 5 (and beyond it) asserted as
+//! it turns out.
 //!
 //! Independent references: the closed-form cissoid `h(r) = x³tan²θ/(2a − x) − y² − z²` and the
 //! MRP of the scene's quaternion written out by hand (initial state); the mean motion

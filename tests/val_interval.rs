@@ -1,4 +1,4 @@
-//! Sound verification between samples (issue 16): nothing may hide between two steps.
+//! Sound verification between samples: nothing may hide between two steps.
 //!
 //! References, all closed forms of straight-line and constant-rate motion in free space (no
 //! gravity, no forces, bodies on principal axes so the f64 integrator's path is exact):

@@ -390,7 +390,7 @@ fn regress_xu2015_scene_errors() {
     let e = Simulation::new(&l).err().expect("rejected");
     assert_eq!(e.field, "controllers.0.0.accm.sample_period_s");
     assert!(
-        // An error in an overridden value is located in the `--set` argument (issue 17):
+        // An error in an overridden value is located in the `--set` argument:
         // line 1, the column of the value after `=`.
         e.file == "s.ron (--set controllers.0.0.accm.sample_period_s=0.15)"
             && (e.line, e.col) == (1, 38),

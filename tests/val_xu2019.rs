@@ -178,7 +178,7 @@ fn val_xu2019_fig13_claims() {
     assert!(held("experiment-lags-in-x-and-y"));
     // The 2° goal tolerance is ours. With rapier's rigid cone–slot contact the simulation case
     // failed it (2.03°) when the law is switched off at the magnet; with the compliant contact
-    // (issue 18, e = 0.3) the cone seats at 0.11°. Kept active, it latches inside 0.5° either way.
+    // (e = 0.3) the cone seats at 0.11°. Kept active, it latches inside 0.5° either way.
     assert!(held("simulation-reaches-goal-and-latches"));
     assert!(r.simulation.final_angle_err_deg < 2.0);
     assert!(held("simulation-law-kept-active-reaches-goal-and-latches"));

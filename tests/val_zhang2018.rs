@@ -333,7 +333,7 @@ fn invariant_zhang2018_scene_errors_are_located() {
         assert!(e.starts_with(PAIR), "{e}");
         assert!(e.contains(&format!("field `{field}`")), "{e}");
         // A line number: `file:line:col: field`, or, for an error inside an overridden value,
-        // `file (--set PATH=VALUE):line:col: field` (located in the `--set` text, issue 17).
+        // `file (--set PATH=VALUE):line:col: field` (located in the `--set` text).
         let rest = &e[PAIR.len()..];
         let rest = match rest.strip_prefix(" (--set ") {
             Some(r) => &r[r.find("):").expect("closing the --set") + 1..],
@@ -348,8 +348,8 @@ fn invariant_zhang2018_scene_errors_are_located() {
 fn regress_zhang2018_reproduce_claims() {
     // `rpod reproduce zhang2018` end to end: claims.json follows the contract (id, claim,
     // paper, measured, held) and holds each claim with the value the tests above establish
-    // independently; the figures are PNG files; REPORT.md documents each typo correction of
-    // SPEC.md (P4).
+    // independently; the figures are PNG files; REPORT.md documents each correction of a typo
+    // in the paper.
     let dir = std::env::temp_dir().join(format!("rpod-zhang2018-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     rpod::reproduce::zhang2018::run(&dir).unwrap();

@@ -108,6 +108,22 @@ class Simulation:
         ports: Optional[Tuple[str, str]] = None,
         columns: Optional[List[str]] = None,
     ) -> int: ...
+    def add_guarantee(
+        self,
+        func: Callable[[Dict[str, Any]], float],
+        name: str,
+        unit: str,
+        rate_bound: Optional[float] = None,
+    ) -> int:
+        """A guarantee written in Python: ``func(view)`` returns the margin (≥ 0 held, < 0
+        violated) in ``unit``; ``view`` = {``t_s``, ``bodies``: {name: {``pos_m``, ``vel_m_s``,
+        ``quat_wxyz``, ``omega_rad_s``, ``rate_body_rad_s``}} (world frame), ``distances_m``:
+        {``"a/b"``: full-geometry distance of each tracked pair}}. With ``rate_bound`` (a bound
+        on |d margin/dt| in ``unit``/s that you guarantee) it is judged on every step interval;
+        without, at the samples only (``judged: "samples only"``). Shown in ``monitor()``, the
+        trajectory, the summary and trials like a scene's guarantee. A raising ``func``
+        (``SimulationError``, the cause chained) or a non-finite margin (``NumericError``) stops
+        the run with an exception naming the guarantee. Call before the first step."""
     def step(self, n: int = 1) -> None: ...
     def run_until(self, t_s: float) -> None: ...
     def monitor(self) -> Dict[str, Any]: ...
@@ -115,6 +131,10 @@ class Simulation:
         """Names, ``seat_depth_m``, ``mouth_radius_m``, ``state``, ``reason``, ``t_latch_s``,
         ``spec`` (the scene's ``docking`` entry: ``magnet``, ``latch``, ``miss``, ``contact``)
         and ``contact_model``."""
+    def release_docking(self) -> None:
+        """Commands the docking mechanism to release at the next step (``RELEASED`` and the
+        separation springs when latched, else a ``docking_release_ignored`` event); ValueError
+        without a docking mechanism."""
     def render(
         self,
         width: int = 480,

@@ -271,6 +271,115 @@ fn extract_vec3(v: &Bound<'_, PyAny>, what: &str) -> PyResult<Vector3<f64>> {
 /// Where a Python law's failure waits for `step` to raise it.
 type ErrorSlot = Arc<Mutex<Option<PyErr>>>;
 
+/// A Python callable as a guarantee: `func(view) -> margin` (a float in `unit`), judged on
+/// the step intervals when `rate_bound` (|d margin/dt| ≤ rate_bound, in unit/s, the caller's
+/// claim) is given, at the samples only otherwise. A raising callable or a non-finite margin
+/// stops the run with an exception naming the guarantee; its margin then counts as −∞
+/// (violated), so it is never reported held.
+struct PyGuarantee {
+    func: Py<PyAny>,
+    name: String,
+    unit: String,
+    rate_bound: Option<f64>,
+    body_names: Vec<String>,
+    error: ErrorSlot,
+    failed: std::sync::atomic::AtomicBool,
+}
+
+/// What a Python guarantee sees: `t_s`, `bodies` (per body, world frame, the keys of a law
+/// observation's `bodies` entries: `pos_m`, `vel_m_s`, `quat_wxyz`, `omega_rad_s`,
+/// `rate_body_rad_s`) and `distances_m` (`"a/b"`: full-geometry distance of each tracked pair).
+fn monitor_view_dict<'py>(
+    py: Python<'py>,
+    names: &[String],
+    v: &rpod::guarantee::MonitorView,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("t_s", v.t_s)?;
+    let bodies = PyDict::new(py);
+    for (n, b) in names.iter().zip(v.bodies) {
+        let bd = PyDict::new(py);
+        bd.set_item("pos_m", vec3(py, &b.pos_m))?;
+        bd.set_item("vel_m_s", vec3(py, &b.vel_m_s))?;
+        bd.set_item("quat_wxyz", quat(py, &b.att))?;
+        bd.set_item("omega_rad_s", vec3(py, &b.omega_rad_s))?;
+        bd.set_item(
+            "rate_body_rad_s",
+            vec3(py, &b.att.inverse_transform_vector(&b.omega_rad_s)),
+        )?;
+        bodies.set_item(n.as_str(), bd)?;
+    }
+    d.set_item("bodies", bodies)?;
+    let dist = PyDict::new(py);
+    for p in v.pairs {
+        if let (Some(a), Some(b)) = (names.get(p.a), names.get(p.b)) {
+            dist.set_item(format!("{a}/{b}"), p.distance_m)?;
+        }
+    }
+    d.set_item("distances_m", dist)?;
+    Ok(d)
+}
+
+impl PyGuarantee {
+    fn call(&self, py: Python<'_>, v: &rpod::guarantee::MonitorView) -> PyResult<f64> {
+        let o = monitor_view_dict(py, &self.body_names, v)?;
+        let r = self.func.bind(py).call1((o,)).map_err(|e| {
+            let err = SimulationError::new_err(format!(
+                "guarantee `{}` raised {} at t = {} s",
+                self.name, e, v.t_s
+            ));
+            err.set_cause(py, Some(e));
+            err
+        })?;
+        let m: f64 = r.extract().map_err(|_| {
+            PyTypeError::new_err(format!(
+                "guarantee `{}` must return its margin as a float, got {}",
+                self.name,
+                r.get_type().name().map_or("?".into(), |n| n.to_string())
+            ))
+        })?;
+        if !m.is_finite() {
+            return Err(NumericError::new_err(format!(
+                "guarantee `{}` returned a non-finite margin {m} at t = {} s",
+                self.name, v.t_s
+            )));
+        }
+        Ok(m)
+    }
+}
+
+impl rpod::guarantee::Guarantee for PyGuarantee {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn unit(&self) -> &str {
+        &self.unit
+    }
+    fn margin(&self, v: &rpod::guarantee::MonitorView) -> f64 {
+        if self.failed.load(Ordering::Relaxed) {
+            return f64::NEG_INFINITY;
+        }
+        Python::attach(|py| match self.call(py, v) {
+            Ok(m) => m,
+            Err(e) => {
+                self.failed.store(true, Ordering::Relaxed);
+                if let Ok(mut slot) = self.error.lock()
+                    && slot.is_none()
+                {
+                    *slot = Some(e);
+                }
+                f64::NEG_INFINITY
+            }
+        })
+    }
+    fn rate_bound(&self, _m: &dyn rpod::guarantee::MotionBounds) -> Option<f64> {
+        self.rate_bound
+    }
+    fn reads(&self) -> rpod::guarantee::Reads {
+        rpod::guarantee::Reads::Everything
+    }
+}
+
 /// A Python callable as a control law.
 struct PyLaw {
     func: Py<PyAny>,
@@ -500,6 +609,7 @@ pub struct PySimulation {
     /// The constructor's `out_dir` (recording starts there at the first step).
     out_dir: Option<PathBuf>,
     errors: ErrorSlot,
+    /// Python laws and guarantees (the run then steps one step at a time).
     python_laws: usize,
     /// A step was taken.
     started: bool,
@@ -637,7 +747,7 @@ impl PySimulation {
                 if let Some(e) = errors.lock().ok().and_then(|mut s| s.take()) {
                     let what: String = e.to_string().chars().take(500).collect();
                     self.stopped = Some(format!(
-                        "at t = {} s, a Python law raised {what}",
+                        "at t = {} s, Python code (a law or a guarantee) raised {what}",
                         sim.t_s()
                     ));
                     return Err(e);
@@ -1118,6 +1228,73 @@ impl PySimulation {
         Ok(k)
     }
 
+    /// Adds a guarantee written in Python: `func(view) -> margin` (a float in `unit`; ≥ 0
+    /// held, < 0 violated), `view` = {`t_s`, `bodies`: per body `pos_m`, `vel_m_s`,
+    /// `quat_wxyz`, `omega_rad_s`, `rate_body_rad_s` (world frame), `distances_m`: `"a/b"` →
+    /// full-geometry distance of each tracked pair}. With `rate_bound` (your bound on
+    /// |d margin/dt|, unit/s) it is judged on every step interval (the monitor evaluates it
+    /// between samples); without, at the samples only, and the outputs say "samples only".
+    /// It appears in `monitor()`, the trajectory's columns and the summary like a scene's.
+    /// A raising callable or a non-finite margin stops the run with an exception naming the
+    /// guarantee. Call before the first step. Returns its index among the guarantees.
+    #[pyo3(signature = (func, name, unit, rate_bound=None))]
+    fn add_guarantee(
+        &mut self,
+        py: Python<'_>,
+        func: Bound<'_, PyAny>,
+        name: &str,
+        unit: &str,
+        rate_bound: Option<f64>,
+    ) -> PyResult<usize> {
+        self.cell()?;
+        if !func.is_callable() {
+            return Err(PyTypeError::new_err(format!(
+                "add_guarantee `{name}`: `func` must be callable (view -> margin)"
+            )));
+        }
+        if self.recording.is_some() || self.started {
+            return Err(SimulationError::new_err(format!(
+                "add_guarantee `{name}`: guarantees must be added before the first step (the trajectory's header names their columns)"
+            )));
+        }
+        if let Some(r) = rate_bound
+            && !(r.is_finite() && r >= 0.0)
+        {
+            return Err(PyValueError::new_err(format!(
+                "add_guarantee `{name}`: rate_bound must be a finite number ≥ 0 ({unit}/s), got {r}"
+            )));
+        }
+        let body_names = self.with(|sim| {
+            Ok(sim
+                .controllers()
+                .info
+                .iter()
+                .map(|b| b.name.clone())
+                .collect())
+        })?;
+        let g = PyGuarantee {
+            func: func.unbind(),
+            name: name.to_string(),
+            unit: unit.to_string(),
+            rate_bound,
+            body_names,
+            error: self.errors.clone(),
+            failed: std::sync::atomic::AtomicBool::new(false),
+        };
+        let k = self.with_mut(|sim| {
+            sim.add_guarantee(Box::new(g))
+                .map_err(|e| PyValueError::new_err(format!("add_guarantee `{name}`: {e}")))
+        })?;
+        self.python_laws += 1;
+        // The t = 0 sample was just taken: its failure is raised now.
+        if let Some(e) = self.errors.lock().ok().and_then(|mut s| s.take()) {
+            self.stopped = Some(format!("at t = 0 s, guarantee `{name}` failed"));
+            let _ = py;
+            return Err(e);
+        }
+        Ok(k)
+    }
+
     /// Advances `n` fixed steps.
     #[pyo3(signature = (n=1))]
     fn step(&mut self, py: Python<'_>, n: u64) -> PyResult<()> {
@@ -1263,6 +1440,22 @@ impl PySimulation {
         }
         d.set_item("contacts", cs)?;
         Ok(d)
+    }
+
+    /// Commands the docking mechanism to release, acted on at the next step: when latched,
+    /// the latch opens (state `RELEASED`, a `docking_state` event) and the separation springs
+    /// push the vehicles apart; otherwise a `docking_release_ignored` event. ValueError when
+    /// the scene has no docking mechanism.
+    fn release_docking(&self) -> PyResult<()> {
+        self.with_mut(|sim| {
+            if sim.release_docking("python") {
+                Ok(())
+            } else {
+                Err(PyValueError::new_err(
+                    "release_docking: the scene has no docking mechanism",
+                ))
+            }
+        })
     }
 
     /// The scene's docking mechanism, or None: `chaser`, `chaser_port`, `target`,

@@ -1,7 +1,7 @@
 //! Pulse-width pulse-frequency (PWPF) modulator: turns a continuous command into on/off
 //! valve pulses. Xu, Wen, Wei (2019) §3.1 drive their cold-gas valves through PWPF, citing
-//! Guglieri et al. (2014, their ref. 25) without giving its form or constants; SPEC.md P3
-//! gives the standard form used here.
+//! Guglieri et al. (2014, their ref. 25) without giving its form or constants; the
+//! standard form of the PWPF literature is used here.
 //!
 //! ```text
 //!   r = F_cmd / F_max                (normalised command, dimensionless)
@@ -33,8 +33,8 @@
 
 use serde::{Deserialize, Serialize};
 
-/// PWPF constants. SPEC.md P3 "typical" values (the paper gives none): K_m = 4.5,
-/// T_m = 0.2 s, U_on = 0.45, U_off = 0.15.
+/// PWPF constants. Typical values of the PWPF literature, our choice (the paper gives none):
+/// K_m = 4.5, T_m = 0.2 s, U_on = 0.45, U_off = 0.15.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PwpfParams {
@@ -57,8 +57,8 @@ impl Default for PwpfParams {
 }
 
 impl PwpfParams {
-    /// SPEC.md P3 typical values: K_m = 4.5, T_m = 0.2 s, U_on = 0.45, U_off = 0.15, no
-    /// minimum on-time.
+    /// Typical values of the PWPF literature: K_m = 4.5, T_m = 0.2 s, U_on = 0.45,
+    /// U_off = 0.15, no minimum on-time.
     pub fn typical() -> Self {
         Self {
             k_m: 4.5,
@@ -205,10 +205,10 @@ mod tests {
         (ons, offs)
     }
 
-    /// Reference: the SPEC.md value Δ_min = −T_m ln(1 − (U_on − U_off)/K_m) ≈ 13.8 ms, and
-    /// a simulated first pulse at r just above the dead zone. Each switching instant is
-    /// quantised to the step, so a pulse width is within 2·dt of the analytic one (plus the
-    /// 1e-3 excess of r over the dead zone, which shortens it by ≈ 0.05 ms).
+    /// Reference: the closed-form minimum pulse width Δ_min = −T_m ln(1 − (U_on − U_off)/K_m) ≈
+    /// 13.8 ms, and a simulated first pulse at r just above the dead zone. Each switching instant
+    /// is quantised to the step, so a pulse width is within 2·dt of the analytic one (plus the 1e-3
+    /// excess of r over the dead zone, which shortens it by ≈ 0.05 ms).
     #[test]
     fn val_pwpf_minimum_pulse_width() {
         let p = PwpfParams::typical();

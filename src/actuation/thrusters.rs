@@ -74,7 +74,7 @@ impl Default for ThrusterParams {
 
 impl ThrusterParams {
     /// Paper values: 0.05 N per nozzle, 0.09 m lever arm (→ 0.009 N·m per pair), I_sp = 50 s,
-    /// SPEC.md typical PWPF constants.
+    /// typical PWPF constants ([`PwpfParams::typical`]).
     pub fn paper() -> Self {
         Self {
             thrust_per_nozzle_n: 0.05,

@@ -5,16 +5,20 @@
 //! the standard twisting laws T1 (eq 5, s = e) and T2 (eq 6, s = ė + λe with an integral
 //! twisting term) and the modified twisting laws M1 (eq 11) and M2 (eq 13) that add linear terms.
 //!
-//! # Model (SPEC P2 \[derived\], checked against inertial finite differences in the tests)
+//! # Model \[derived\]
+//! The paper's eq 1 takes its model from Chen & Geng 2014 without stating it; this is an
+//! equivalent derived from rigid-body kinematics, checked against inertial finite differences in
+//! the tests.
+//!
 //! State x = [ρ; q_rv]:
 //! - ρ = r_s + A_sᵀ p_s − r_t − A_tᵀ p_t: chaser port minus target port, expressed in the frame
 //!   chosen by [`RhoFrame`] (A = inertial→body DCM, p = port in its own body frame). The paper
 //!   writes f(*) in the orbital frame F_o: [`RhoFrame::TargetHill`], the default (x radial,
 //!   y along-track, z orbit normal — the axis order inferred from Table 2's larger y gains; the
-//!   target's orbital frame differs from the chaser's by ~5 µrad at the 36.6 m start). SPEC P2
-//!   proposes target body axes ([`RhoFrame::TargetBody`]); with the 4.7 °/s tumble that frame
-//!   starts with |ρ̇| ≈ 3 m/s and needs centripetal/Coriolis accelerations above a_max, and every
-//!   law loses the ports in it (test `regress_geng2015_target_body_rho_frame_saturates`).
+//!   target's orbital frame differs from the chaser's by ~5 µrad at the 36.6 m start). The other
+//!   reading, target body axes ([`RhoFrame::TargetBody`]), fails: with the 4.7 °/s tumble that
+//!   frame starts with |ρ̇| ≈ 3 m/s and needs centripetal/Coriolis accelerations above a_max,
+//!   and every law loses the ports in it (test `regress_geng2015_target_body_rho_frame_saturates`).
 //!   Port frames have the axes of their body (the paper gives port positions only).
 //! - q_r = q_t⁻¹ ⊗ q_s (Hamilton, body→inertial quaternions), i.e. A(q_r) = A_s A_tᵀ maps target
 //!   axes to chaser axes; canonicalised to q_r0 ≥ 0 (the short way round).
@@ -97,7 +101,7 @@ pub enum RhoFrame {
     /// F_o choice (up to chaser vs target orbit, ~µrad here); the axis order is inferred from
     /// Table 2, whose larger y gains (α1, α2, M3, M4) fit the along-track separation.
     TargetHill,
-    /// Target body axes (SPEC P2 \[derived\]).
+    /// Target body axes (the other reading of the paper's frame, \[derived\]).
     TargetBody,
 }
 
@@ -1595,7 +1599,7 @@ mod tests {
 
     #[test]
     fn regress_geng2015_target_body_rho_frame_saturates() {
-        // SPEC P2's target-body ρ frame: ρ̇ starts at ≈ |ω_t|·36 m ≈ 3 m/s and the frame's
+        // The target-body ρ frame: ρ̇ starts at ≈ |ω_t|·36 m ≈ 3 m/s and the frame's
         // centripetal/Coriolis terms exceed a_max = 0.2 m/s², so T1 (and every law) loses the
         // ports; the paper's orbital frame F_o (TargetHill) does not.
         let run = closed_loop(

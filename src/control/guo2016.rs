@@ -1,6 +1,6 @@
 //! Guo, Song, Li (2016), "Attitude and orbit coupled control for non-cooperative rendezvous and
 //! docking", Control Theory & Applications: coupled attitude–orbit sliding-mode control with an
-//! elliptic-cissoid approach corridor (SPEC.md, P0).
+//! elliptic-cissoid approach corridor.
 //!
 //! # Model (eqs 6–28), as implemented
 //! State `x = [σ_e; r_e]` (MRP, m), in the **chaser body frame** B:
@@ -980,8 +980,8 @@ mod tests {
     fn regress_guo2016_reaching_variant_leaves_corridor() {
         // Not the paper's law: with the optional linear reaching gain k_r = 1/s (so that S → 0),
         // start aligned with D0 (σ(0) = 0), J2 and d_τ on, RK4 0.01 s, 20 s.
-        // Asserted: the errors converge below the brief's thresholds (|r_e| < 1 cm,
-        // |σ_e| < 1e-4: on S = 0, x decays at k1/β ≈ 9/s), and the law sampled every 0.01 s
+        // Asserted: the errors converge below |r_e| < 1 cm and |σ_e| < 1e-4 (on S = 0,
+        // x decays at k1/β ≈ 9/s), and the law sampled every 0.01 s
         // leaves the corridor with k2 = 0 **and** with k2 = 0.02: the straight line
         // r1(0) → [2,0,0] m crosses the wall for tan θ = 5 (h ≈ −65 m² at its midpoint), and
         // the barrier k2/h² only acts for h ≲ √k2 ≈ 0.14 m² (a sub-millimetre layer) which the

@@ -270,6 +270,9 @@ pub struct LawContext<'b, 'a> {
     pub period_steps: u64,
     /// Ports, if the entry names them (or the docking mechanism's).
     pub ports: Option<(String, String)>,
+    /// The entry's sensor, if any: a law that reads the relative state flies on its
+    /// measurements, and a law that cannot use it refuses it ([`LawContext::no_sensor`]).
+    pub sensor: Option<SensorSpec>,
 }
 
 impl LawContext<'_, '_> {
@@ -280,6 +283,17 @@ impl LawContext<'_, '_> {
     /// The controlled body's constants.
     pub fn own(&self) -> &BodyInfo {
         &self.build.info[self.body]
+    }
+    /// The error of a law `kind` that cannot use the entry's sensor (at the entry's `sensor`
+    /// field), or `Ok` without one: a configured sensor is never silently ignored.
+    pub fn no_sensor(&self, kind: &str, why: &str) -> Result<(), BuildError> {
+        match &self.sensor {
+            Some(_) => Err(BuildError::at_root(
+                format!("controllers.{}.sensor", self.build.index),
+                format!("`{kind}` cannot use a sensor: {why}"),
+            )),
+            None => Ok(()),
+        }
     }
 }
 
@@ -421,6 +435,7 @@ impl LawEntry {
                 target,
                 period_steps,
                 ports: ports.clone(),
+                sensor: self.sensor.clone(),
             };
             self.params.build(&mut lc).map_err(|e| e.within("params"))?
         };

@@ -3,8 +3,8 @@
 //! non-cooperative maneuver target", Aerospace Control and Application 41(6):13–18,
 //! eqs. (9)–(27).
 //!
-//! The paper's equations were lost in extraction; every formula below is the
-//! reconstruction of SPEC.md §P1 from the characteristic-model literature (Wu, Hu, Xie 2007;
+//! The paper's equations were lost in extraction; every formula below is a
+//! reconstruction from the characteristic-model literature (Wu, Hu, Xie 2007;
 //! Meng & Wu 2009) and is marked **\[derived\]** where it is a choice, not a quotation.
 //!
 //! # Plant and model (per axis, decoupled, paper eqs. (9)–(11))
@@ -41,7 +41,7 @@
 //! e(k+1) = 1.236 e(k) − 0.382 e(k−1): a double pole at z = 0.618.
 //! The reference y_r = ξ_r + s_k, ξ_r a quintic from the first measured position to the goal
 //! (zero velocity and acceleration at both ends) over `reference_duration_s`, then held
-//! [derived: SPEC notes that regulating straight to the goal saturates and limit-cycles].
+//! [derived: regulating straight to the goal saturates and limit-cycles].
 //!
 //! # PD baseline \[derived\]
 //! u = sat(m_nominal [ξ̈_r − k_p e − k_d ė]), e = ξ − ξ_r, ė = (e(k) − e(k−1))/h (backward
@@ -133,8 +133,8 @@ pub fn quintic_reference(
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct AccmParams {
-    /// Sample period h, s [derived: paper silent; 0.1 s makes β0 = h²/m = 1e−4 s²/kg as in
-    /// SPEC's reconstruction].
+    /// Sample period h, s [derived: paper silent; 0.1 s (10 Hz), for which
+    /// β0 = h²/m = 1e−4 s²/kg].
     pub sample_period_s: f64,
     /// Nominal chaser mass used in β0 = h²/m_nominal, kg (paper: 100 kg).
     pub mass_nominal_kg: f64,
@@ -154,11 +154,11 @@ pub struct AccmParams {
     pub lambda1: f64,
     /// Identification regulariser λ2 > 0, m² [derived: 0.01 m², ≪ φᵀφ ≥ 2(d − η)² = 0.5 m²].
     pub lambda2_m2: f64,
-    /// Projection box for α1 [derived, SPEC: [1.5, 2.02]].
+    /// Projection box for α1 [derived: [1.5, 2.02] about α1 = 2 + h²a ≈ 2].
     pub alpha1_bounds: [f64; 2],
-    /// Projection box for α2 [derived, SPEC: [−1.02, −0.5]].
+    /// Projection box for α2 [derived: [−1.02, −0.5] about α2 = −1].
     pub alpha2_bounds: [f64; 2],
-    /// Projection box for γ = β/β0 [derived, SPEC: [0.85, 1.15], covers ±10 % mass].
+    /// Projection box for γ = β/β0 [derived: [0.85, 1.15], covers ±10 % mass].
     pub gamma_bounds: [f64; 2],
     /// Initial estimate [α1, α2, γ] (the nominal double integrator: [2, −1, 1]).
     pub theta0: [f64; 3],
@@ -917,7 +917,7 @@ mod scene_tests {
 mod tests {
     //! References: linear error dynamics of the normalised-gradient identifier, the closed
     //! form of the golden-section error recursion, and a closed-loop f64 simulation of the
-    //! P1 scenario on the SPEC relative dynamics ([`crate::orbit::elliptic`]).
+    //! paper's scenario on the relative dynamics of [`crate::orbit::elliptic`].
     use super::*;
     use crate::orbit::elliptic::{EllipticOrbit, RelStateTof, rk4_step_relative};
     use nalgebra::Matrix3;
@@ -1162,8 +1162,8 @@ mod tests {
         )
     }
 
-    /// P1 scenario on the SPEC relative dynamics (RK4 at the sample period, thrust held),
-    /// chaser at rest relative to the target frame at t = 0.
+    /// The paper's scenario on the relative dynamics of [`crate::orbit::elliptic`] (RK4 at the
+    /// sample period, thrust held), chaser at rest relative to the target frame at t = 0.
     fn run_p1(
         mass_chaser_kg: f64,
         mut ctrl: impl FnMut(&Xu2015Observation) -> Vector3<f64>,
@@ -1219,7 +1219,7 @@ mod tests {
     /// Independent reference for PD: with the reference constant, the quasi-static error of
     /// m_nom[−k_p e − k_d ė]/m_c = F_t/m_t is e_i = (F_t,i/m_t)·m_c/(m_nom k_p); the dynamic
     /// correction |1 + iω k_d/k_p − ω²/k_p| − 1 ≤ 1e−3 at ω ≤ 0.1 rad/s, so the per-axis PD
-    /// peak must match F_max,i m_c/(m_t m_nom k_p) within 5 % (margin for the brief x-axis
+    /// peak must match F_max,i m_c/(m_t m_nom k_p) within 5 % (margin for the short x-axis
     /// saturation at 100 kg and the 0.1 s sampling of the peak).
     /// Findings asserted as measured (see the printed table; do not re-tune to pass):
     /// - 90 and 100 kg: ACCM is more than 10× more accurate than PD (measured ≈ 50×) at the

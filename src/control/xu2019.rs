@@ -24,7 +24,8 @@
 //!
 //! - **Radial distance to the superquadric** ([`RadialForm`]): the published eq (8)
 //!   (`PaperEq8`, never zero on the boundary off the axes) or the exact ray intersection
-//!   (`Exact`). The heart has one form: eq (11) with the SPEC.md sign correction.
+//!   (`Exact`). The heart has one form: eq (11) with its third branch's sign corrected
+//!   ([`crate::geometry::heart`]).
 //! - **Gradient** ([`GradientForm`]): the paper prints (after eq 15)
 //!   `∇φ = k_a Q_a r_cd + Σ k_r {Q r_cd (e−1) − r_cdᵀQ r_cd · e · P r_co}/(e−1)²`, `e = exp(r_coᵀ P r_co)`,
 //!   which is the gradient only if `∂r_co/∂x_c = I` (a point obstacle): for a radial distance

@@ -1,8 +1,8 @@
 //! Heart-shaped target keep-out of Xu, Wen, Wei (2019), eqs (9)–(11).
 //!
 //! Polar form about the heart centre `o2` (lab frame of the air-bearing table, metres),
-//! β the polar angle of the point P about o2 in `[0, 2π)` (eq 11, with the SPEC.md P3 sign
-//! correction in the third branch):
+//! β the polar angle of the point P about o2 in `[0, 2π)` (eq 11, with the sign of
+//! the third branch corrected, below):
 //!
 //! ```text
 //! |o2Q| =  2 R1 sin β    β ∈ [0, π/2]        right half of the circle of radius R1 about (0,  R1)
@@ -11,9 +11,10 @@
 //! ```
 //!
 //! The published third branch reads `+2R3 sin β`, which is negative on `(3π/2, 2π)`; the minus
-//! sign is meant (SPEC.md P3). The paper's values (Table 1): `o2 = (0.2, 1.4) m`,
-//! `R2 = 2R1 = 2R3 = 0.2 m`. The three arcs meet continuously when `2R1 = R2 = 2R3`; for
-//! other radii the outline closes with straight pieces along the local y axis.
+//! sign is meant (a radius is positive, and only then do the arcs join). The paper's values
+//! (Table 1): `o2 = (0.2, 1.4) m`, `R2 = 2R1 = 2R3 = 0.2 m`. The three arcs meet continuously
+//! when `2R1 = R2 = 2R3`; for other radii the outline closes with straight pieces along the
+//! local y axis.
 //!
 //! The notch (cusp, `|o2Q| = 0` at β = 0) is at the centre and opens along +x: the docking
 //! approach. The paper's goal (0.25, 1.4) m sits in the notch, 0.05 m radially from o2 but

@@ -13,7 +13,7 @@
 //!   o1 and the signs those of cos α, sin α. N lies on the curve but, unless `a = b` and
 //!   `s = 1`, *not on the ray o1M*; `|NM|` is a norm, never negative, and it is not zero when
 //!   M is on the curve off the axes. The published barrier therefore does not vanish on the
-//!   obstacle boundary. SPEC.md P3 asks for it "as published"; the test
+//!   obstacle boundary. It is kept as published, to reproduce the paper; the test
 //!   `val_xu2019_eq8_differs_off_axis` shows the difference.
 //! - [`RadialForm::Exact`] — the radial distance the paper defines in §2.1: the ray o1M
 //!   crosses the curve at `r(α) = [(cos²α/a²)^s + (sin²α/b²)^s]^(−1/2s)`, so the signed

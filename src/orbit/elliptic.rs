@@ -2,9 +2,9 @@
 //! Xu & Hu (2015), "Control for relative position of spacecraft rendezvous with a
 //! non-cooperative maneuver target", Aerospace Control and Application 41(6), eqs. (1)–(8).
 //!
-//! The paper's equations were lost in extraction; the form used here is the one of
-//! SPEC.md §P1, re-derived below and checked against an inertial two-body integration in
-//! the tests.
+//! The paper's equations were lost in extraction; the form used here is the standard nonlinear
+//! relative motion in the target's orbital frame, re-derived below and checked against an
+//! inertial two-body integration in the tests.
 //!
 //! # Frames
 //! - ECI: Earth-centred inertial (x to the vernal equinox, z north).
@@ -13,7 +13,7 @@
 //!   in-plane transverse direction θ̂ (along-track only at perigee/apogee when e ≠ 0).
 //!   The frame rotates with ω = (0, −ḟ, 0) (expressed in itself), ω̇ = (0, −f̈, 0).
 //!
-//! # Relative dynamics (SPEC §P1)
+//! # Relative dynamics
 //! With ρ = (x, y, z) the chaser position relative to the target in the tof,
 //! r_t = (0, 0, −R) and r_c = r_t + ρ, the transport theorem gives
 //! ρ̈ = −μ r_c/|r_c|³ + μ r_t/R³ + a − 2ω×ρ̇ − ω̇×ρ − ω×(ω×ρ), which expands to
@@ -246,7 +246,7 @@ pub fn eccentric_from_true(f_rad: f64, e: f64) -> f64 {
     f_rad - 2.0 * (b * f_rad.sin()).atan2(1.0 + b * f_rad.cos())
 }
 
-/// Relative acceleration ρ̈ (m/s², tof) of SPEC §P1 / Xu & Hu (2015) eqs. (6)–(8):
+/// Relative acceleration ρ̈ (m/s², tof) of Xu & Hu (2015) eqs. (6)–(8), as re-derived above:
 /// full nonlinear two-body differential gravity plus the frame's Coriolis, Euler and
 /// centrifugal terms at true anomaly `f_rad`, plus `accel_input_tof_m_s2`
 /// (= u/m_c − F_t/m_t + d, m/s², tof). `r_c` is the chaser's distance to Earth's centre.

@@ -85,6 +85,54 @@ pub fn frame_rate_eci_exact_rad_s(
     h / (r * r) + (a_ref_eci_m_s2.dot(&h) / (hn * hn)) * r_ref_eci_m
 }
 
+/// A bound on the Hill frame's angular speed over the interval [t − dt, t + dt] of a reference
+/// whose ECI state at t is (`r_eci_m`, `v_eci_m_s`), under two-body gravity plus J2 (`j2`), rad/s;
+/// `None` if the interval is too long for the bound (|r| could reach the Earth's radius).
+///
+/// Derivation. The Hill frame (x̂ = r̂, ẑ = ĥ) turns at ω = (|h|/r²) ẑ + (r a_h/|h|) x̂, with a_h
+/// the acceleration along ĥ (only J2 has one). Over |τ| ≤ dt: the acceleration is at most
+/// g = μ(1 + 3 J2 R²/r²)/r² ≤ μ(1 + 3 J2)/r_lo² (|a_J2| ≤ 3 J2 μ R²/r⁴ termwise, R ≤ r), so
+/// |v| ≤ v_hi = |v(t)| + g dt and |r| ≥ r_lo = |r(t)| − v_hi dt, |r| ≤ r_hi = |r(t)| + v_hi dt
+/// (r_lo: a fixed point, verified). |h| = |r × v| ≤
+/// r_hi v_hi; central gravity does not change h and J2 changes it at most at r |a_J2|, so
+/// |h| ≥ h_lo = |h(t)| − r_hi a_J2,max dt. Hence |ω| ≤ r_hi v_hi / r_lo² + r_hi a_J2,max / h_lo.
+pub fn hill_rate_bound_rad_s(
+    r_eci_m: &Vector3<f64>,
+    v_eci_m_s: &Vector3<f64>,
+    dt_s: f64,
+    j2: bool,
+) -> Option<f64> {
+    use crate::orbit::constants::{J2_EARTH, MU_EARTH_M3_S2 as MU, R_EARTH_M};
+    let (r, v) = (r_eci_m.norm(), v_eci_m_s.norm());
+    let j2_fac = if j2 { 3.0 * J2_EARTH } else { 0.0 };
+    let mut r_lo = r;
+    for _ in 0..4 {
+        if r_lo <= R_EARTH_M {
+            return None;
+        }
+        let g = MU * (1.0 + j2_fac) / (r_lo * r_lo);
+        r_lo = r - (v + g * dt_s) * dt_s;
+    }
+    // A little below the iterate, then verified: if |r| ≥ r_lo on the interval, the speed
+    // bound v_hi it implies keeps |r| ≥ r − v_hi dt ≥ r_lo (continuity closes the argument).
+    r_lo = r - 1.01 * (r - r_lo) - 1e-3;
+    if r_lo <= R_EARTH_M {
+        return None;
+    }
+    let g = MU * (1.0 + j2_fac) / (r_lo * r_lo);
+    let v_hi = v + g * dt_s;
+    if r - v_hi * dt_s < r_lo {
+        return None;
+    }
+    let r_hi = r + v_hi * dt_s;
+    let a_j2 = j2_fac * MU * R_EARTH_M * R_EARTH_M / r_lo.powi(4);
+    let h_lo = r_eci_m.cross(v_eci_m_s).norm() - r_hi * a_j2 * dt_s;
+    if h_lo <= 0.0 {
+        return None;
+    }
+    Some(r_hi * v_hi / (r_lo * r_lo) + r_hi * a_j2 / h_lo)
+}
+
 /// A local orbital frame at one instant: its attitude and angular velocity.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LocalFrame {

@@ -1,7 +1,7 @@
 //! `claims.json`: one JSON object per claim a reproduction checks.
 //!
-//! Contract (design notes, "Outputs", extended by issue 20): a JSON array; each object has
-//! exactly the keys, in this order,
+//! Contract (the `claims.json` of every `rpod reproduce` report, `docs/papers.md`): a JSON
+//! array; each object has exactly the keys, in this order,
 //! - `id` (short slug),
 //! - `claim` (one sentence),
 //! - `kind`: `"paper"` (a claim the paper makes) or `"beyond the paper"` (a question the

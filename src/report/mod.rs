@@ -1,8 +1,8 @@
 //! Reports: PNG/SVG plots, the `REPORT.md` builder and `claims.json`.
 //!
-//! This is the shared output layer of `rpod reproduce NAME --out DIR` and `rpod trials`
-//! (see "Outputs" in the design notes). It is Bevy-free and has no global state besides a
-//! lazily built, read-only font database.
+//! This is the shared output layer of `rpod reproduce NAME --out DIR` and `rpod trials` (the output
+//! contract: `docs/outputs.md`, `ARCHITECTURE.md`). It is Bevy-free and has no global state besides
+//! a lazily built, read-only font database.
 //!
 //! - [`plot`]: [`Plot`] (one set of axes: time series, XY paths with obstacle outlines and
 //!   polygons, categorical outcome maps) and [`Figure`] (a grid of plots with a title), written

@@ -23,6 +23,14 @@ use super::{Dash, Figure, LineStyle, Plot};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+/// Opens a run's output file for reading: a regular file only (a link to `/dev/zero` or a FIFO
+/// planted in a run folder is refused, not read), at most
+/// [`super::fsio::MAX_OUTPUT_READ_BYTES`] read.
+fn open_run_file(path: &Path) -> std::io::Result<std::io::Take<std::fs::File>> {
+    use std::io::Read;
+    Ok(super::fsio::open_regular(path, "run file")?.take(super::fsio::MAX_OUTPUT_READ_BYTES))
+}
+
 /// Columns of a CSV file, by header name (empty cells and text are NaN).
 struct Table {
     names: Vec<String>,
@@ -31,8 +39,7 @@ struct Table {
 
 impl Table {
     fn read(path: &Path) -> Result<Self, String> {
-        let mut rdr =
-            csv::Reader::from_path(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut rdr = csv::Reader::from_reader(open_run_file(path).map_err(|e| e.to_string())?);
         let names: Vec<String> = rdr
             .headers()
             .map_err(|e| format!("{}: {e}", path.display()))?
@@ -55,9 +62,10 @@ impl Table {
             .map(|i| self.cols[i].as_slice())
     }
     fn text_col(path: &Path, name: &str) -> Vec<String> {
-        let Ok(mut rdr) = csv::Reader::from_path(path) else {
+        let Ok(file) = open_run_file(path) else {
             return Vec::new();
         };
+        let mut rdr = csv::Reader::from_reader(file);
         let Some(i) = rdr
             .headers()
             .ok()
@@ -117,9 +125,10 @@ fn write(
 
 /// (chaser, target) names for a run.
 fn roles(dir: &Path, bodies: &[String]) -> (String, String) {
-    let summary: Option<serde_json::Value> = std::fs::read_to_string(dir.join("summary.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str(&t).ok());
+    let summary: Option<serde_json::Value> =
+        super::fsio::read_regular_string(&dir.join("summary.json"), 64 << 20, "run summary")
+            .ok()
+            .and_then(|t| serde_json::from_str(&t).ok());
     if let Some(s) = &summary
         && let Some(file) = s["scene_file"].as_str()
     {
@@ -160,6 +169,13 @@ fn roles(dir: &Path, bodies: &[String]) -> (String, String) {
 /// Draws the standard figures of the run in `dir` into `out` (created); returns the files.
 pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, String> {
     let traj = Table::read(&dir.join("trajectory.csv"))?;
+    if std::fs::symlink_metadata(out).is_ok_and(|m| m.file_type().is_symlink()) {
+        return Err(format!(
+            "{} is a symbolic link: rpod writes plots only into a real folder; remove the link \
+             or choose another --out",
+            out.display()
+        ));
+    }
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let t = traj
         .col("t_s")

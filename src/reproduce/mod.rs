@@ -34,6 +34,13 @@ pub const INDEX_FILE: &str = "INDEX.md";
 
 /// Runs one paper's reproduction into `out` (the paper's own directory).
 pub fn run(name: &str, out: &Path) -> Result<(), String> {
+    if !PAPERS.contains(&name) {
+        return Err(format!(
+            "unknown paper `{}`; known: {}",
+            name.escape_debug(),
+            PAPERS.join(", ")
+        ));
+    }
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     match name {
         "guo2016" => guo2016::run(out),

@@ -169,8 +169,9 @@ fn whole_file_error(file: &str, message: String) -> SceneError {
 pub fn read_text(path: &Path, what: &str) -> Result<String, SceneError> {
     use std::io::Read;
     let file = path.display().to_string();
-    let f = std::fs::File::open(path)
-        .map_err(|e| whole_file_error(&file, format!("cannot read the {what}: {e}")))?;
+    // A FIFO, socket or device is refused before anything is read (no hang, no endless read).
+    let f = crate::report::fsio::open_regular(path, what)
+        .map_err(|e| whole_file_error(&file, e.to_string()))?;
     let mut bytes = Vec::new();
     f.take(MAX_FILE_BYTES as u64 + 1)
         .read_to_end(&mut bytes)
@@ -551,9 +552,13 @@ fn parse_ron_mapped<T: serde::de::DeserializeOwned>(
     original: &str,
     edits: &[Edit],
 ) -> Result<T, SceneError> {
-    ron::Options::default()
+    let mut ignored: Vec<Vec<String>> = Vec::new();
+    let value = ron::Options::default()
         .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
-        .from_str(text)
+        .from_str_seed(
+            text,
+            RefuseIgnored::<T>(&mut ignored, std::marker::PhantomData),
+        )
         .map_err(|e| {
             let offset = offset_of(text, e.span.start.line, e.span.start.col);
             let (file, line, col) = if e.span.start.line == 0 {
@@ -568,7 +573,193 @@ fn parse_ron_mapped<T: serde::de::DeserializeOwned>(
                 field: field_at_offset(text, offset),
                 message: e.code.to_string(),
             }
+        })?;
+    if let Ok(root) = parse_tree(text) {
+        let mut bad = None;
+        check_numbers(text, &root, "", &mut Vec::new(), &mut bad);
+        if let Some((offset, field, message)) = bad {
+            let (file, line, col) = position(original, file, edits, offset);
+            return Err(SceneError {
+                file,
+                line,
+                col,
+                field,
+                message,
+            });
+        }
+    }
+    // A field no type consumed: every struct and variant refuses unknown fields, at any depth
+    // (law and Sequencer params, contact laws, `--set` included), whatever its serde attributes.
+    if let Some(path) = ignored.first() {
+        let joined = path.join(".");
+        let offset = locate(text, &joined).map_or(0, |(s, _)| s);
+        let (file, line, col) = position(original, file, edits, offset);
+        let name = path.last().map_or("", String::as_str);
+        return Err(SceneError {
+            file,
+            line,
+            col,
+            field: joined.clone(),
+            message: format!(
+                "unknown field `{}` here: it is not a field of this struct or variant, so it \
+                 would be silently ignored; check its spelling against the scene format",
+                name.escape_debug()
+            ),
+        });
+    }
+    Ok(value)
+}
+
+/// Largest magnitude of any number in a scene or trials file. Far beyond any physical parameter
+/// rpod models, and small enough that the norm of a 3-vector and the product of two numbers stay
+/// finite in f64 (1e100² = 1e200): a direction can never normalise to zero or NaN by overflow.
+pub const MAX_NUMBER: f64 = 1e100;
+
+/// The limit on a number by the unit its field name ends with (`…_m_s`, `…_rad_s`, `…_n`):
+/// (unit, largest magnitude, what it is). Units not listed (compound ones such as `_n_s_m`, and
+/// unitless gains) get [`MAX_NUMBER`] only; bounds that depend on meaning (positive, below one)
+/// stay with each type's own validation.
+const UNIT_LIMITS: &[(&str, f64, &str)] = &[
+    ("_m_s2", 1e6, "an acceleration (m/s²)"),
+    ("_m_s", super::validate::MAX_SPEED_M_S, "a speed (m/s)"),
+    (
+        "_rad_s",
+        super::validate::MAX_RATE_DEG_S * std::f64::consts::PI / 180.0,
+        "a rate (rad/s)",
+    ),
+    ("_deg_s", super::validate::MAX_RATE_DEG_S, "a rate (°/s)"),
+    ("_nm", super::validate::MAX_FORCE_N, "a torque (N·m)"),
+    ("_n", super::validate::MAX_FORCE_N, "a force (N)"),
+    ("_m", super::validate::MAX_ORBIT_RADIUS_M, "a length (m)"),
+];
+
+/// The unit a field name ends with: its longest trailing run of unit tokens (`vel_m_s` → `m_s`,
+/// `viscous_drag_n_s_m` → `n_s_m`, `stiffness_n_m1_5` → `n_m1_5`, `damping_ratio` → ``).
+fn unit_of(key: &str) -> String {
+    const TOKENS: &[&str] = &[
+        "m", "s", "s2", "n", "nm", "rad", "deg", "kg", "m1", "m2", "m3", "5", "hz",
+    ];
+    let parts: Vec<&str> = key.split('_').collect();
+    let mut k = parts.len();
+    // The first part is the quantity's name even when it looks like a unit (`s`, `m`).
+    while k > 1 && TOKENS.contains(&parts[k - 1]) {
+        k -= 1;
+    }
+    parts[k..].join("_")
+}
+
+/// Checks every number of the text, wherever it appears (law and Sequencer params, sensors,
+/// actuators, contact laws, guarantees, trials grids): finite, at most [`MAX_NUMBER`] in
+/// magnitude, and within the limit of its unit ([`UNIT_LIMITS`], from the field name; the
+/// elements of a tuple take their field's unit). One shared pass, so no type can forget it.
+/// Records the first failure as (byte offset, field path, message).
+fn check_numbers(
+    text: &str,
+    node: &Node,
+    key: &str,
+    path: &mut Vec<String>,
+    bad: &mut Option<(usize, String, String)>,
+) {
+    if bad.is_some() {
+        return;
+    }
+    match &node.kind {
+        NodeKind::Struct { fields, .. } => {
+            for (k, _, v) in fields {
+                path.push(k.clone());
+                check_numbers(text, v, k, path, bad);
+                path.pop();
+            }
+        }
+        NodeKind::Seq(items) => {
+            for (i, v) in items.iter().enumerate() {
+                // Paths as the other scene errors spell them: a named element by its name, a
+                // vector's component by its field alone.
+                if matches!(v.kind, NodeKind::Atom) {
+                    check_numbers(text, v, key, path, bad);
+                    continue;
+                }
+                path.push(element_label(text, v).unwrap_or_else(|| i.to_string()));
+                check_numbers(text, v, key, path, bad);
+                path.pop();
+            }
+        }
+        NodeKind::Atom => {
+            let raw = text.get(node.start..node.end.min(text.len())).unwrap_or("");
+            let raw = raw.trim();
+            // Only numbers: names, strings, variants and booleans are other atoms.
+            let starts_numeric = raw
+                .trim_start_matches(['+', '-'])
+                .starts_with(|c: char| c.is_ascii_digit() || c == '.' || c == 'i' || c == 'N');
+            if !starts_numeric || raw.starts_with('"') {
+                return;
+            }
+            let Ok(x) = raw.replace('_', "").parse::<f64>() else {
+                return;
+            };
+            let unit_of_key = unit_of(key);
+            let unit = UNIT_LIMITS
+                .iter()
+                .find(|(u, _, _)| u.trim_start_matches('_') == unit_of_key);
+            let why = if !x.is_finite() {
+                Some(format!("{raw} is not a finite number"))
+            } else if let Some((u, max, what)) = unit
+                && x.abs() > *max
+            {
+                Some(format!(
+                    "{raw} is beyond ±{max:e}, the largest value of {what} a scene may hold \
+                     (field unit `{}`); it would change the model's meaning or disable it",
+                    u.trim_start_matches('_')
+                ))
+            } else if x.abs() > MAX_NUMBER {
+                Some(format!(
+                    "{raw} is beyond ±{MAX_NUMBER:e}, the largest number a scene may hold (so \
+                     that no norm or product overflows)"
+                ))
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                *bad = Some((node.start, path.join("."), why));
+            }
+        }
+    }
+}
+
+/// Deserialises a `T` and records the path of every field the types did not consume.
+struct RefuseIgnored<'a, T>(&'a mut Vec<Vec<String>>, std::marker::PhantomData<T>);
+
+impl<'de, T: serde::de::DeserializeOwned> serde::de::DeserializeSeed<'de> for RefuseIgnored<'_, T> {
+    type Value = T;
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<T, D::Error> {
+        let sink = self.0;
+        serde_ignored::deserialize(d, |path| {
+            if sink.len() < 16 {
+                let mut segs = Vec::new();
+                ignored_segments(&path, &mut segs);
+                sink.push(segs);
+            }
         })
+    }
+}
+
+/// The path of an ignored field as the segments [`locate`] walks (field names and indices).
+fn ignored_segments(p: &serde_ignored::Path<'_>, out: &mut Vec<String>) {
+    use serde_ignored::Path;
+    match p {
+        Path::Root => {}
+        Path::Seq { parent, index } => {
+            ignored_segments(parent, out);
+            out.push(index.to_string());
+        }
+        Path::Map { parent, key } => {
+            ignored_segments(parent, out);
+            out.push(key.clone());
+        }
+        Path::Some { parent }
+        | Path::NewtypeStruct { parent }
+        | Path::NewtypeVariant { parent } => ignored_segments(parent, out),
+    }
 }
 
 /// Applies one `path=value` override to scene text. The value is one RON value (`3.5`, `true`,

@@ -130,6 +130,30 @@ pub struct DockingSpec {
     /// values documented in [`crate::contact`]) or `Rigid` (rapier's impulses).
     #[serde(default)]
     pub contact: crate::contact::ContactModelSpec,
+    /// Start latched: the chaser must be seated within the latch tolerances at t = 0 (checked
+    /// when the scene loads); the latch closes before the first step. For undocking scenes.
+    #[serde(default)]
+    pub start_latched: bool,
+    /// Separation springs between the ports, compressed while latched, that push the vehicles
+    /// apart when the latch is released (needs the `Compliant` contact, whose sub-steps
+    /// integrate them).
+    #[serde(default)]
+    pub separation: Option<SeparationSpec>,
+}
+
+/// Separation springs (all of them together, acting along the target port axis at the chaser
+/// port origin): the force falls linearly from `force_n` at full compression to `preload_n`
+/// at the end of the stroke, where they rest on their stops. Energy released:
+/// ½·(`force_n` + `preload_n`)·`stroke_m`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SeparationSpec {
+    /// Stroke, m.
+    pub stroke_m: f64,
+    /// Force at full compression, N.
+    pub force_n: f64,
+    /// Force at the end of the stroke (the preload the stops hold), N.
+    pub preload_n: f64,
 }
 
 /// Electromagnet: attractive force F(gap) = min(F0 / (1 + gap/g0)², F_max) on the chaser port,
@@ -166,10 +190,107 @@ pub struct LatchSpec {
     pub dwell_s: f64,
     /// The latch breaks when the joint force exceeds this, N.
     pub break_force_n: f64,
+    /// Relative rates beyond which the latch refuses to engage (default: the IDSS initial
+    /// contact conditions, see [`CaptureRates`]).
+    #[serde(default)]
+    pub capture_rates: CaptureRates,
+    /// What holds the latched bodies: `Rigid` (the default, a rapier fixed joint) or
+    /// `Compliant((...))`, a stiff spring–damper ([`CompliantLatch`]).
+    #[serde(default)]
+    pub joint: LatchJoint,
+}
+
+/// The latch joint.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub enum LatchJoint {
+    /// A rapier fixed joint: stops the relative motion within one step, so its peak load is an
+    /// impulse over dt and depends on the step.
+    #[default]
+    Rigid,
+    /// A spring–damper between the chaser port frame and where the latch caught it in the
+    /// target's frame, integrated in f64 with the compliant contact's sub-steps (the scene's
+    /// contact must be `Compliant`): its loads converge in dt.
+    Compliant(CompliantLatch),
+}
+
+/// A compliant latch: on the chaser, at its port origin p_c, the force
+/// F = −k·Δx − c·Δv and the moment M = −k_θ·θ − c_θ·Δω, where Δx is p_c less the point where the
+/// latch caught it (carried by the target), Δv the velocity of the chaser's material point at
+/// p_c less the target's there, θ the rotation vector from the caught attitude to the present
+/// one and Δω = ω_c − ω_t (world frame); the target gets −F at p_c and −M.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CompliantLatch {
+    /// k, N/m.
+    pub stiffness_n_m: f64,
+    /// c, N·s/m.
+    pub damping_n_s_m: f64,
+    /// k_θ, N·m/rad.
+    pub rot_stiffness_nm_rad: f64,
+    /// c_θ, N·m·s/rad.
+    pub rot_damping_nm_s_rad: f64,
 }
 
 fn dwell() -> f64 {
     0.2
+}
+
+/// Capture rate limits: the latch engages only when, at the end of the dwell, the relative
+/// motion of the chaser port with respect to the target port is within all three, else it
+/// stays open (the mechanism keeps waiting while seated) and an event names the rate.
+///
+/// Rates, world frame, taken at the chaser port origin p_c with a_t the target port axis:
+/// - axial: |v_rel·a_t|, v_rel the chaser's velocity at p_c less the target's material point
+///   velocity there;
+/// - lateral: |v_rel − (v_rel·a_t)·a_t|;
+/// - angular: |ω_c − ω_t| (the magnitude of the relative angular velocity vector, all axes).
+///
+/// Defaults: the International Docking System Standard's initial contact conditions as
+/// quoted in `ANCHORS.md` (closing speed ≤ 0.10 m/s, lateral rate ≤ 0.04 m/s, pitch/yaw/roll
+/// rates ≤ 0.2 °/s), applied here to the relative motion at the moment of capture. The
+/// standard bounds each angular axis at 0.2 °/s; the default bounds the vector's magnitude at
+/// √3 · 0.2 °/s ≈ 0.346 °/s, the largest magnitude the standard's per-axis box admits, so
+/// that every state the standard requires a mechanism to capture is accepted.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CaptureRates {
+    /// Largest |axial rate|, m/s.
+    #[serde(default = "CaptureRates::idss_axial")]
+    pub max_axial_rate_m_s: f64,
+    /// Largest lateral rate, m/s.
+    #[serde(default = "CaptureRates::idss_lateral")]
+    pub max_lateral_rate_m_s: f64,
+    /// Largest relative angular rate magnitude, deg/s.
+    #[serde(default = "CaptureRates::idss_angular")]
+    pub max_angular_rate_deg_s: f64,
+}
+
+impl CaptureRates {
+    /// IDSS closing speed upper bound, m/s.
+    pub const IDSS_AXIAL_M_S: f64 = 0.10;
+    /// IDSS lateral rate bound, m/s.
+    pub const IDSS_LATERAL_M_S: f64 = 0.04;
+    /// IDSS per-axis angular rate bound, deg/s.
+    pub const IDSS_ANGULAR_PER_AXIS_DEG_S: f64 = 0.2;
+    fn idss_axial() -> f64 {
+        Self::IDSS_AXIAL_M_S
+    }
+    fn idss_lateral() -> f64 {
+        Self::IDSS_LATERAL_M_S
+    }
+    fn idss_angular() -> f64 {
+        Self::IDSS_ANGULAR_PER_AXIS_DEG_S * 3f64.sqrt()
+    }
+}
+
+impl Default for CaptureRates {
+    fn default() -> Self {
+        Self {
+            max_axial_rate_m_s: Self::idss_axial(),
+            max_lateral_rate_m_s: Self::idss_lateral(),
+            max_angular_rate_deg_s: Self::idss_angular(),
+        }
+    }
 }
 
 /// Failure criteria.
@@ -952,66 +1073,4 @@ impl PartSpec {
     }
 }
 
-/// An invariant written in the scene, checked every step by the monitor.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub enum GuaranteeSpec {
-    /// Full-geometry minimum distance between two bodies stays ≥ `min_m`
-    /// (margin = distance − min_m, m).
-    MinDistance {
-        /// Guarantee name.
-        name: String,
-        /// First body.
-        a: String,
-        /// Second body.
-        b: String,
-        /// Required clearance, m.
-        min_m: f64,
-    },
-    /// Point-mass keep-out: the centre of mass of `body` stays outside a sphere of `radius_m`
-    /// about the centre of mass of `around` (margin = |r| − radius, m).
-    KeepOutSphere {
-        /// Guarantee name.
-        name: String,
-        /// The body whose centre of mass is checked.
-        body: String,
-        /// The body at the sphere's centre.
-        around: String,
-        /// Sphere radius, m.
-        radius_m: f64,
-    },
-    /// Full-geometry approach cone: while `body`'s centre of mass is between `to_range_m` and
-    /// `from_range_m` from the port `port` of `around`, every point of every part of `body`
-    /// stays inside the cone with its apex at the port, its axis the port's outward axis and
-    /// half-angle `half_angle_deg` (margin = the clearance to the cone's wall, m, inside the
-    /// range band; positive outside it, continuous across its edges; see
-    /// [`crate::geometry::approach_cone`]).
-    ApproachCone {
-        /// Guarantee name.
-        name: String,
-        /// The body that approaches.
-        body: String,
-        /// The body with the port.
-        around: String,
-        /// The port (its origin is the apex).
-        port: String,
-        /// Half-angle, deg (0 < α < 90).
-        half_angle_deg: f64,
-        /// The cone applies from this range (centre of mass to apex) inwards, m.
-        from_range_m: f64,
-        /// … down to this range, m (default 0).
-        #[serde(default)]
-        to_range_m: f64,
-    },
-}
-
-impl GuaranteeSpec {
-    /// The guarantee's name.
-    pub fn name(&self) -> &str {
-        match self {
-            GuaranteeSpec::MinDistance { name, .. }
-            | GuaranteeSpec::KeepOutSphere { name, .. }
-            | GuaranteeSpec::ApproachCone { name, .. } => name,
-        }
-    }
-}
+pub use crate::guarantee::GuaranteeSpec;

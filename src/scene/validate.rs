@@ -17,12 +17,10 @@
 //! this set keeps every one of those unambiguous without quoting. Names are unique in their
 //! list (bodies, parts of a body, ports of a body, guarantees).
 
-use super::{
-    AttitudeSpec, BodySpec, Environment, GuaranteeSpec, OrbitSpec, PartSpec, Scene, ShapeSpec, V3,
-};
+use super::{AttitudeSpec, BodySpec, Environment, OrbitSpec, PartSpec, Scene, ShapeSpec, V3};
 use crate::orbit::constants::R_EARTH_M;
 
-type Check = Result<(), (String, String)>;
+pub(crate) type Check = Result<(), (String, String)>;
 
 /// Most bodies in a scene.
 pub const MAX_BODIES: usize = 64;
@@ -41,6 +39,9 @@ pub const MAX_SLOT_SEGMENTS: u32 = 256;
 pub const MAX_PRISM_SEGMENTS: u32 = 1024;
 /// Most guarantees in a scene.
 pub const MAX_GUARANTEES: usize = 256;
+/// Most controllers in a scene (a few per body of [`MAX_BODIES`], with room to spare; checking
+/// and building stay linear in the count).
+pub const MAX_CONTROLLERS: usize = 4096;
 /// Most rapier substeps per step.
 pub const MAX_SUBSTEPS: u32 = 1000;
 /// Longest fixed step, s. The reference orbit and the L2 formation centre are propagated in
@@ -115,7 +116,7 @@ pub fn num(v: f64) -> String {
     }
 }
 
-fn in_range(path: &str, v: f64, (lo, hi): (f64, f64), unit: &str) -> Check {
+pub(crate) fn in_range(path: &str, v: f64, (lo, hi): (f64, f64), unit: &str) -> Check {
     if !(v.is_finite() && v >= lo && v <= hi) {
         return fail(
             path,
@@ -160,7 +161,7 @@ fn fail(path: impl Into<String>, msg: impl Into<String>) -> Check {
     Err((path.into(), msg.into()))
 }
 
-fn positive(path: &str, v: f64, unit: &str) -> Check {
+pub(crate) fn positive(path: &str, v: f64, unit: &str) -> Check {
     if !(v.is_finite() && v > 0.0) {
         return fail(
             path,
@@ -228,6 +229,15 @@ pub fn validate(s: &Scene) -> Check {
             format!(
                 "at most {MAX_GUARANTEES} guarantees, got {}",
                 s.guarantees.len()
+            ),
+        );
+    }
+    if s.controllers.len() > MAX_CONTROLLERS {
+        return fail(
+            "controllers",
+            format!(
+                "at most {MAX_CONTROLLERS} controllers, got {}",
+                s.controllers.len()
             ),
         );
     }
@@ -361,91 +371,10 @@ pub fn validate(s: &Scene) -> Check {
     }
     for g in &s.guarantees {
         let p = format!("guarantees.{}", g.name());
-        let body_exists = |n: &str| s.bodies.iter().any(|b| b.name == n);
-        match g {
-            GuaranteeSpec::MinDistance { a, b, min_m, .. } => {
-                for (f, n) in [("a", a), ("b", b)] {
-                    if !body_exists(n) {
-                        return fail(format!("{p}.{f}"), format!("no body named `{n}`"));
-                    }
-                }
-                if a == b {
-                    return fail(format!("{p}.b"), "must name a different body than `a`");
-                }
-                if !(min_m.is_finite() && *min_m >= 0.0 && *min_m <= MAX_POSITION_M) {
-                    return fail(
-                        format!("{p}.min_m"),
-                        format!("must be from 0 to {MAX_POSITION_M:e} m"),
-                    );
-                }
-            }
-            GuaranteeSpec::KeepOutSphere {
-                body,
-                around,
-                radius_m,
-                ..
-            } => {
-                for (f, n) in [("body", body), ("around", around)] {
-                    if !body_exists(n) {
-                        return fail(format!("{p}.{f}"), format!("no body named `{n}`"));
-                    }
-                }
-                in_range(
-                    &format!("{p}.radius_m"),
-                    *radius_m,
-                    (f64::MIN_POSITIVE, MAX_POSITION_M),
-                    "m",
-                )?;
-            }
-            GuaranteeSpec::ApproachCone {
-                body,
-                around,
-                port,
-                half_angle_deg,
-                from_range_m,
-                to_range_m,
-                ..
-            } => {
-                for (f, n) in [("body", body), ("around", around)] {
-                    if !body_exists(n) {
-                        return fail(format!("{p}.{f}"), format!("no body named `{n}`"));
-                    }
-                }
-                if body == around {
-                    return fail(
-                        format!("{p}.around"),
-                        "must name a different body than `body`",
-                    );
-                }
-                let has_port = s
-                    .bodies
-                    .iter()
-                    .find(|b| &b.name == around)
-                    .is_some_and(|b| b.ports.iter().any(|q| &q.name == port));
-                if !has_port {
-                    return fail(
-                        format!("{p}.port"),
-                        format!("body `{around}` has no port `{port}`"),
-                    );
-                }
-                if !(half_angle_deg.is_finite() && *half_angle_deg > 0.0 && *half_angle_deg < 90.0)
-                {
-                    return fail(
-                        format!("{p}.half_angle_deg"),
-                        format!("must be an angle in (0, 90) deg, got {half_angle_deg}"),
-                    );
-                }
-                positive(&format!("{p}.from_range_m"), *from_range_m, "metres")?;
-                if !(to_range_m.is_finite() && *to_range_m >= 0.0 && to_range_m < from_range_m) {
-                    return fail(
-                        format!("{p}.to_range_m"),
-                        format!(
-                            "must be ≥ 0 m and below from_range_m ({from_range_m} m), got {to_range_m}"
-                        ),
-                    );
-                }
-            }
-        }
+        g.check(s).map_err(|e| {
+            let e = e.within(&p);
+            (e.field, e.message)
+        })?;
     }
     Ok(())
 }
@@ -1128,6 +1057,60 @@ fn validate_docking(s: &Scene, d: &super::DockingSpec) -> Check {
         return fail("docking.latch.dwell_s", "must be ≥ 0 s");
     }
     positive("docking.latch.break_force_n", l.break_force_n, "newtons")?;
+    let r = &l.capture_rates;
+    for (f, v, unit) in [
+        ("max_axial_rate_m_s", r.max_axial_rate_m_s, "m/s"),
+        ("max_lateral_rate_m_s", r.max_lateral_rate_m_s, "m/s"),
+        ("max_angular_rate_deg_s", r.max_angular_rate_deg_s, "deg/s"),
+    ] {
+        positive(&format!("docking.latch.capture_rates.{f}"), v, unit)?;
+    }
+    if let Some(sp) = &d.separation {
+        if !matches!(d.contact, crate::contact::ContactModelSpec::Compliant(_)) {
+            return fail(
+                "docking.separation",
+                "separation springs are integrated with the compliant contact's sub-steps: the \
+                 docking contact must be Compliant",
+            );
+        }
+        positive("docking.separation.stroke_m", sp.stroke_m, "metres")?;
+        if !(sp.force_n.is_finite() && sp.force_n > 0.0 && sp.force_n <= MAX_FORCE_N) {
+            return fail(
+                "docking.separation.force_n",
+                format!(
+                    "must be a positive force up to {MAX_FORCE_N:e} N, got {}",
+                    num(sp.force_n)
+                ),
+            );
+        }
+        if !(sp.preload_n.is_finite() && sp.preload_n >= 0.0 && sp.preload_n <= sp.force_n) {
+            return fail(
+                "docking.separation.preload_n",
+                format!(
+                    "must be from 0 N to force_n ({} N), got {}",
+                    num(sp.force_n),
+                    num(sp.preload_n)
+                ),
+            );
+        }
+    }
+    if let super::LatchJoint::Compliant(j) = &l.joint {
+        if !matches!(d.contact, crate::contact::ContactModelSpec::Compliant(_)) {
+            return fail(
+                "docking.latch.joint",
+                "a Compliant latch is integrated with the compliant contact's sub-steps: the \
+                 docking contact must be Compliant too",
+            );
+        }
+        for (f, v, unit) in [
+            ("stiffness_n_m", j.stiffness_n_m, "N/m"),
+            ("damping_n_s_m", j.damping_n_s_m, "N·s/m"),
+            ("rot_stiffness_nm_rad", j.rot_stiffness_nm_rad, "N·m/rad"),
+            ("rot_damping_nm_s_rad", j.rot_damping_nm_s_rad, "N·m·s/rad"),
+        ] {
+            positive(&format!("docking.latch.joint.{f}"), v, unit)?;
+        }
+    }
     positive("docking.miss.jam_time_s", d.miss.jam_time_s, "seconds")?;
     positive("docking.miss.jam_speed_m_s", d.miss.jam_speed_m_s, "m/s")?;
     positive(

@@ -6,11 +6,8 @@ use super::{
     BodyState, Clock, EventLog, Guarantees, MonitorState, OrbitEnv, Part, Physics, Roster, SimBody,
     StepBudget, Wrench, conv,
 };
-use crate::guarantee::{KeepOutSphere, MinDistance};
 use crate::scene::parts::{PartCollider, Primitive, expand_body};
-use crate::scene::{
-    BodySpec, Environment, GuaranteeSpec, InitFrame, LoadedScene, Scene, SceneError,
-};
+use crate::scene::{BodySpec, Environment, InitFrame, LoadedScene, Scene, SceneError};
 use bevy::prelude::*;
 use bevy_rapier3d::rapier::prelude as rp;
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
@@ -131,8 +128,8 @@ impl Simulation {
         // contact points, normal and lever arms and only advances their separations along the
         // frozen normal. A speculative contact made 2 cm above the slot's rim (its normal along
         // the rim edge) then stops the cone when it crosses the mouth plane, millimetres clear of
-        // the real wall (issue 22, trial 17 of the capture envelope). Every pair is recomputed
-        // every step instead: `tests/val_contact_normals.rs`.
+        // the real wall (trial 17 of `scenes/trials/capture_envelope.ron`). Every pair is
+        // recomputed every step instead: `tests/val_contact_normals.rs`.
         pw.integration_parameters.contact_recycling = false;
 
         let reference = super::environment::install(&mut app, &scene.environment, dt);
@@ -301,64 +298,17 @@ impl Simulation {
         drop(probes);
 
         let mut guarantees = Guarantees::default();
-        let idx = |n: &str| {
-            scene
-                .bodies
-                .iter()
-                .position(|b| b.name == n)
-                .expect("validated")
+        let gctx = crate::guarantee::registry::GuaranteeContext {
+            scene: &scene,
+            parts: &all_parts,
         };
         for g in &scene.guarantees {
-            match g {
-                GuaranteeSpec::MinDistance { name, a, b, min_m } => {
-                    guarantees.register(Box::new(MinDistance {
-                        name: name.clone(),
-                        a: idx(a),
-                        b: idx(b),
-                        min_m: *min_m,
-                    }))
-                }
-                GuaranteeSpec::KeepOutSphere {
-                    name,
-                    body,
-                    around,
-                    radius_m,
-                } => guarantees.register(Box::new(KeepOutSphere {
-                    name: name.clone(),
-                    body: idx(body),
-                    around: idx(around),
-                    radius_m: *radius_m,
-                })),
-                GuaranteeSpec::ApproachCone {
-                    name,
-                    body,
-                    around,
-                    port,
-                    half_angle_deg,
-                    from_range_m,
-                    to_range_m,
-                } => {
-                    let (b, a) = (idx(body), idx(around));
-                    let (port_m, axis) =
-                        crate::scene::parts::port_frame(&scene.bodies[a], port).expect("validated");
-                    guarantees.register(Box::new(crate::geometry::approach_cone::ApproachCone {
-                        name: name.clone(),
-                        body: b,
-                        body_com_m: Vector3::from(scene.bodies[b].com_m),
-                        points: all_parts[b]
-                            .iter()
-                            .flat_map(crate::geometry::approach_cone::support_points)
-                            .collect(),
-                        around: a,
-                        around_com_m: Vector3::from(scene.bodies[a].com_m),
-                        port_m,
-                        axis,
-                        half_angle_rad: half_angle_deg.to_radians(),
-                        from_range_m: *from_range_m,
-                        to_range_m: *to_range_m,
-                    }))
-                }
-            }
+            let p = format!("guarantees.{}", g.name());
+            let built = g.build(&gctx).map_err(|e| {
+                let e = e.within(&p);
+                loaded.error_at(&e.field, e.message)
+            })?;
+            guarantees.register(built);
         }
 
         app.insert_resource(Physics {
@@ -589,6 +539,23 @@ impl Simulation {
             .map(|d| d.state.name())
     }
 
+    /// Commands the docking mechanism to release (acted on at the next step: RELEASED and the
+    /// separation springs if latched, else a `docking_release_ignored` event). `false` when the
+    /// scene has no docking mechanism.
+    pub fn release_docking(&mut self, source: &str) -> bool {
+        match self
+            .app
+            .world_mut()
+            .get_resource_mut::<super::docking::DockingCommands>()
+        {
+            Some(mut c) => {
+                c.release.push(source.to_string());
+                true
+            }
+            None => false,
+        }
+    }
+
     /// The smallest clearance so far between parts that are not both docking parts, over every
     /// body pair, m (0 when they touched).
     pub fn min_clearance_non_docking_m(&self) -> f64 {
@@ -625,6 +592,88 @@ impl Simulation {
         }
         let k = super::controllers::host_slot(self.app.world_mut(), slot)?;
         super::controllers::ensure_systems(&mut self.app);
+        Ok(k)
+    }
+
+    /// Adds a guarantee (a user's Rust guarantee, a Python callable) to the built simulation,
+    /// judged like a scene's: its margin is sampled now (t = 0) and then every step, on the
+    /// whole interval when it gives a rate bound, at the samples only otherwise. Call it before
+    /// the first step and before [`Simulation::record_to`] (the header names its column).
+    /// Returns its index in [`Simulation::guarantees`].
+    pub fn add_guarantee(
+        &mut self,
+        g: Box<dyn crate::guarantee::Guarantee>,
+    ) -> Result<usize, String> {
+        if self.app.world().resource::<Recorder>().files.is_some() || self.steps() > 0 {
+            return Err(
+                "guarantees must be added before the first step and before recording starts".into(),
+            );
+        }
+        if let Some(p) = crate::scene::validate::name_problem(g.name()) {
+            return Err(format!("guarantee name: {p}"));
+        }
+        if self.guarantees().status.iter().any(|s| s.name == g.name()) {
+            return Err(format!("a guarantee named `{}` already exists", g.name()));
+        }
+        let unit = g.unit();
+        if unit.is_empty()
+            || unit.len() > 16
+            || !unit
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "_/".contains(c))
+        {
+            return Err(format!(
+                "guarantee `{}`: unit {unit:?} must be 1 to 16 of A-Z a-z 0-9 _ /",
+                g.name()
+            ));
+        }
+        let w = self.app.world_mut();
+        let n = w.resource::<Roster>().names.len();
+        // The pairs it reads are tracked from now on (and measured again at t = 0).
+        if let crate::guarantee::Reads::Pairs(l) = g.reads() {
+            let mut np = w.resource_mut::<super::NamedPairs>();
+            let before = np.0.len();
+            for (a, b) in l {
+                if a >= n || b >= n || a == b {
+                    return Err(format!(
+                        "guarantee `{}` reads the pair ({a}, {b}), not two different bodies of the {n}",
+                        g.name()
+                    ));
+                }
+                np.0.push((a.min(b), a.max(b)));
+            }
+            np.0.sort_unstable();
+            np.0.dedup();
+            if np.0.len() != before {
+                use bevy::ecs::system::RunSystemOnce;
+                w.run_system_once(super::monitor::distances)
+                    .map_err(|e| e.to_string())?;
+            }
+        }
+        let t = w.resource::<Clock>().t_s();
+        let m = {
+            let mon = w.resource::<MonitorState>();
+            let view = crate::guarantee::MonitorView {
+                t_s: t,
+                bodies: &mon.bodies,
+                pairs: &mon.pairs,
+                reference: w.get_resource::<super::OrbitEnv>().map(|o| {
+                    let (p, v) = o.reference.state();
+                    crate::guarantee::ReferenceView {
+                        pos_eci_m: p,
+                        vel_eci_m_s: v,
+                    }
+                }),
+            };
+            g.margin_bracket(&view)
+        };
+        let mut gs = w.resource_mut::<Guarantees>();
+        let k = gs.list.len();
+        gs.last
+            .resize(k, crate::geometry::bounds::Bracket::exact(f64::INFINITY));
+        gs.register(g);
+        gs.status[k].update(t, m.value);
+        gs.last.push(m);
         Ok(k)
     }
 

@@ -1,4 +1,4 @@
-//! Compliant docking contact (issue 18): the cone–slot contact force computed by rpod from
+//! Compliant docking contact: the cone–slot contact force computed by rpod from
 //! parry's contact manifolds with the scene's law ([`crate::contact`]), integrated in f64 with
 //! sub-steps only while the docking parts can touch.
 //!
@@ -177,6 +177,108 @@ pub struct CompliantContact {
     pub stats: SubstepStats,
     /// Simulated time at the start of the current step, s (set by the physics step).
     pub t_step_s: f64,
+    /// Mechanism forces between the bodies (latch, separation springs).
+    pub link: Link,
+    /// This step: what the link did.
+    pub link_step: LinkStep,
+}
+
+/// A spring–damper latch between the two docking bodies ([`crate::scene::CompliantLatch`]).
+#[derive(Debug, Clone)]
+pub struct LatchSpring {
+    /// The law's coefficients.
+    pub spec: crate::scene::CompliantLatch,
+    /// The chaser port origin in the chaser's body frame, m.
+    pub port_c_body_m: Vector3<f64>,
+    /// The chaser's body frame in the target's body frame when the latch caught it.
+    pub caught: Isometry3<f64>,
+}
+
+/// Separation springs: along the target port axis a_t, at the chaser port origin, the force
+/// on the chaser F = (preload + k·(L − x))·a_t for an extension x < L since the release
+/// (x = the growth of (p_c − p_t)·a_t), k = (force − preload)/L; none once x reaches L, and
+/// from then on never again (the springs rest on their stops). The target gets −F.
+#[derive(Debug, Clone)]
+pub struct SeparationSpring {
+    /// Stroke L, m.
+    pub stroke_m: f64,
+    /// Force at full compression (x = 0), N.
+    pub force_n: f64,
+    /// Force at the end of the stroke (x = L), N.
+    pub preload_n: f64,
+    /// (p_c − p_t)·a_t at the release, m.
+    pub x0_m: f64,
+    /// Ports in their body frames: chaser origin, target origin and unit axis, m.
+    pub ports_body_m: (Vector3<f64>, Vector3<f64>, Vector3<f64>),
+}
+
+/// Mechanism forces between the docking bodies, integrated with the contact's sub-steps.
+#[derive(Debug, Clone, Default)]
+pub struct Link {
+    /// The chaser is body `b` of the pair (else `a`).
+    pub chaser_is_b: bool,
+    /// The compliant latch, while latched.
+    pub latch: Option<LatchSpring>,
+    /// Separation springs, from the release to the end of their stroke.
+    pub separation: Option<SeparationSpring>,
+}
+
+/// What the link did in one step.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LinkStep {
+    /// Largest latch force on the chaser at its port within the step, N.
+    pub peak_force_n: f64,
+    /// Largest latch moment on the chaser about its port within the step, N·m.
+    pub peak_moment_nm: f64,
+    /// Latch force on the chaser at its port at the end of the step, world, N.
+    pub force_end_n: Vector3<f64>,
+    /// Latch moment on the chaser about its port at the end of the step, world, N·m.
+    pub moment_end_nm: Vector3<f64>,
+    /// The separation springs reached the end of their stroke in this step.
+    pub separation_ended: bool,
+}
+
+/// (latch force on the chaser, latch moment on it, separation force on it, point p_c), world.
+type LinkWrench = (Vector3<f64>, Vector3<f64>, Vector3<f64>, Vector3<f64>);
+
+/// The link's wrench at one configuration: (latch force on the chaser at p_c, latch moment
+/// on the chaser, separation force on the chaser at p_c, p_c), world frame.
+fn link_wrench(
+    link: &Link,
+    (dc, sc): (&Dyn, &BodyState),
+    (dt, st): (&Dyn, &BodyState),
+) -> Option<LinkWrench> {
+    let pose_c = sc.body_pose(&dc.com);
+    let pose_t = st.body_pose(&dt.com);
+    let mut f = Vector3::zeros();
+    let mut m = Vector3::zeros();
+    let mut fs = Vector3::zeros();
+    let mut p_c = None;
+    if let Some(l) = &link.latch {
+        let p = pose_c.transform_point(&l.port_c_body_m.into()).coords;
+        let anchor = (pose_t * l.caught)
+            .transform_point(&l.port_c_body_m.into())
+            .coords;
+        let dv = point_vel(sc, &p) - point_vel(st, &p);
+        f = -(p - anchor) * l.spec.stiffness_n_m - dv * l.spec.damping_n_s_m;
+        let err = pose_c.rotation * (pose_t.rotation * l.caught.rotation).inverse();
+        m = -err.scaled_axis() * l.spec.rot_stiffness_nm_rad
+            - (sc.omega_rad_s - st.omega_rad_s) * l.spec.rot_damping_nm_s_rad;
+        p_c = Some(p);
+    }
+    if let Some(sp) = &link.separation {
+        let (pc_b, pt_b, at_b) = sp.ports_body_m;
+        let p = pose_c.transform_point(&pc_b.into()).coords;
+        let pt = pose_t.transform_point(&pt_b.into()).coords;
+        let at = pose_t.rotation * at_b;
+        let x = (p - pt).dot(&at) - sp.x0_m;
+        if x < sp.stroke_m {
+            let k = (sp.force_n - sp.preload_n) / sp.stroke_m;
+            fs = at * (sp.preload_n + k * (sp.stroke_m - x));
+        }
+        p_c.get_or_insert(p);
+    }
+    p_c.map(|p| (f, m, fs, p))
 }
 
 /// How much sub-stepping a run needed.
@@ -450,6 +552,7 @@ struct Stepper<'a> {
     d: (&'a Dyn, &'a Dyn),
     half_h: f64,
     prediction_m: f64,
+    link: &'a Link,
 }
 
 /// Forces of one evaluation: per pair (force on b, normal force, unclamped normal force), and
@@ -462,6 +565,10 @@ struct Forces {
     torque: (Vector3<f64>, Vector3<f64>),
     /// World inverse inertias used.
     ii: (Matrix3<f64>, Matrix3<f64>),
+    /// The link's (latch force, latch moment, separation force) on the chaser, world.
+    link: (Vector3<f64>, Vector3<f64>, Vector3<f64>),
+    /// The link's force on b, world, N.
+    link_on_b: Vector3<f64>,
 }
 
 impl Stepper<'_> {
@@ -484,7 +591,31 @@ impl Stepper<'_> {
             on_b: Vector3::zeros(),
             torque: (Vector3::zeros(), Vector3::zeros()),
             ii,
+            link: (Vector3::zeros(), Vector3::zeros(), Vector3::zeros()),
+            link_on_b: Vector3::zeros(),
         };
+        let (c, t) = if self.link.chaser_is_b {
+            ((self.d.1, sb), (self.d.0, sa))
+        } else {
+            ((self.d.0, sa), (self.d.1, sb))
+        };
+        if let Some((f, m, fs, p)) = link_wrench(self.link, c, t) {
+            let fc = f + fs;
+            // On the chaser: fc at p and the couple m; on the target the opposite.
+            let tc = (p - c.1.pos_m).cross(&fc) + m;
+            let tt = (p - t.1.pos_m).cross(&(-fc)) - m;
+            if self.link.chaser_is_b {
+                out.on_b += fc;
+                out.torque.1 += tc;
+                out.torque.0 += tt;
+            } else {
+                out.on_b -= fc;
+                out.torque.0 += tc;
+                out.torque.1 += tt;
+            }
+            out.link = (f, m, fs);
+            out.link_on_b = if self.link.chaser_is_b { fc } else { -fc };
+        }
         for k in self.candidates {
             let Some(g) = geo[*k].as_ref().filter(|g| g.depth > 0.0) else {
                 continue;
@@ -579,7 +710,9 @@ impl CompliantContact {
         self.b_force_history.clear();
         self.impacts.clear();
         self.step_contact_s = 0.0;
-        if !self.enabled {
+        self.link_step = LinkStep::default();
+        let link_on = self.link.latch.is_some() || self.link.separation.is_some();
+        if !self.enabled && !link_on {
             return None;
         }
         let [(ba, sa0, wa), (bb, sb0, wb)] = q.get_many([self.bodies.0, self.bodies.1]).ok()?;
@@ -597,7 +730,7 @@ impl CompliantContact {
         let acc_rel = (held.2 * db.inv_m - held.0 * da.inv_m).norm();
         let mut candidates: Vec<usize> = Vec::new();
         let mut r_max: (f64, f64) = (0.0, 0.0);
-        for (k, p) in self.pairs.iter().enumerate() {
+        for (k, p) in self.pairs.iter().enumerate().filter(|_| self.enabled) {
             let ca = pose_a * p.poses.0;
             let cb = pose_b * p.poses.1;
             let ra = (ca.translation.vector - sa0.pos_m).norm() + p.radii.0;
@@ -621,7 +754,7 @@ impl CompliantContact {
                 p.last_depth_m = f64::NEG_INFINITY;
             }
         }
-        if candidates.is_empty() {
+        if candidates.is_empty() && !link_on {
             return None;
         }
         // 2. Sub-step size.
@@ -645,7 +778,43 @@ impl CompliantContact {
             .max(2.0 * depth_now);
         let mut h_max = dt;
         let k_loc = self.law.local_stiffness_n_m(depth_bound);
-        if k_loc > 0.0 {
+        if let Some(l) = &self.link.latch {
+            // The latch's periods: translation at the port (the smallest effective mass there),
+            // rotation (the smallest inertia); explicit damping within a fifth of its time
+            // constant.
+            let r = |d: &Dyn, s: &BodyState, port: &Vector3<f64>| {
+                (s.body_pose(&d.com).transform_point(&(*port).into()).coords - s.pos_m).norm()
+            };
+            let (dc, sc, dtg, stg) = if self.link.chaser_is_b {
+                (&db, sb0, &da, sa0)
+            } else {
+                (&da, sa0, &db, sb0)
+            };
+            let rc = r(dc, sc, &l.port_c_body_m);
+            let port_t = l.caught.transform_point(&l.port_c_body_m.into()).coords;
+            let rt = r(dtg, stg, &port_t);
+            let m_port = 1.0
+                / (w_red + rc * rc * dc.inv_inertia_bound() + rt * rt * dtg.inv_inertia_bound())
+                    .max(1e-30);
+            let i_min = 1.0 / (da.inv_inertia_bound() + db.inv_inertia_bound()).max(1e-30);
+            let j = &l.spec;
+            let tau = std::f64::consts::TAU;
+            h_max = h_max
+                .min(tau * (m_port / j.stiffness_n_m).sqrt() / f64::from(self.substeps_per_period))
+                .min(
+                    tau * (i_min / j.rot_stiffness_nm_rad).sqrt()
+                        / f64::from(self.substeps_per_period),
+                )
+                .min(0.2 * m_port / j.damping_n_s_m)
+                .min(0.2 * i_min / j.rot_damping_nm_s_rad);
+        }
+        if let Some(sp) = &self.link.separation {
+            // The spring's force ends with a step at the end of its stroke: sub-steps short
+            // enough to cross it within 0.5 % of the stroke.
+            let a = sp.force_n.max(sp.preload_n) * w_red;
+            h_max = h_max.min(0.005 * sp.stroke_m / (v_rel + a * dt).max(1e-9));
+        }
+        if k_loc > 0.0 && !candidates.is_empty() {
             let period = 2.0 * std::f64::consts::PI * (m_min / k_loc).sqrt();
             h_max = h_max.min(period / f64::from(self.substeps_per_period));
         }
@@ -680,6 +849,7 @@ impl CompliantContact {
             // Enough to see each contact coming one sub-step ahead (its start and end are
             // interpolated from the depths on either side).
             prediction_m: 2.0 * v_bound * h + 1e-6,
+            link: &self.link,
         };
         // The force at the start of the step (damping implicit over the first half-kick); then
         // per sub-step: half-kick with it, drift, the force at the new poses from the half-step
@@ -688,6 +858,7 @@ impl CompliantContact {
         // this is the trapezoidal rule (second order, A-stable).
         let mut geo = st.geometry(&sa, &sb);
         let mut f0 = st.forces(&geo, &sa, &sb);
+        let mut link_imp_b = Vector3::zeros();
         for i in 0..n {
             kick_both((&da, &db), (&mut sa, &mut sb), &held, &f0, 0.5 * h);
             drift(&da, &mut sa, h);
@@ -697,6 +868,14 @@ impl CompliantContact {
             kick_both((&da, &db), (&mut sa, &mut sb), &held, &f1, 0.5 * h);
             ang_a += (f0.torque.0 + f1.torque.0) * (0.5 * h);
             ang_b += (f0.torque.1 + f1.torque.1) * (0.5 * h);
+            link_imp_b += (f0.link_on_b + f1.link_on_b) * (0.5 * h);
+            {
+                let ls = &mut self.link_step;
+                ls.peak_force_n = ls.peak_force_n.max(f1.link.0.norm());
+                ls.peak_moment_nm = ls.peak_moment_nm.max(f1.link.1.norm());
+                ls.force_end_n = f1.link.0;
+                ls.moment_end_nm = f1.link.1;
+            }
             for k in &candidates {
                 let j = (f0.per_pair[*k].0 + f1.per_pair[*k].0) * (0.5 * h);
                 impulse[*k] += j;
@@ -796,6 +975,25 @@ impl CompliantContact {
                     in_contact_at_end: self.pairs[k].in_contact,
                 });
                 mean_f += impulse[k] / dt;
+            }
+        }
+        if link_on {
+            mean_f += link_imp_b / dt;
+            // Separation springs at the end of their stroke rest on their stops from now on.
+            if let Some(sp) = &self.link.separation {
+                let (sc, stg, dc, dtg) = if self.link.chaser_is_b {
+                    (&sb, &sa, &db, &da)
+                } else {
+                    (&sa, &sb, &da, &db)
+                };
+                let (pc_b, pt_b, at_b) = sp.ports_body_m;
+                let p = sc.body_pose(&dc.com).transform_point(&pc_b.into()).coords;
+                let pose_t = stg.body_pose(&dtg.com);
+                let pt = pose_t.transform_point(&pt_b.into()).coords;
+                if (p - pt).dot(&(pose_t.rotation * at_b)) - sp.x0_m >= sp.stroke_m {
+                    self.link.separation = None;
+                    self.link_step.separation_ended = true;
+                }
             }
         }
         if mean_f.norm() > 0.0 {
@@ -992,6 +1190,8 @@ pub fn install_between(
         impacts: Vec::new(),
         stats: SubstepStats::default(),
         t_step_s: 0.0,
+        link: Link::default(),
+        link_step: LinkStep::default(),
     });
     Ok(())
 }

@@ -526,6 +526,7 @@ pub fn host_control(
     guarantees: Res<Guarantees>,
     mut host: ResMut<ControllerHost>,
     mut log: ResMut<EventLog>,
+    mut dock_cmds: Option<ResMut<super::docking::DockingCommands>>,
 ) {
     if host.slots.is_empty() {
         return;
@@ -564,6 +565,11 @@ pub fn host_control(
         slot.held = slot.law.command(&obs);
         slot.calls += 1;
         for e in slot.law.take_events() {
+            if e.kind == crate::control::generic::sequencer::DOCKING_RELEASE_EVENT
+                && let Some(d) = dock_cmds.as_deref_mut()
+            {
+                d.release.push(format!("controller event {}", e.data));
+            }
             log.push(t, &e.kind, e.data);
         }
     }
@@ -782,7 +788,7 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
         let mut diag = world.resource_mut::<Diagnostics>();
         let mut cols = Vec::with_capacity(names.len());
         for n in &names {
-            if diag.names.iter().any(|m| m == n) {
+            if diag.contains(n) {
                 return Err(format!(
                     "controller `{kind}`: column `{n}` is already written by another controller or mechanism"
                 ));

@@ -1,16 +1,18 @@
-//! The docking mechanism: electromagnetic capture, soft capture, latch (a rapier fixed joint
-//! with a finite break force), and the state machine FREE → ATTRACTING → CONTACT →
-//! SOFT_CAPTURE → LATCHED, with REBOUND, JAMMED and MISSED. Every change is an event.
+//! The docking mechanism: electromagnetic capture, soft capture, latch (a rapier fixed joint,
+//! or a compliant spring–damper, with a finite break force) that engages only within the
+//! capture rate limits, release with separation springs, and the state machine FREE →
+//! ATTRACTING → CONTACT → SOFT_CAPTURE → LATCHED → RELEASED, with REBOUND, JAMMED and MISSED.
+//! Every change is an event; `docs/mechanisms.md` describes the issue-28 additions.
 //!
 //! Geometry and the magnet law are documented on [`crate::scene::DockingSpec`] and
 //! [`crate::scene::MagnetSpec`]. Contact is real: the cone and the slot's wall pieces are rapier
 //! colliders, and the monitor says which parts touch.
 
-use super::contact_model::{CompliantContact, ImpactRecord};
+use super::contact_model::{CompliantContact, ImpactRecord, LatchSpring, SeparationSpring};
 use super::monitor::ContactState;
 use super::output::Diagnostics;
 use super::{BodyState, Clock, EventLog, Physics, SimBody, SimStep, Wrench, conv};
-use crate::scene::{DockingSpec, LoadedScene, SceneError};
+use crate::scene::{DockingSpec, LatchJoint, LoadedScene, SceneError};
 use bevy::prelude::*;
 use bevy_rapier3d::rapier::prelude as rp;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -84,6 +86,24 @@ impl DockingLoads {
     }
 }
 
+/// Loads of a compliant latch at the interface (the chaser port origin), from the f64
+/// spring–damper force evaluated at every sub-step.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct InterfaceLoads {
+    /// Largest force on the chaser at its port, N.
+    pub peak_force_n: f64,
+    /// When (end of the step that held it), s.
+    pub peak_force_t_s: Option<f64>,
+    /// Largest moment on the chaser about its port, N·m.
+    pub peak_moment_nm: f64,
+    /// When, s.
+    pub peak_moment_t_s: Option<f64>,
+    /// Force on the chaser at its port at the end of the last latched step, world, N.
+    pub last_force_n: [f64; 3],
+    /// Moment on the chaser about its port then, world, N·m.
+    pub last_moment_nm: [f64; 3],
+}
+
 /// Docking state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "SCREAMING_SNAKE_CASE")]
@@ -105,6 +125,8 @@ pub enum DockState {
     Jammed,
     /// Failed: passed beside the slot, or another part collided.
     Missed,
+    /// Released from the latch by a command (undocking); final.
+    Released,
 }
 
 impl DockState {
@@ -119,6 +141,7 @@ impl DockState {
             DockState::Rebound => 5.0,
             DockState::Jammed => 6.0,
             DockState::Missed => 7.0,
+            DockState::Released => 8.0,
         }
     }
     /// The name used in events and summaries.
@@ -132,8 +155,17 @@ impl DockState {
             DockState::Rebound => "REBOUND",
             DockState::Jammed => "JAMMED",
             DockState::Missed => "MISSED",
+            DockState::Released => "RELEASED",
         }
     }
+}
+
+/// Commands to the mechanism, acted on at the start of the next mechanism step: the Sequencer
+/// (a phase with `release_docking`) and [`crate::sim::Simulation::release_docking`] push here.
+#[derive(Resource, Debug, Clone, Default)]
+pub struct DockingCommands {
+    /// Release commands not yet acted on, each with where it came from.
+    pub release: Vec<String>,
 }
 
 /// Port geometry at one instant (world frame).
@@ -151,6 +183,49 @@ pub struct PortGeometry {
     pub axial_rate_m_s: f64,
     /// Relative speed of the chaser port point w.r.t. the target's material point there, m/s.
     pub rel_speed_m_s: f64,
+    /// Part of that relative velocity perpendicular to the target port axis, m/s.
+    pub lateral_rate_m_s: f64,
+    /// Magnitude of the relative angular velocity |ω_c − ω_t|, deg/s.
+    pub angular_rate_deg_s: f64,
+}
+
+/// Which capture rate limit, if any, the relative motion `g` exceeds: the first of axial,
+/// lateral, angular (in that order) whose value is strictly above its limit, as an event
+/// payload (`rate`, `value`, `limit`) and a sentence naming the rate. A rate equal to its limit
+/// is accepted.
+pub fn capture_rate_violation(
+    limits: &crate::scene::CaptureRates,
+    g: &PortGeometry,
+) -> Option<(serde_json::Value, String)> {
+    [
+        (
+            "axial_rate_m_s",
+            g.axial_rate_m_s.abs(),
+            limits.max_axial_rate_m_s,
+            "m/s",
+        ),
+        (
+            "lateral_rate_m_s",
+            g.lateral_rate_m_s,
+            limits.max_lateral_rate_m_s,
+            "m/s",
+        ),
+        (
+            "angular_rate_deg_s",
+            g.angular_rate_deg_s,
+            limits.max_angular_rate_deg_s,
+            "deg/s",
+        ),
+    ]
+    .into_iter()
+    // A NaN rate is refused too.
+    .find(|(_, v, lim, _)| v.is_nan() || v > lim)
+    .map(|(name, v, lim, unit)| {
+        (
+            serde_json::json!({"rate": name, "value": v, "limit": lim}),
+            format!("latch refused: relative {name} {v:.6} {unit} > limit {lim:.6} {unit}"),
+        )
+    })
 }
 
 /// The mechanism's state and results.
@@ -195,6 +270,20 @@ pub struct Docking {
     pub armed: bool,
     /// The chaser port's axial error at the previous step, m (positive: in front of the seat).
     pub prev_axial_error_m: Option<f64>,
+    /// The rate the latch is refusing on now (`None`: not refusing); a refusal is an event when
+    /// it starts or the rate named changes.
+    pub refusing: Option<String>,
+    /// Latch refusals (events `capture_refused`) in the run.
+    pub refusals: u64,
+    /// Relative rates when the latch engaged: axial, lateral (m/s), angular (deg/s).
+    pub latch_rates: Option<[f64; 3]>,
+    /// A compliant latch's interface loads (absent for a rigid latch).
+    pub interface: Option<InterfaceLoads>,
+    /// The release time, s.
+    pub t_release_s: Option<f64>,
+    /// Relative velocity of the chaser port w.r.t. the target when the separation springs
+    /// reached the end of their stroke (world, m/s), and when, s.
+    pub separation_end: Option<([f64; 3], f64)>,
     /// Diagnostics column indices: gap, axial, lateral, misalignment, magnet, state, joint force,
     /// joint torque.
     cols: [usize; 8],
@@ -228,6 +317,7 @@ pub fn geometry(
     // Rate of the axial error: d/dt[(p_c − p_t)·a_t] = (v_c(p_c) − v_t(p_t))·a_t
     // + (p_c − p_t)·(ω_t × a_t), which reduces to v_rel·a_t with v_rel taken at p_c.
     let axial_rate = v_rel.dot(&at);
+    let w_rel = chaser.0.omega_rad_s - target.0.omega_rad_s;
     let g = PortGeometry {
         gap_m: (pc - seat).norm(),
         axial_error_m: axial - spec.seat_depth_m,
@@ -235,6 +325,8 @@ pub fn geometry(
         misalignment_deg: ac.dot(&(-at)).clamp(-1.0, 1.0).acos().to_degrees(),
         axial_rate_m_s: axial_rate,
         rel_speed_m_s: v_rel.norm(),
+        lateral_rate_m_s: (v_rel - at * axial_rate).norm(),
+        angular_rate_deg_s: w_rel.norm().to_degrees(),
     };
     (g, pc, at)
 }
@@ -269,11 +361,44 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
     ];
     let magnet_on = spec.magnet.on_at_start;
     let spec_contact = spec.contact.clone();
+    let start_latched = spec.start_latched;
+    if start_latched {
+        let state = |e: Entity| {
+            let w = app.world();
+            (w.get::<BodyState>(e).cloned(), w.get::<SimBody>(e).cloned())
+        };
+        let (e_c, e_t) = (roster.bodies[ci], roster.bodies[ti]);
+        if let ((Some(cs), Some(cb)), (Some(ts), Some(tb))) = (state(e_c), state(e_t)) {
+            let (g, _, _) = geometry(&spec, (&cs, &cb), (&ts, &tb), &ports);
+            let l = &spec.latch;
+            if !(g.axial_error_m.abs() <= l.axial_tolerance_m
+                && g.lateral_m <= l.lateral_tolerance_m
+                && g.misalignment_deg <= l.angle_tolerance_deg)
+            {
+                return Err(loaded.error_at(
+                    "docking.start_latched",
+                    format!(
+                        "the chaser is not seated at t = 0 (axial error {:.4} m, lateral {:.4} m, misalignment {:.2}°; tolerances {} m, {} m, {}°): place its port on the seat",
+                        g.axial_error_m,
+                        g.lateral_m,
+                        g.misalignment_deg,
+                        l.axial_tolerance_m,
+                        l.lateral_tolerance_m,
+                        l.angle_tolerance_deg
+                    ),
+                ));
+            }
+        }
+    }
+    app.init_resource::<DockingCommands>();
     app.insert_resource(Docking {
         spec,
         bodies: (roster.bodies[ci], roster.bodies[ti]),
         ports,
-        state: if magnet_on {
+        state: if start_latched {
+            // The latch closes at the first mechanism step ([`docking_actuate`]).
+            DockState::Latched
+        } else if magnet_on {
             DockState::Attracting
         } else {
             DockState::Free
@@ -296,6 +421,12 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         last_docking_contact_s: None,
         armed: false,
         prev_axial_error_m: None,
+        refusing: None,
+        refusals: 0,
+        latch_rates: None,
+        interface: None,
+        t_release_s: None,
+        separation_end: None,
         cols,
     });
     app.add_systems(
@@ -307,15 +438,84 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
 }
 
 /// Actuate: the magnet's force on the chaser port and its reaction on the target.
-fn docking_actuate(mut dock: ResMut<Docking>, mut q: Query<(&SimBody, &BodyState, &mut Wrench)>) {
+/// Actuate: a latch that starts closed, release commands, and the magnet's force on the chaser
+/// port and its reaction on the target.
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it uses
+fn docking_actuate(
+    mut dock: ResMut<Docking>,
+    mut q: Query<(&SimBody, &BodyState, &mut Wrench)>,
+    clock: Res<Clock>,
+    mut phys: ResMut<Physics>,
+    mut compliant: Option<ResMut<CompliantContact>>,
+    mut cmds: ResMut<DockingCommands>,
+    mut log: ResMut<EventLog>,
+) {
     let (ce, te) = dock.bodies;
+    let t = clock.t_s();
     let [(cb, cs, _), (tb, ts, _)] = q.get_many([ce, te]).expect("docking bodies");
+    if dock.state == DockState::Latched && dock.t_latch_s.is_none() {
+        // `start_latched`: close the latch where the scene placed the chaser.
+        engage_latch(
+            &mut dock,
+            (cs, cb),
+            (ts, tb),
+            &mut phys,
+            compliant.as_deref_mut(),
+        );
+        dock.t_latch_s = Some(t);
+        dock.reason = "started latched (docking.start_latched)".into();
+    }
+    for source in std::mem::take(&mut cmds.release) {
+        if dock.state != DockState::Latched {
+            log.push(
+                t,
+                "docking_release_ignored",
+                serde_json::json!({"state": dock.state.name(), "source": source,
+                    "reason": format!("release commanded while {}: not docked", dock.state.name())}),
+            );
+            continue;
+        }
+        if let Some(h) = dock.joint.take() {
+            phys.world.impulse_joints.remove(h, true);
+        }
+        let (pc, _) = port_world(cs, &cb.com_body_m, &dock.ports.0);
+        let (pt, at) = port_world(ts, &tb.com_body_m, &dock.ports.1);
+        if let Some(c) = compliant.as_deref_mut() {
+            c.link.latch = None;
+            c.link.chaser_is_b = c.indices.1 == cb.index;
+            c.link.separation = dock.spec.separation.as_ref().map(|sp| SeparationSpring {
+                stroke_m: sp.stroke_m,
+                force_n: sp.force_n,
+                preload_n: sp.preload_n,
+                x0_m: (pc - pt).dot(&at),
+                ports_body_m: (dock.ports.0.0, dock.ports.1.0, dock.ports.1.1),
+            });
+            c.enabled = true;
+        }
+        let reason = format!(
+            "released ({source}){}",
+            if dock.spec.separation.is_some() {
+                "; separation springs pushing"
+            } else {
+                ""
+            }
+        );
+        log.push(
+            t,
+            "docking_state",
+            serde_json::json!({"from": "LATCHED", "to": "RELEASED", "reason": reason}),
+        );
+        dock.state = DockState::Released;
+        dock.reason = reason;
+        dock.t_release_s = Some(t);
+        dock.magnet_on = false;
+    }
     let (g, pc, at) = geometry(&dock.spec, (cs, cb), (ts, tb), &dock.ports);
     let m = dock.spec.magnet.clone();
     if !dock.magnet_on && m.activation_distance_m > 0.0 && g.gap_m < m.activation_distance_m {
         dock.magnet_on = true;
     }
-    let on = dock.magnet_on && dock.state != DockState::Latched;
+    let on = dock.magnet_on && !matches!(dock.state, DockState::Latched | DockState::Released);
     let f = if on {
         (m.f0_n / (1.0 + g.gap_m / m.g0_m).powi(2)).min(m.max_force_n)
     } else {
@@ -455,6 +655,54 @@ fn docking_monitor(
     use DockState::*;
     match old {
         Missed => {}
+        Released => {
+            if let Some(c) = compliant.as_deref()
+                && c.link_step.separation_ended
+            {
+                let (pc, _) = port_world(cs, &cb.com_body_m, &dock.ports.0);
+                let v = point_velocity(cs, &pc) - point_velocity(ts, &pc);
+                dock.separation_end = Some((v.into(), t));
+                log.push(
+                    t,
+                    "separation_complete",
+                    serde_json::json!({"relative_velocity_m_s": [v.x, v.y, v.z],
+                        "axial_rate_m_s": v.dot(&at)}),
+                );
+            }
+        }
+        Latched if dock.interface.is_some() => {
+            let ls = compliant
+                .as_deref()
+                .map(|c| c.link_step)
+                .unwrap_or_default();
+            joint_now = (ls.peak_force_n, ls.peak_moment_nm);
+            let il = dock.interface.get_or_insert_with(Default::default);
+            if ls.peak_force_n > il.peak_force_n {
+                il.peak_force_n = ls.peak_force_n;
+                il.peak_force_t_s = Some(t);
+            }
+            if ls.peak_moment_nm > il.peak_moment_nm {
+                il.peak_moment_nm = ls.peak_moment_nm;
+                il.peak_moment_t_s = Some(t);
+            }
+            il.last_force_n = ls.force_end_n.into();
+            il.last_moment_nm = ls.moment_end_nm.into();
+            dock.peak_joint_force_n = dock.peak_joint_force_n.max(ls.peak_force_n);
+            dock.loads.peak_joint_force_n = dock.peak_joint_force_n;
+            dock.loads.peak_joint_torque_nm =
+                dock.loads.peak_joint_torque_nm.max(ls.peak_moment_nm);
+            if ls.peak_force_n > spec.latch.break_force_n {
+                if let Some(c) = compliant.as_deref_mut() {
+                    c.link.latch = None;
+                    c.enabled = true;
+                }
+                new = Free;
+                reason = format!(
+                    "latch broke: joint force {:.1} N > break force {:.1} N",
+                    ls.peak_force_n, spec.latch.break_force_n
+                );
+            }
+        }
         Latched => {
             if let Some(h) = dock.joint
                 && let Some(j) = phys.world.impulse_joints.get(h)
@@ -542,24 +790,39 @@ fn docking_monitor(
                         "seated: axial {:.4} m, lateral {:.4} m, misalignment {:.2}°",
                         g.axial_error_m, g.lateral_m, g.misalignment_deg
                     );
+                } else if t - dock.seated_since.unwrap_or(t) >= spec.latch.dwell_s - 1e-9
+                    && let Some((payload, why)) =
+                        capture_rate_violation(&spec.latch.capture_rates, &g)
+                {
+                    let rate = payload["rate"].as_str().unwrap_or_default().to_string();
+                    if dock.refusing.as_deref() != Some(rate.as_str()) {
+                        dock.refusals += 1;
+                        let mut payload = payload;
+                        payload["reason"] = why.clone().into();
+                        log.push(t, "capture_refused", payload);
+                        dock.refusing = Some(rate);
+                    }
+                    dock.reason = why;
                 } else if t - dock.seated_since.unwrap_or(t) >= spec.latch.dwell_s - 1e-9 {
+                    dock.refusing = None;
+                    dock.latch_rates = Some([
+                        g.axial_rate_m_s.abs(),
+                        g.lateral_rate_m_s,
+                        g.angular_rate_deg_s,
+                    ]);
                     new = Latched;
                     reason = format!(
                         "latched after {:.2} s seated (axial {:.4} m, lateral {:.4} m, misalignment {:.2}°)",
                         spec.latch.dwell_s, g.axial_error_m, g.lateral_m, g.misalignment_deg
                     );
-                    let joint = latch_joint(cs, cb, ts, tb);
-                    let h = phys.world.insert_impulse_joint(tb.handle, cb.handle, joint);
-                    dock.joint = Some(h);
+                    engage_latch(
+                        &mut dock,
+                        (cs, cb),
+                        (ts, tb),
+                        &mut phys,
+                        compliant.as_deref_mut(),
+                    );
                     dock.t_latch_s = Some(t);
-                    // The latched pair is one structure: no more docking contact (the joint
-                    // carries the loads, reported as joint loads).
-                    if let Some(c) = compliant.as_deref_mut() {
-                        c.enabled = false;
-                        for p in &mut c.pairs {
-                            p.in_contact = false;
-                        }
-                    }
                 }
             } else if docking_contact {
                 if old != Contact && old != Jammed {
@@ -614,6 +877,7 @@ fn docking_monitor(
         }
     }
     if new != old {
+        dock.refusing = None;
         dock.state = new;
         dock.reason = reason.clone();
         log.push(
@@ -638,6 +902,47 @@ fn docking_monitor(
     dock.geometry = g;
 }
 
+/// Closes the latch where the chaser is: a rapier fixed joint, or the compliant latch's spring.
+/// The latched pair is one structure: no more docking contact (the joint carries the loads,
+/// reported as joint loads).
+fn engage_latch(
+    dock: &mut Docking,
+    (cs, cb): (&BodyState, &SimBody),
+    (ts, tb): (&BodyState, &SimBody),
+    phys: &mut Physics,
+    compliant: Option<&mut CompliantContact>,
+) {
+    match (&dock.spec.latch.joint, compliant) {
+        (LatchJoint::Compliant(j), Some(c)) => {
+            let pt: Isometry3<f64> = ts.body_pose(&tb.com_body_m);
+            let pc: Isometry3<f64> = cs.body_pose(&cb.com_body_m);
+            c.link.chaser_is_b = c.indices.1 == cb.index;
+            c.link.latch = Some(LatchSpring {
+                spec: j.clone(),
+                port_c_body_m: dock.ports.0.0,
+                caught: pt.inv_mul(&pc),
+            });
+            dock.interface = Some(InterfaceLoads::default());
+            disable_contact(c);
+        }
+        (_, c) => {
+            let joint = latch_joint(cs, cb, ts, tb);
+            let h = phys.world.insert_impulse_joint(tb.handle, cb.handle, joint);
+            dock.joint = Some(h);
+            if let Some(c) = c {
+                disable_contact(c);
+            }
+        }
+    }
+}
+
+fn disable_contact(c: &mut CompliantContact) {
+    c.enabled = false;
+    for p in &mut c.pairs {
+        p.in_contact = false;
+    }
+}
+
 /// A fixed joint holding the chaser where it is relative to the target: frame 1 is the target's
 /// body frame, frame 2 the same frame expressed in the chaser's body frame.
 fn latch_joint(cs: &BodyState, cb: &SimBody, ts: &BodyState, tb: &SimBody) -> rp::FixedJoint {
@@ -656,14 +961,32 @@ fn latch_joint(cs: &BodyState, cb: &SimBody, ts: &BodyState, tb: &SimBody) -> rp
 
 /// The docking section of `summary.json`.
 pub fn summary(dock: &Docking) -> serde_json::Value {
-    serde_json::json!({
+    let mut v = serde_json::json!({
         "state": dock.state.name(),
         "reason": dock.reason,
         "first_docking_contact_s": dock.t_first_contact_s,
         "t_latch_s": dock.t_latch_s,
         "max_misalignment_in_contact_deg": dock.max_misalignment_deg,
         "peak_latch_force_n": dock.peak_joint_force_n,
+        "capture_rate_limits": dock.spec.latch.capture_rates,
+        "capture_rates_at_latch": dock.latch_rates.map(|[a, l, w]| serde_json::json!({
+            "axial_rate_m_s": a, "lateral_rate_m_s": l, "angular_rate_deg_s": w,
+        })),
+        "capture_refusals": dock.refusals,
         "final_geometry": dock.geometry,
         "contact": dock.loads,
-    })
+    });
+    // A compliant latch's loads at the interface (a rigid latch's are `peak_latch_force_n`
+    // and `contact.peak_joint_*`).
+    if let Some(il) = &dock.interface {
+        v["interface_loads"] = serde_json::to_value(il).unwrap_or_default();
+    }
+    if let Some(tr) = dock.t_release_s {
+        v["t_release_s"] = tr.into();
+        v["separation_end"] = dock
+            .separation_end
+            .map(|(vel, te)| serde_json::json!({"t_s": te, "relative_velocity_m_s": vel}))
+            .unwrap_or_default();
+    }
+    v
 }

@@ -510,6 +510,36 @@ impl guarantee_bounds::MotionBounds for motion::StepMotion {
     }
 }
 
+/// The step's motion bounds with the bound on the Hill frame's rate (orbit scenes).
+struct FrameMotion<'a> {
+    motion: &'a motion::StepMotion,
+    hill_rate_rad_s: Option<f64>,
+}
+
+impl guarantee_bounds::MotionBounds for FrameMotion<'_> {
+    fn dt_s(&self) -> f64 {
+        self.motion.dt_s
+    }
+    fn speed_bound(&self, i: usize) -> f64 {
+        self.motion.speed_bound(i)
+    }
+    fn rel_speed_bound(&self, i: usize, j: usize) -> f64 {
+        self.motion.rel_speed_bound(i, j)
+    }
+    fn omega_bound(&self, i: usize) -> f64 {
+        self.motion.omega_bound(i)
+    }
+    fn extent_m(&self, i: usize) -> f64 {
+        self.motion.extent_m[i]
+    }
+    fn separation_bound(&self, i: usize, j: usize) -> f64 {
+        self.motion.separation_bound(i, j)
+    }
+    fn hill_rate_bound_rad_s(&self) -> Option<f64> {
+        self.hill_rate_rad_s
+    }
+}
+
 mod guarantee_bounds {
     pub use crate::guarantee::MotionBounds;
 }
@@ -972,6 +1002,7 @@ const MAX_CROSSING_EVALS: u32 = 256;
 /// [`EVENT_TIME_TOL`]·dt ([`crate::geometry::bounds::first_below`]), and, if it holds again by
 /// the end of the step, the time it came back. A guarantee without a rate bound is judged at
 /// the samples only.
+#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource
 fn check_guarantees(
     clock: Res<Clock>,
     mon: Res<MonitorState>,
@@ -980,14 +1011,35 @@ fn check_guarantees(
     motion: Res<motion::StepMotion>,
     geo: Res<monitor::MonitorGeometry>,
     mut scratch: Local<monitor::DistanceScratch>,
+    orbit: Option<Res<OrbitEnv>>,
 ) {
     use crate::geometry::bounds::{Bracket, Crossing, first_below, interval_lower_bound, minimize};
-    use crate::guarantee::{IntervalFinding, Reads};
+    use crate::guarantee::{IntervalFinding, Reads, ReferenceView};
     let t = clock.t_s();
+    let orbit = orbit.as_deref();
+    let reference_at = |back_s: f64| {
+        orbit.map(|o| {
+            let mut r = o.reference.clone();
+            r.step(back_s);
+            let (p, v) = r.state();
+            ReferenceView {
+                pos_eci_m: p,
+                vel_eci_m_s: v,
+            }
+        })
+    };
     let view = MonitorView {
         t_s: t,
         bodies: &mon.bodies,
         pairs: &mon.pairs,
+        reference: reference_at(0.0),
+    };
+    let frame_motion = FrameMotion {
+        motion: &motion,
+        hill_rate_rad_s: orbit.and_then(|o| {
+            let (r, v) = o.reference.state();
+            crate::orbit::lvlh::hill_rate_bound_rad_s(&r, &v, motion.dt_s, o.j2)
+        }),
     };
     let g = &mut *g;
     g.last.resize(g.list.len(), Bracket::exact(f64::INFINITY));
@@ -998,7 +1050,7 @@ fn check_guarantees(
         let inv = &g.list[k];
         let m1 = inv.margin_bracket(&view);
         let rate = if motion.ready {
-            inv.rate_bound(&*motion)
+            inv.rate_bound(&frame_motion)
         } else {
             None
         };
@@ -1063,6 +1115,7 @@ fn check_guarantees(
                 t_s: t0 + tau,
                 bodies: &bodies_at,
                 pairs: &pairs_at,
+                reference: reference_at(tau - dt),
             };
             inv.margin_bracket(&v)
         };

@@ -39,17 +39,26 @@ pub struct Diagnostics {
     pub names: Vec<String>,
     /// Current values, same order.
     pub values: Vec<f64>,
+    /// Index of each name in `names` (registration stays linear in the number of columns:
+    /// a scene with tens of thousands of controllers is checked in seconds, not hours).
+    index: std::collections::HashMap<String, usize>,
 }
 
 impl Diagnostics {
     /// Registers a column and returns its index (registering twice returns the same index).
     pub fn column(&mut self, name: &str) -> usize {
-        if let Some(i) = self.names.iter().position(|n| n == name) {
+        if let Some(&i) = self.index.get(name) {
             return i;
         }
+        self.index.insert(name.to_string(), self.names.len());
         self.names.push(name.to_string());
         self.values.push(f64::NAN);
         self.names.len() - 1
+    }
+
+    /// Whether a column of this name is registered.
+    pub fn contains(&self, name: &str) -> bool {
+        self.index.contains_key(name)
     }
 }
 
@@ -75,12 +84,14 @@ impl FolderLock {
         use std::io::{Read, Seek};
         std::fs::create_dir_all(dir)?;
         let path = dir.join(".rpod.lock");
-        let mut file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(&path)?;
+        // A link planted at `.rpod.lock` is refused, not followed (truncating its target).
+        let mut file = crate::report::fsio::open_write_nofollow(
+            &path,
+            std::fs::OpenOptions::new()
+                .read(true)
+                .create(true)
+                .truncate(false),
+        )?;
         match file.try_lock() {
             Ok(()) => {}
             Err(std::fs::TryLockError::WouldBlock) => {
@@ -150,10 +161,7 @@ pub fn safe_dir_name(name: &str) -> String {
 
 /// Creates a new file: fails if something (a file, a planted symlink) is already there.
 fn create_new(path: &Path) -> std::io::Result<File> {
-    std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(path)
+    crate::report::fsio::create_new_nofollow(path)
         .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))
 }
 

@@ -11,8 +11,8 @@
 //! # What an allowed overlap does
 //! rapier resolves a penetration by pushing the bodies apart with a corrective velocity (up to
 //! its `max_corrective_velocity`, 3 m/s by default), which is energy from nowhere: a 300 kg
-//! chaser started inside a target was thrown out at about 9 m/s in the hostile-input probe of
-//! issue 17. rpod therefore disables the
+//! chaser started inside a target was thrown out at about 9 m/s in a hostile-input probe. rpod
+//! therefore disables the
 //! *solver* contact between every collider pair that overlaps at t = 0, until the pair's exact
 //! distance (f64 poses, parry) first becomes positive; from then on the pair collides normally.
 //! While suppressed the two parts pass through each other: no force acts between them, so

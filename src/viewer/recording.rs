@@ -77,7 +77,12 @@ pub struct Recording {
 }
 
 fn read(path: &Path) -> Result<String, String> {
-    std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))
+    crate::report::fsio::read_regular_string(
+        path,
+        crate::report::fsio::MAX_OUTPUT_READ_BYTES,
+        "run file",
+    )
+    .map_err(|e| e.to_string())
 }
 
 impl Recording {

@@ -14,7 +14,8 @@
 
 use crate::geometry::heart::HeartParams;
 use crate::geometry::superquadric::SuperquadricParams;
-use crate::scene::{Environment, GuaranteeSpec, Scene};
+use crate::guarantee::builtin::KeepOutSphereParams;
+use crate::scene::{Environment, Scene};
 use bevy::asset::RenderAssetUsages;
 use bevy::mesh::{Indices, PrimitiveTopology};
 use bevy::prelude::Mesh;
@@ -258,21 +259,16 @@ pub fn scene_surfaces(scene: &Scene) -> Vec<Surface> {
         }
     }
     for g in &scene.guarantees {
-        if let GuaranteeSpec::KeepOutSphere {
-            name,
-            around,
-            radius_m,
-            ..
-        } = g
-            && let Some(i) = index(around)
+        if let Some(k) = g.params::<KeepOutSphereParams>()
+            && let Some(i) = index(&k.around)
         {
             out.push(Surface {
                 kind: SurfaceKind::KeepOut {
-                    name: name.clone(),
-                    radius_m: *radius_m,
+                    name: k.name.clone(),
+                    radius_m: k.radius_m,
                 },
                 anchor: Anchor::BodyCom(i),
-                mesh: sphere(*radius_m, SPHERE_RINGS, SPHERE_SEGMENTS),
+                mesh: sphere(k.radius_m, SPHERE_RINGS, SPHERE_SEGMENTS),
                 curve_lab_m: Vec::new(),
                 rgba: [1.0, 0.85, 0.2, 0.1],
             });

@@ -8,6 +8,9 @@
 //!          params: (mode: AlignPort, natural_frequency_rad_s: 0.3, damping_ratio: 0.9))
 //! ```
 //!
+//! It flies on the true attitude: a `sensor` on an `Attitude` entry is a located error (in a
+//! `Sequencer`, the entry's sensor feeds the translation laws only).
+//!
 //! # The law
 //! With q the attitude (body → world), q_d the desired one, q_e = q_d⁻¹ q = (q_w, q_v) the error
 //! (its vector part in body axes to first order), ω the body rate and ω_d the desired rate, both
@@ -78,6 +81,10 @@ pub struct AttitudeParams {
 
 impl LawParams for AttitudeParams {
     fn build(&self, ctx: &mut LawContext) -> Result<Box<dyn Controller>, BuildError> {
+        ctx.no_sensor(
+            "Attitude",
+            "it flies on the true attitude (in a Sequencer, the entry's sensor feeds the translation laws)",
+        )?;
         let w = self.natural_frequency_rad_s;
         if !(w.is_finite() && w > 0.0 && w < 1e3) {
             return Err(BuildError::at(

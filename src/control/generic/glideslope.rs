@@ -9,6 +9,10 @@
 //!                     gains: Pd(natural_frequency_rad_s: 0.08, damping_ratio: 1.0)))
 //! ```
 //!
+//! With the entry's `sensor`, it flies on the measured relative state as `HillPd` does
+//! ([`super::hill::point_state`]: `axis: TargetPort` reads a `Port` measurement, the other
+//! axes a `Hill`, `TargetBody` or `World` one).
+//!
 //! # The reference
 //! With û the approach axis (Hill frame; for `TargetPort` the target port's outward axis, the
 //! range measured from the port's origin to the chaser's port; otherwise from the target's
@@ -215,7 +219,14 @@ impl LawParams for GlideslopeParams {
             .env
             .reference()
             .map_or(0.0, |(r, v)| super::mean_motion_rad_s(&r, &v));
+        let point = if self.axis == ApproachAxis::TargetPort {
+            ControlPoint::Port
+        } else {
+            ControlPoint::CentreOfMass
+        };
+        let sensed = super::hill::sensed(ctx, "Glideslope", point)?;
         Ok(Box::new(Glideslope {
+            sensed,
             params: self.clone(),
             feedback: TranslationFeedback::new(&self.gains, n, ctx.period_s()),
             prefix: unique_prefix(ctx, "glideslope"),
@@ -230,6 +241,8 @@ impl LawParams for GlideslopeParams {
 /// The running `Glideslope` law.
 #[derive(Debug, Clone)]
 pub struct Glideslope {
+    /// It flies on the entry's sensor ([`point_state`]).
+    pub sensed: bool,
     /// Its parameters.
     pub params: GlideslopeParams,
     /// Its feedback.
@@ -277,7 +290,7 @@ impl Controller for Glideslope {
         } else {
             ControlPoint::CentreOfMass
         };
-        let Some(s) = point_state(obs, point) else {
+        let Some(s) = point_state(obs, point, self.sensed) else {
             return Command::zero();
         };
         let u = self.axis(obs, s.frame);

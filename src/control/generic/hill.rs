@@ -15,10 +15,17 @@
 //! hold_vel, ẍ_r = 0. The command is F = m·a in the Hill frame with a from
 //! [`TranslationFeedback::accel`]. Outside an orbit there is no Hill frame: the law then acts in
 //! the world frame with n = 0 (free-space double integrators).
+//!
+//! # Sensor
+//! With the entry's `sensor`, the law flies on its latest measurement ([`point_state`]) instead
+//! of the truth of the relative position and velocity: `point: CentreOfMass` reads a `Hill`,
+//! `TargetBody` or `World` measurement, `point: Port` a `Port` one (another frame is a located
+//! error); attitudes and lever arms stay the truth. Before the first delivery it commands
+//! nothing.
 
 use super::{TranslationFeedback, TranslationGains, target_mean_motion, unique_prefix};
 use crate::control::interface::{
-    ActuationReport, Command, Controller, DiagnosticsAt, Frame, Observation,
+    ActuationReport, Command, Controller, DiagnosticsAt, Frame, MeasuredFrame, Observation,
 };
 use crate::control::registry::{BuildError, LawContext, LawParams};
 use nalgebra::{Matrix3, SMatrix, Vector3};
@@ -67,10 +74,108 @@ pub struct PointState {
     pub frame: Frame,
 }
 
-/// The state of `point` from an observation (None without a target, or without ports for
-/// [`ControlPoint::Port`]).
-pub fn point_state(obs: &Observation, point: ControlPoint) -> Option<PointState> {
+/// Whether a law flies on the entry's sensor: `Ok(true)` with a sensor whose frame suits the
+/// controlled point (`CentreOfMass`: a `Hill`, `TargetBody` or `World` measurement; `Port`: a
+/// `Port` measurement), `Ok(false)` without one, a located error (at the entry's
+/// `sensor.frame`) otherwise.
+pub fn sensed(ctx: &LawContext, kind: &str, point: ControlPoint) -> Result<bool, BuildError> {
+    let Some(s) = &ctx.sensor else {
+        return Ok(false);
+    };
+    let ok = match point {
+        ControlPoint::CentreOfMass => s.frame != MeasuredFrame::Port,
+        ControlPoint::Port => s.frame == MeasuredFrame::Port,
+    };
+    if !ok {
+        return Err(BuildError::at_root(
+            format!("controllers.{}.sensor.frame", ctx.build.index),
+            format!(
+                "`{kind}` with point {point:?} reads {}: its sensor must measure {}",
+                match point {
+                    ControlPoint::CentreOfMass => "the centre of mass relative to the target",
+                    ControlPoint::Port => "the chaser port relative to the target port",
+                },
+                match point {
+                    ControlPoint::CentreOfMass => "`Hill`, `TargetBody` or `World`",
+                    ControlPoint::Port => "`Port`",
+                }
+            ),
+        ));
+    }
+    Ok(true)
+}
+
+/// The measured relative state of the controlled point, world axes (inertial derivative):
+/// (point − its reference origin, its rate, centre of mass − target's, its rate). The
+/// measurement replaces the truth of the relative position and velocity; the attitudes and
+/// lever arms that carry a measurement to another frame are the truth.
+fn measured_world(
+    obs: &Observation,
+    m: &crate::control::interface::Measurement,
+    point: ControlPoint,
+) -> Option<[Vector3<f64>; 4]> {
+    let t = obs.target_state()?;
     let rel = obs.relative?;
+    let com = match m.frame {
+        MeasuredFrame::Hill => match (rel.dcm_world_from_hill, rel.hill_rate_world_rad_s) {
+            (Some(c), Some(w)) => {
+                let d = c * m.pos_m;
+                (d, c * m.vel_m_s + w.cross(&d))
+            }
+            _ => (m.pos_m, m.vel_m_s),
+        },
+        MeasuredFrame::TargetBody => {
+            let d = t.att * m.pos_m;
+            (d, t.att * m.vel_m_s + t.omega_rad_s.cross(&d))
+        }
+        MeasuredFrame::World => (m.pos_m - t.pos_m, m.vel_m_s - t.vel_m_s),
+        MeasuredFrame::Port => {
+            let p = obs.ports?;
+            let d = p.target.att * m.pos_m;
+            let dv = p.target.att * m.vel_m_s + t.omega_rad_s.cross(&d);
+            // Centres of mass from the ports with the true lever arms.
+            let own = obs.own();
+            let com = d + (p.target.pos_m - t.pos_m) - (p.chaser.pos_m - own.pos_m);
+            let com_v = dv + (p.target.vel_m_s - t.vel_m_s) - (p.chaser.vel_m_s - own.vel_m_s);
+            return match point {
+                ControlPoint::Port => Some([d, dv, com, com_v]),
+                ControlPoint::CentreOfMass => None,
+            };
+        }
+    };
+    match point {
+        ControlPoint::CentreOfMass => Some([com.0, com.1, com.0, com.1]),
+        ControlPoint::Port => None,
+    }
+}
+
+/// The state of `point` from an observation (None without a target, or without ports for
+/// [`ControlPoint::Port`]). With `sensed`, from the sensor's latest measurement instead of the
+/// truth (None before its first delivery: the law then commands nothing).
+pub fn point_state(obs: &Observation, point: ControlPoint, sensed: bool) -> Option<PointState> {
+    let rel = obs.relative?;
+    if sensed {
+        let [d, dv, c, cv] = measured_world(obs, obs.measured?, point)?;
+        return Some(match (rel.dcm_world_from_hill, rel.hill_rate_world_rad_s) {
+            (Some(cm), Some(w)) => {
+                let to = cm.transpose();
+                PointState {
+                    pos_m: to * d,
+                    vel_m_s: to * (dv - w.cross(&d)),
+                    com_pos_m: to * c,
+                    com_vel_m_s: to * (cv - w.cross(&c)),
+                    frame: Frame::Hill,
+                }
+            }
+            _ => PointState {
+                pos_m: d,
+                vel_m_s: dv,
+                com_pos_m: c,
+                com_vel_m_s: cv,
+                frame: Frame::World,
+            },
+        });
+    }
     let (com_pos, com_vel, frame, to_frame, rate): (_, _, _, Matrix3<f64>, Vector3<f64>) =
         match (rel.hill, rel.dcm_world_from_hill, rel.hill_rate_world_rad_s) {
             (Some(h), Some(c), Some(w)) => (h.pos_m, h.vel_m_s, Frame::Hill, c.transpose(), w),
@@ -136,7 +241,9 @@ impl LawParams for HillPdParams {
             .reference()
             .map_or(0.0, |(r, v)| super::mean_motion_rad_s(&r, &v));
         let feedback = TranslationFeedback::new(&self.gains, n, ctx.period_s());
+        let sensed = sensed(ctx, "HillPd", self.point)?;
         Ok(Box::new(HillPd {
+            sensed,
             params: self.clone(),
             feedback,
             prefix: unique_prefix(ctx, "hill_pd"),
@@ -151,6 +258,8 @@ impl LawParams for HillPdParams {
 /// The running `HillPd` law.
 #[derive(Debug, Clone)]
 pub struct HillPd {
+    /// It flies on the entry's sensor ([`point_state`]).
+    pub sensed: bool,
     /// Its parameters.
     pub params: HillPdParams,
     /// Its feedback.
@@ -173,7 +282,7 @@ impl HillPd {
 
 impl Controller for HillPd {
     fn command(&mut self, obs: &Observation) -> Command {
-        let Some(s) = point_state(obs, self.params.point) else {
+        let Some(s) = point_state(obs, self.params.point, self.sensed) else {
             return Command::zero();
         };
         let (x_ref, v_ref) = self.reference(obs.t_s);

@@ -52,7 +52,7 @@ pub enum Condition {
     /// A guarantee's margin (end of the previous step) below a value, in the guarantee's unit.
     MarginBelow(String, f64),
     /// The docking mechanism in one of these states (`FREE`, `ATTRACTING`, `CONTACT`,
-    /// `SOFT_CAPTURE`, `LATCHED`, `REBOUND`, `JAMMED`, `MISSED`).
+    /// `SOFT_CAPTURE`, `LATCHED`, `REBOUND`, `JAMMED`, `MISSED`, `RELEASED`).
     DockingState(Vec<String>),
     /// The phase's translation law tracks its reference within these errors.
     Settled {
@@ -68,7 +68,7 @@ pub enum Condition {
 }
 
 /// The docking states a `DockingState` condition may name.
-pub const DOCK_STATES: [&str; 8] = [
+pub const DOCK_STATES: [&str; 9] = [
     "FREE",
     "ATTRACTING",
     "CONTACT",
@@ -77,6 +77,7 @@ pub const DOCK_STATES: [&str; 8] = [
     "REBOUND",
     "JAMMED",
     "MISSED",
+    "RELEASED",
 ];
 
 /// One exit of a phase.
@@ -104,6 +105,11 @@ pub struct Phase {
     /// Exits, checked in order.
     #[serde(default)]
     pub exits: Vec<Exit>,
+    /// On entering this phase, command the docking mechanism to release (open the latch; the
+    /// separation springs push the vehicles apart). A `docking_release` event; the mechanism
+    /// acts on it in the same step, or raises `docking_release_ignored` when not docked.
+    #[serde(default)]
+    pub release_docking: bool,
 }
 
 /// Parameters of `Sequencer`.
@@ -113,6 +119,10 @@ pub struct SequencerParams {
     /// The phases; the first is active at t = 0.
     pub phases: Vec<Phase>,
 }
+
+/// The kind of the event a phase with `release_docking` raises on entry; the docking
+/// mechanism acts on it.
+pub const DOCKING_RELEASE_EVENT: &str = "docking_release";
 
 /// Most phases a sequencer may have.
 pub const MAX_PHASES: usize = 256;
@@ -229,6 +239,18 @@ impl LawParams for SequencerParams {
                     format!("two phases are named `{}`", p.name),
                 ));
             }
+            if p.release_docking && ctx.build.scene.docking.is_none() {
+                return Err(BuildError::at(
+                    format!("{f}.release_docking"),
+                    "the scene has no `docking` mechanism to release",
+                ));
+            }
+            if p.release_docking && i == 0 {
+                return Err(BuildError::at(
+                    format!("{f}.release_docking"),
+                    "the first phase is never entered by an exit: release from a later phase",
+                ));
+            }
             if p.exits.is_empty() && i + 1 != self.phases.len() {
                 return Err(BuildError::at(
                     format!("{f}.exits"),
@@ -274,7 +296,7 @@ impl LawParams for SequencerParams {
         let prefix = super::unique_prefix(ctx, "seq");
         let mut phases = Vec::with_capacity(self.phases.len());
         for (i, p) in self.phases.iter().enumerate() {
-            let mut build = |spec: &Option<LawParamsSpec>, field: &str| {
+            let build = |ctx: &mut LawContext, spec: &Option<LawParamsSpec>, field: &str| {
                 spec.as_ref()
                     .map(|s| {
                         s.params
@@ -284,13 +306,19 @@ impl LawParams for SequencerParams {
                     })
                     .transpose()
             };
-            let translation = build(&p.translation, "translation")?;
-            let attitude = build(&p.attitude, "attitude")?;
+            let translation = build(ctx, &p.translation, "translation")?;
+            // The entry's sensor feeds the translation laws (relative state); the attitude
+            // laws fly on the truth of the attitude.
+            let sensor = ctx.sensor.take();
+            let attitude = build(ctx, &p.attitude, "attitude");
+            ctx.sensor = sensor;
+            let attitude = attitude?;
             phases.push(RunningPhase {
                 name: p.name.clone(),
                 translation,
                 attitude,
                 exits: p.exits.clone(),
+                release_docking: p.release_docking,
                 cols: (0, 0, 0),
             });
         }
@@ -319,6 +347,7 @@ struct RunningPhase {
     translation: Option<(String, Box<dyn Controller>)>,
     attitude: Option<(String, Box<dyn Controller>)>,
     exits: Vec<Exit>,
+    release_docking: bool,
     /// (first column, translation columns, attitude columns).
     cols: (usize, usize, usize),
 }
@@ -397,6 +426,12 @@ impl Controller for Sequencer {
                     "to": e.to, "reason": reason, "in_phase_s": in_phase}),
             });
             self.switches.push((obs.t_s, from, e.to.clone(), reason));
+            if self.phases[to].release_docking {
+                self.events.push(ControllerEvent {
+                    kind: DOCKING_RELEASE_EVENT.into(),
+                    data: serde_json::json!({"sequencer": self.prefix, "phase": e.to}),
+                });
+            }
         }
         let ph = &mut self.phases[self.active];
         let mut cmd = Command::zero();
