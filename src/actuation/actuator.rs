@@ -47,6 +47,22 @@ pub enum ActuatorSpec {
         #[serde(default)]
         seed: u64,
     },
+    /// Three-dimensional reaction-control jets ([`crate::actuation::rcs`]): the command's
+    /// force and torque, turned into body axes with the true attitude, are allocated to
+    /// non-negative jet thrusts (least error, saturation reported), rounded to the minimum
+    /// impulse bits; a command with `valves` fires those jets at full thrust (one flag per jet,
+    /// in layout order).
+    Rcs {
+        /// The jets.
+        jets: Vec<super::rcs::JetSpec>,
+        /// Specific impulse, s (default 220 s, a hydrazine monopropellant thruster).
+        #[serde(default = "rcs_isp")]
+        isp_s: f64,
+    },
+}
+
+fn rcs_isp() -> f64 {
+    220.0
 }
 
 impl ActuatorSpec {
@@ -71,6 +87,7 @@ impl ActuatorSpec {
                 }
                 Ok(())
             }
+            ActuatorSpec::Rcs { jets, isp_s } => super::rcs::validate_jets(jets, *isp_s),
             ActuatorSpec::PlanarThrusters {
                 params,
                 thrust_noise,
@@ -138,6 +155,10 @@ pub struct Actuator {
     pub propellant_used_kg: f64,
     /// Velocity increment applied so far, ∫|F|/m dt, m/s.
     pub delta_v_m_s: f64,
+    /// Per jet (`Rcs`): on-time, impulse, firings, propellant.
+    pub jets: Vec<super::rcs::JetTotals>,
+    /// Steps in which the actuator could not meet the command.
+    pub saturated_steps: u64,
     thrust_noise: GaussianNoise,
 }
 
@@ -152,6 +173,16 @@ impl Actuator {
             ),
             _ => (None, 0),
         };
+        let jets = match &spec {
+            ActuatorSpec::Rcs { jets, .. } => jets
+                .iter()
+                .map(|j| super::rcs::JetTotals {
+                    name: j.name.clone(),
+                    ..Default::default()
+                })
+                .collect(),
+            _ => Vec::new(),
+        };
         Self {
             spec,
             pwpf,
@@ -160,6 +191,8 @@ impl Actuator {
             valve_openings: [0; 8],
             propellant_used_kg: 0.0,
             delta_v_m_s: 0.0,
+            jets,
+            saturated_steps: 0,
             thrust_noise: GaussianNoise::new(noise_seed),
         }
     }
@@ -175,7 +208,59 @@ impl Actuator {
         dt_s: f64,
     ) -> Option<ActuationReport> {
         let mut report = ActuationReport::default();
+        let to_body = |frame: Frame, v: &Vector3<f64>| -> Option<Vector3<f64>> {
+            if frame == Frame::Body {
+                Some(*v)
+            } else {
+                Some(frames.body.inverse() * frames.to_world(frame, v)?)
+            }
+        };
         let (f_world, t_world) = match &self.spec {
+            ActuatorSpec::Rcs { jets, isp_s } => {
+                use super::rcs;
+                let thrust: Vec<f64> = match &cmd.valves {
+                    Some(v) => jets
+                        .iter()
+                        .enumerate()
+                        .map(|(k, j)| {
+                            if v.get(k).copied().unwrap_or(false) {
+                                j.max_thrust_n
+                            } else {
+                                0.0
+                            }
+                        })
+                        .collect(),
+                    None => {
+                        let fb = to_body(cmd.force_frame, &cmd.force_n)?;
+                        let tb = to_body(cmd.torque_frame, &cmd.torque_nm)?;
+                        let w = nalgebra::Vector6::new(fb.x, fb.y, fb.z, tb.x, tb.y, tb.z);
+                        let a = rcs::allocate(jets, &w);
+                        report.saturated = a.saturated;
+                        rcs::apply_minimum_impulse(jets, &a.thrust_n, dt_s)
+                    }
+                };
+                let mut flags = Vec::with_capacity(jets.len());
+                for ((j, t), u) in jets.iter().zip(self.jets.iter_mut()).zip(&thrust) {
+                    let impulse = u * dt_s;
+                    let on = impulse > 0.0;
+                    if on && !t.firing {
+                        t.firings += 1;
+                    }
+                    t.firing = on;
+                    t.impulse_ns += impulse;
+                    t.on_time_s += impulse / j.max_thrust_n;
+                    let dm = impulse / (isp_s * G0_M_S2);
+                    t.propellant_kg += dm;
+                    self.propellant_used_kg += dm;
+                    flags.push(on);
+                }
+                report.valves = Some(flags);
+                let w = rcs::wrench(jets, &thrust);
+                (
+                    frames.body * Vector3::new(w[0], w[1], w[2]),
+                    frames.body * Vector3::new(w[3], w[4], w[5]),
+                )
+            }
             ActuatorSpec::Ideal => (
                 frames.to_world(cmd.force_frame, &cmd.force_n)?,
                 frames.to_world(cmd.torque_frame, &cmd.torque_nm)?,
@@ -210,13 +295,6 @@ impl Actuator {
                 let valves = match &cmd.valves {
                     Some(v) => std::array::from_fn(|i| v.get(i).copied().unwrap_or(false)),
                     None => {
-                        let to_body = |frame: Frame, v: &Vector3<f64>| -> Option<Vector3<f64>> {
-                            if frame == Frame::Body {
-                                Some(*v)
-                            } else {
-                                Some(frames.body.inverse() * frames.to_world(frame, v)?)
-                            }
-                        };
                         let fb = to_body(cmd.force_frame, &cmd.force_n)?;
                         let tb = to_body(cmd.torque_frame, &cmd.torque_nm)?;
                         let pw = self.pwpf.as_mut().expect("thrusters have PWPF");
@@ -244,6 +322,9 @@ impl Actuator {
         };
         if mass_kg > 0.0 {
             self.delta_v_m_s += f_world.norm() / mass_kg * dt_s;
+        }
+        if report.saturated {
+            self.saturated_steps += 1;
         }
         report.force_world_n = f_world;
         report.torque_world_nm = t_world;

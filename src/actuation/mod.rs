@@ -5,4 +5,5 @@ pub use actuator::{Actuator, ActuatorSpec};
 
 pub mod actuator;
 pub mod pwpf;
+pub mod rcs;
 pub mod thrusters;

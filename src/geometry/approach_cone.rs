@@ -59,6 +59,8 @@ pub fn support_points(part: &PartCollider) -> Vec<(Vector3<f64>, f64)> {
         }
         Primitive::Ball { radius_m } => vec![(tf(Point3::origin()), *radius_m)],
         Primitive::ConvexHull { points_m } => points_m.iter().map(|p| (tf(*p), 0.0)).collect(),
+        // Every point of a triangle is a convex combination of its corners: the vertices.
+        Primitive::Mesh { mesh, .. } => mesh.vertices_m.iter().map(|p| (tf(*p), 0.0)).collect(),
         Primitive::Cylinder {
             radius_m,
             half_length_m,

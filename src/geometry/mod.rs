@@ -7,4 +7,5 @@ pub mod approach_cone;
 pub mod bounds;
 pub mod cissoid;
 pub mod heart;
+pub mod mesh;
 pub mod superquadric;

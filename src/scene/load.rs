@@ -259,7 +259,183 @@ pub fn load_scene_str(
     if let Err((path, message)) = super::validate::validate(&loaded.scene) {
         return Err(loaded.error_at(&path, message));
     }
+    let mut loaded = loaded;
+    if resolve_meshes(&mut loaded)? {
+        // Mass properties computed from meshes are held to the same limits as stated ones.
+        if let Err((path, message)) = super::validate::validate(&loaded.scene) {
+            return Err(loaded.error_at(&path, message));
+        }
+    }
     Ok(loaded)
+}
+
+/// Reads every `Mesh` shape's file (relative to the scene file's folder) into the scene, and
+/// fills the mass properties of the bodies that take them from their meshes. Returns whether
+/// any body's mass properties were computed. Errors point at the shape's `path` (or the mass
+/// field) and name the mesh file and the element.
+fn resolve_meshes(loaded: &mut LoadedScene) -> Result<bool, SceneError> {
+    use super::{PartSpec, ShapeSpec};
+    use crate::geometry::mesh;
+    let base = Path::new(&loaded.file)
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
+    let mut scene = std::mem::take(&mut loaded.scene.bodies);
+    let mut computed = false;
+    let result = (|| {
+        for b in &mut scene {
+            let bp = format!("bodies.{}", b.name);
+            let mut mass_sources: Vec<(String, mesh::MassProperties, nalgebra::Isometry3<f64>)> =
+                Vec::new();
+            for part in &mut b.parts {
+                let pp = format!("{bp}.parts.{}", part.name());
+                let (PartSpec::Bus {
+                    shape,
+                    pos_m,
+                    attitude,
+                    ..
+                }
+                | PartSpec::Antenna {
+                    shape,
+                    pos_m,
+                    attitude,
+                    ..
+                }) = part
+                else {
+                    continue;
+                };
+                let pose = nalgebra::Isometry3::from_parts(
+                    nalgebra::Translation3::from(nalgebra::Vector3::from(*pos_m)),
+                    attitude.to_quat(),
+                );
+                let ShapeSpec::Mesh {
+                    path,
+                    scale,
+                    nodes,
+                    max_triangles,
+                    density_kg_m3,
+                    loaded: data,
+                    ..
+                } = shape
+                else {
+                    continue;
+                };
+                let file = base.join(path.as_str());
+                let m = mesh::load_mesh_file(&file, *scale, nodes, *max_triangles)
+                    .map_err(|e| loaded.error_at(&format!("{pp}.shape.path"), e))?;
+                if let Some(rho) = density_kg_m3 {
+                    if !b.mass_from_meshes {
+                        return Err(loaded.error_at(
+                            &format!("{pp}.shape.density_kg_m3"),
+                            "the body does not take its mass from its meshes \
+                             (set mass_from_meshes: true, or leave the density out)",
+                        ));
+                    }
+                    for c in &m.components {
+                        mesh::check_closed(c).map_err(|e| {
+                            loaded.error_at(
+                                &format!("{pp}.shape.density_kg_m3"),
+                                format!(
+                                    "{}: component `{}` cannot be a mass source: {e}; a mesh \
+                                     that is not closed can still be a collision shape \
+                                     (leave density_kg_m3 out)",
+                                    file.display(),
+                                    c.name
+                                ),
+                            )
+                        })?;
+                        mass_sources.push((
+                            c.name.clone(),
+                            mesh::mass_properties(c, *rho),
+                            pose * nalgebra::Translation3::from(c.offset_m),
+                        ));
+                    }
+                }
+                *data = Some(std::sync::Arc::new(m));
+            }
+            // Component names become collider names: unique on the body.
+            let cols = super::parts::expand_body(b);
+            for (k, c) in cols.iter().enumerate() {
+                if cols[..k].iter().any(|o| o.name == c.name) {
+                    return Err(loaded.error_at(
+                        &format!("{bp}.parts.{}", c.part),
+                        format!(
+                            "collider `{}` is named twice on the body (mesh components are \
+                             named by their glTF node or OBJ object; select them with `nodes`)",
+                            c.name
+                        ),
+                    ));
+                }
+            }
+            if b.mass_from_meshes {
+                if !b.mass_kg.is_nan() || !b.inertia_kg_m2.xx.is_nan() {
+                    let f = if b.mass_kg.is_nan() {
+                        "inertia_kg_m2"
+                    } else {
+                        "mass_kg"
+                    };
+                    return Err(loaded.error_at(
+                        &format!("{bp}.{f}"),
+                        "leave it out: mass_from_meshes computes the mass properties",
+                    ));
+                }
+                if mass_sources.is_empty() {
+                    return Err(loaded.error_at(
+                        &format!("{bp}.mass_from_meshes"),
+                        "no part of the body is a Mesh with a density_kg_m3",
+                    ));
+                }
+                let total = combine_mass(&mass_sources);
+                b.mass_kg = total.mass_kg;
+                b.com_m = [total.com_m.x, total.com_m.y, total.com_m.z];
+                let j = total.inertia_kg_m2;
+                b.inertia_kg_m2 = super::InertiaSpec {
+                    xx: j[(0, 0)],
+                    yy: j[(1, 1)],
+                    zz: j[(2, 2)],
+                    xy: j[(0, 1)],
+                    xz: j[(0, 2)],
+                    yz: j[(1, 2)],
+                };
+                computed = true;
+            }
+        }
+        Ok(())
+    })();
+    loaded.scene.bodies = scene;
+    result.map(|()| computed)
+}
+
+/// Mass properties of several solids, each given in its part frame with the part's pose in
+/// the body frame: total mass, centre of mass, and the inertia about it (parallel axes).
+pub fn combine_mass(
+    parts: &[(
+        String,
+        crate::geometry::mesh::MassProperties,
+        nalgebra::Isometry3<f64>,
+    )],
+) -> crate::geometry::mesh::MassProperties {
+    use nalgebra::{Matrix3, Vector3};
+    let mass: f64 = parts.iter().map(|p| p.1.mass_kg).sum();
+    let volume: f64 = parts.iter().map(|p| p.1.volume_m3).sum();
+    let com = parts
+        .iter()
+        .map(|(_, m, pose)| (pose * nalgebra::Point3::from(m.com_m)).coords * m.mass_kg)
+        .sum::<Vector3<f64>>()
+        / mass;
+    let mut j = Matrix3::zeros();
+    for (_, m, pose) in parts {
+        let r = pose.rotation.to_rotation_matrix().into_inner();
+        let c = (pose * nalgebra::Point3::from(m.com_m)).coords - com;
+        j += r * m.inertia_kg_m2 * r.transpose()
+            + m.mass_kg * (Matrix3::identity() * c.norm_squared() - c * c.transpose());
+    }
+    crate::geometry::mesh::MassProperties {
+        volume_m3: volume,
+        mass_kg: mass,
+        com_m: com,
+        inertia_kg_m2: j,
+    }
 }
 
 /// Refuses text whose brackets nest deeper than [`MAX_NESTING`], pointing at the first bracket

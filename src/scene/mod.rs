@@ -629,13 +629,21 @@ pub struct BodySpec {
     pub name: String,
     /// Chaser, target or other.
     pub role: BodyRole,
-    /// Mass, kg.
+    /// Mass, kg (left out when `mass_from_meshes`).
+    #[serde(default = "unset_f64")]
     pub mass_kg: f64,
-    /// Centre of mass in the body frame, m.
+    /// Centre of mass in the body frame, m (computed when `mass_from_meshes`).
     #[serde(default)]
     pub com_m: V3,
-    /// Inertia tensor about the centre of mass, body axes, kg·m².
+    /// Inertia tensor about the centre of mass, body axes, kg·m² (left out when
+    /// `mass_from_meshes`).
+    #[serde(default = "unset_inertia")]
     pub inertia_kg_m2: InertiaSpec,
+    /// Mass, centre of mass and inertia computed by the loader from the closed meshes of the
+    /// parts that state a `density_kg_m3` (divergence theorem, [`crate::geometry::mesh`]);
+    /// `mass_kg` and `inertia_kg_m2` are then left out.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub mass_from_meshes: bool,
     /// Initial state.
     pub initial: InitialState,
     /// Geometry: every part becomes one or more colliders.
@@ -654,6 +662,22 @@ pub struct BodySpec {
 
 fn friction() -> f64 {
     0.3
+}
+
+/// NaN: a mass not written in the scene (filled from meshes, or refused by validation).
+fn unset_f64() -> f64 {
+    f64::NAN
+}
+
+fn unset_inertia() -> InertiaSpec {
+    InertiaSpec {
+        xx: f64::NAN,
+        yy: f64::NAN,
+        zz: f64::NAN,
+        xy: 0.0,
+        xz: 0.0,
+        yz: 0.0,
+    }
 }
 
 /// A body axis, for directions written in a scene.
@@ -727,6 +751,73 @@ pub enum ShapeSpec {
         #[serde(default = "prism_segments")]
         segments: u32,
     },
+    /// A triangle mesh read from a file (see `docs/vehicles.md`): OBJ, STL (ASCII or binary),
+    /// glTF or GLB. Distances and guarantee margins use the mesh itself (concave parts
+    /// included); rapier's contact dynamics use its convex decomposition (`decomposition`).
+    /// Each component of the file (glTF node with a mesh, OBJ object) becomes one collider
+    /// named by the component, or by the part when there is a single component.
+    Mesh {
+        /// The file, relative to the scene file's folder.
+        path: String,
+        /// Uniform scale, file units → m.
+        #[serde(default = "unit_scale")]
+        scale: f64,
+        /// Components to keep by name (empty: all).
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        nodes: Vec<String>,
+        /// Most triangles accepted (all components together).
+        #[serde(default = "max_triangles")]
+        max_triangles: u32,
+        /// Convex-decomposition parameters for rapier.
+        #[serde(default)]
+        decomposition: DecompositionSpec,
+        /// Density of the solid, kg/m³: the part's components are mass sources when the body
+        /// takes its mass from its meshes (`mass_from_meshes`); they must then be closed.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        density_kg_m3: Option<f64>,
+        /// The file's components, read by the scene loader (never written in a scene).
+        #[serde(skip)]
+        loaded: Option<std::sync::Arc<crate::geometry::mesh::MeshFile>>,
+    },
+}
+
+fn max_triangles() -> u32 {
+    crate::geometry::mesh::DEFAULT_MAX_TRIANGLES
+}
+
+/// Parameters of the convex decomposition (parry's V-HACD) of a mesh part for rapier.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DecompositionSpec {
+    /// Largest concavity left in a convex piece, as a fraction of the mesh's size (0 … 1).
+    #[serde(default = "vhacd_concavity")]
+    pub concavity: f64,
+    /// Voxel resolution along the longest axis (16 … 512).
+    #[serde(default = "vhacd_resolution")]
+    pub resolution: u32,
+    /// Most convex pieces per component (1 … 4096).
+    #[serde(default = "vhacd_max_hulls")]
+    pub max_convex_hulls: u32,
+}
+
+impl Default for DecompositionSpec {
+    fn default() -> Self {
+        Self {
+            concavity: vhacd_concavity(),
+            resolution: vhacd_resolution(),
+            max_convex_hulls: vhacd_max_hulls(),
+        }
+    }
+}
+
+fn vhacd_concavity() -> f64 {
+    0.01
+}
+fn vhacd_resolution() -> u32 {
+    64
+}
+fn vhacd_max_hulls() -> u32 {
+    256
 }
 
 fn prism_segments() -> u32 {

@@ -33,6 +33,15 @@ pub enum Primitive {
         /// Hull points, m.
         points_m: Vec<Point3<f64>>,
     },
+    /// A triangle mesh (one component of a mesh file, vertices in the local frame), judged
+    /// exactly; simulated in rapier as its convex decomposition with these parameters. Not
+    /// convex in general.
+    Mesh {
+        /// The component.
+        mesh: std::sync::Arc<crate::geometry::mesh::MeshComponent>,
+        /// Convex-decomposition parameters.
+        decomposition: super::DecompositionSpec,
+    },
 }
 
 impl Primitive {
@@ -48,6 +57,7 @@ impl Primitive {
             Primitive::ConvexHull { points_m } => {
                 points_m.iter().map(|p| p.coords.norm()).fold(0.0, f64::max)
             }
+            Primitive::Mesh { mesh, .. } => mesh.bounding_radius_m(),
         }
     }
 }
@@ -143,6 +153,14 @@ fn shape_primitive(shape: &ShapeSpec) -> (Primitive, UnitQuaternion<f64>) {
                 UnitQuaternion::identity(),
             )
         }
+        // Expanded by `expand_part` from the loaded file; a mesh the loader has not read (a
+        // scene built without `load_scene_*`) has no colliders to give.
+        ShapeSpec::Mesh { .. } => (
+            Primitive::ConvexHull {
+                points_m: Vec::new(),
+            },
+            UnitQuaternion::identity(),
+        ),
     }
 }
 
@@ -196,6 +214,29 @@ fn expand_part(body: &BodySpec, part: &PartSpec, out: &mut Vec<PartCollider>) {
             } else {
                 PartRole::Antenna
             };
+            if let ShapeSpec::Mesh {
+                loaded: Some(file),
+                decomposition,
+                ..
+            } = shape
+            {
+                // One collider per component: named by the part when it is the only one, else
+                // by the component (glTF node, OBJ object).
+                let single = file.components.len() == 1;
+                for c in &file.components {
+                    push(
+                        if single { name.clone() } else { c.name.clone() },
+                        role,
+                        Primitive::Mesh {
+                            mesh: c.clone(),
+                            decomposition: *decomposition,
+                        },
+                        iso(Vector3::from(*pos_m), attitude.to_quat())
+                            * Translation3::from(c.offset_m),
+                    );
+                }
+                return;
+            }
             let (prim, local_rot) = shape_primitive(shape);
             push(
                 name.clone(),

@@ -496,7 +496,46 @@ fn validate_attitude(path: &str, a: &AttitudeSpec) -> Check {
 
 fn validate_body(b: &BodySpec) -> Check {
     let p = format!("bodies.{}", b.name);
+    if b.mass_kg.is_nan() && !b.mass_from_meshes {
+        return fail(
+            format!("{p}.mass_kg"),
+            "missing: state mass_kg and inertia_kg_m2, or set mass_from_meshes: true",
+        );
+    }
+    // Mass properties from meshes are checked once the loader has computed them.
+    let mass_pending = b.mass_from_meshes && b.mass_kg.is_nan();
+    if !mass_pending {
+        validate_mass(&p, b)?;
+    }
+    bounded3(
+        &format!("{p}.initial.pos_m"),
+        &b.initial.pos_m,
+        MAX_POSITION_M,
+        "m",
+    )?;
+    bounded3(
+        &format!("{p}.initial.vel_m_s"),
+        &b.initial.vel_m_s,
+        MAX_SPEED_M_S,
+        "m/s",
+    )?;
+    bounded3(
+        &format!("{p}.initial.rate_body_deg_s"),
+        &b.initial.rate_body_deg_s,
+        MAX_RATE_DEG_S,
+        "deg/s",
+    )?;
+    validate_body_rest(&p, b)
+}
+
+fn validate_mass(p: &str, b: &BodySpec) -> Check {
     positive(&format!("{p}.mass_kg"), b.mass_kg, "kilograms")?;
+    if b.inertia_kg_m2.xx.is_nan() && !b.mass_from_meshes {
+        return fail(
+            format!("{p}.inertia_kg_m2"),
+            "missing: state the inertia tensor (or set mass_from_meshes: true)",
+        );
+    }
     in_range(&format!("{p}.mass_kg"), b.mass_kg, MASS_RANGE_KG, "kg")?;
     if !(b.friction.is_finite() && b.friction >= 0.0 && b.friction <= MAX_FRICTION) {
         return fail(
@@ -550,24 +589,10 @@ fn validate_body(b: &BodySpec) -> Check {
             ),
         );
     }
-    bounded3(
-        &format!("{p}.initial.pos_m"),
-        &b.initial.pos_m,
-        MAX_POSITION_M,
-        "m",
-    )?;
-    bounded3(
-        &format!("{p}.initial.vel_m_s"),
-        &b.initial.vel_m_s,
-        MAX_SPEED_M_S,
-        "m/s",
-    )?;
-    bounded3(
-        &format!("{p}.initial.rate_body_deg_s"),
-        &b.initial.rate_body_deg_s,
-        MAX_RATE_DEG_S,
-        "deg/s",
-    )?;
+    Ok(())
+}
+
+fn validate_body_rest(p: &str, b: &BodySpec) -> Check {
     validate_attitude(&format!("{p}.initial.attitude"), &b.initial.attitude)?;
     if b.ports.len() > MAX_PORTS_PER_BODY {
         return fail(
@@ -659,9 +684,75 @@ fn validate_shape(path: &str, s: &ShapeSpec) -> Check {
                 );
             }
         }
+        ShapeSpec::Mesh {
+            path: file,
+            scale,
+            nodes,
+            max_triangles,
+            decomposition,
+            density_kg_m3,
+            ..
+        } => {
+            if file.is_empty() {
+                return fail(format!("{path}.path"), "must name a mesh file");
+            }
+            if crate::geometry::mesh::MeshFormat::of(std::path::Path::new(file)).is_none() {
+                return fail(
+                    format!("{path}.path"),
+                    format!(
+                        "`{file}`: unknown mesh extension (expected .obj, .stl, .gltf or .glb)"
+                    ),
+                );
+            }
+            if !(scale.is_finite() && *scale > 0.0 && *scale <= 1e6) {
+                return fail(
+                    format!("{path}.scale"),
+                    format!("must be positive and at most 1e6, got {scale}"),
+                );
+            }
+            for (k, n) in nodes.iter().enumerate() {
+                if nodes[..k].contains(n) {
+                    return fail(
+                        format!("{path}.nodes.{k}"),
+                        format!("`{n}` is listed twice"),
+                    );
+                }
+            }
+            if !(1..=MAX_MESH_TRIANGLES).contains(max_triangles) {
+                return fail(
+                    format!("{path}.max_triangles"),
+                    format!("from 1 to {MAX_MESH_TRIANGLES}, got {max_triangles}"),
+                );
+            }
+            let d = decomposition;
+            if !(d.concavity.is_finite() && d.concavity >= 0.0 && d.concavity <= 1.0) {
+                return fail(
+                    format!("{path}.decomposition.concavity"),
+                    format!("must be from 0 to 1, got {}", d.concavity),
+                );
+            }
+            if !(16..=512).contains(&d.resolution) {
+                return fail(
+                    format!("{path}.decomposition.resolution"),
+                    format!("must be from 16 to 512 voxels, got {}", d.resolution),
+                );
+            }
+            if !(1..=4096).contains(&d.max_convex_hulls) {
+                return fail(
+                    format!("{path}.decomposition.max_convex_hulls"),
+                    format!("must be from 1 to 4096, got {}", d.max_convex_hulls),
+                );
+            }
+            if let Some(rho) = density_kg_m3 {
+                in_range(&format!("{path}.density_kg_m3"), *rho, (1e-3, 1e5), "kg/m³")?;
+            }
+        }
     }
     Ok(())
 }
+
+/// Most triangles a mesh part may state as its limit.
+pub const MAX_MESH_TRIANGLES: u32 = 2_000_000;
 
 fn validate_part(pp: &str, b: &BodySpec, part: &PartSpec) -> Check {
     let port_exists = |n: &str| b.ports.iter().any(|p| p.name == n);

@@ -29,6 +29,8 @@ pub struct Simulation {
     /// What produced this run (rpod version, git commit, scene hash, `--set` overrides), for
     /// `summary.json`.
     pub provenance: serde_json::Value,
+    /// Mesh parts: judged exactly, simulated as convex pieces (empty without meshes).
+    pub meshes: Vec<MeshPartReport>,
 }
 
 /// The rapier/parry shape of a part primitive (f32, in the part frame); `None` for a hull
@@ -47,7 +49,22 @@ pub(crate) fn primitive_shape(p: &Primitive) -> Option<rp::SharedShape> {
             let pts: Vec<_> = points_m.iter().map(|p| conv::v(&p.coords)).collect();
             rp::SharedShape::convex_hull(&pts)?
         }
+        Primitive::Mesh { mesh, .. } => super::mesh::judged_shape(mesh)?,
     })
+}
+
+/// A mesh part as built: its name, triangles, convex pieces and the decomposition's measured
+/// deviation from the mesh (`summary.json`'s `meshes`).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct MeshPartReport {
+    /// `body/collider`.
+    pub part: String,
+    /// Triangles of the judged mesh.
+    pub triangles: usize,
+    /// Convex pieces rapier simulates.
+    pub convex_pieces: usize,
+    /// Largest deviation measured between the pieces and the mesh, m ([`super::mesh`]).
+    pub decomposition_max_deviation_m: f64,
 }
 
 /// Initial world-frame state of a body (centre of mass), given the reference orbit state.
@@ -120,6 +137,7 @@ impl Simulation {
         let mut roster = Roster::default();
         let mut contacts = ContactState::default();
         let mut all_parts: Vec<Vec<PartCollider>> = Vec::new();
+        let mut meshes = Vec::new();
         for (index, b) in scene.bodies.iter().enumerate() {
             if matches!(b.initial.frame, InitFrame::Hill) && reference.is_none() {
                 return Err(loaded.error_at(
@@ -146,13 +164,16 @@ impl Simulation {
             };
             let colliders = expand_body(b);
             let has_docking = colliders.iter().any(|c| c.role.is_docking());
+            let has_mesh = colliders
+                .iter()
+                .any(|c| matches!(c.shape, Primitive::Mesh { .. }));
             let rb = rp::RigidBodyBuilder::dynamic()
                 .pose(conv::pose(&state.body_pose(&com)))
                 .linvel(conv::v(&state.vel_m_s))
                 .angvel(conv::v(&state.omega_rad_s))
                 .can_sleep(false)
                 .gyroscopic_forces_enabled(true)
-                .ccd_enabled(has_docking)
+                .ccd_enabled(has_docking || has_mesh)
                 .additional_mass_properties(mprops)
                 .build();
             let handle = pw.insert_body(rb);
@@ -181,7 +202,33 @@ impl Simulation {
                         format!("collider `{}` has a degenerate convex hull", pc.name),
                     ));
                 };
-                let col = rp::ColliderBuilder::new(shape.clone())
+                // Judged as the mesh; simulated as its convex pieces.
+                let simulated = match &pc.shape {
+                    Primitive::Mesh {
+                        mesh,
+                        decomposition,
+                    } => {
+                        let Some(s) = super::mesh::simulated_shape(mesh, decomposition) else {
+                            return Err(loaded.error_at(
+                                &format!("bodies.{}.parts.{}.shape.decomposition", b.name, pc.part),
+                                format!(
+                                    "collider `{}`: the convex decomposition gave no piece",
+                                    pc.name
+                                ),
+                            ));
+                        };
+                        let d = super::mesh::decomposition(mesh, decomposition);
+                        meshes.push(MeshPartReport {
+                            part: format!("{}/{}", b.name, pc.name),
+                            triangles: mesh.triangles.len(),
+                            convex_pieces: d.hulls.len(),
+                            decomposition_max_deviation_m: d.max_deviation_m,
+                        });
+                        s
+                    }
+                    _ => shape.clone(),
+                };
+                let col = rp::ColliderBuilder::new(simulated)
                     .position(conv::pose(&pc.pose_body))
                     .density(0.0)
                     .friction(b.friction as f32)
@@ -392,6 +439,7 @@ impl Simulation {
             scene_file: loaded.file.clone(),
             wall_s: 0.0,
             provenance: loaded.provenance(),
+            meshes,
         })
     }
 
@@ -666,6 +714,10 @@ impl Simulation {
 
     /// The run summary (the content of `summary.json`).
     pub fn summary(&self) -> serde_json::Value {
+        self.with_meshes(self.summary_core())
+    }
+
+    fn summary_core(&self) -> serde_json::Value {
         let w = self.app.world();
         let mon = w.resource::<MonitorState>();
         let cs = w.resource::<ContactState>();
@@ -763,6 +815,19 @@ impl Simulation {
             "docking": w.get_resource::<super::docking::Docking>().map(super::docking::summary),
             "controllers": w.resource::<super::controllers::ControllerHost>().summary(),
         })
+    }
+
+    /// The run summary with the mesh parts (`meshes`), when the scene has any.
+    fn with_meshes(&self, mut v: serde_json::Value) -> serde_json::Value {
+        if !self.meshes.is_empty()
+            && let Some(o) = v.as_object_mut()
+        {
+            o.insert(
+                "meshes".into(),
+                serde_json::to_value(&self.meshes).unwrap_or_default(),
+            );
+        }
+        v
     }
 
     /// Writes the last row, the summary, and renames the files into place.

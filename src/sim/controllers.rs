@@ -129,7 +129,7 @@ impl ControllerHost {
             self.slots
                 .iter()
                 .map(|s| {
-                    serde_json::json!({
+                    let mut v = serde_json::json!({
                         "kind": s.kind,
                         "body": name(s.body),
                         "target": s.target.and_then(name),
@@ -137,7 +137,18 @@ impl ControllerHost {
                         "calls": s.calls,
                         "delta_v_m_s": s.actuator.delta_v_m_s,
                         "propellant_used_kg": s.actuator.propellant_used_kg,
-                    })
+                    });
+                    // RCS jets: per-jet totals and the steps the command could not be met.
+                    if !s.actuator.jets.is_empty()
+                        && let Some(o) = v.as_object_mut()
+                    {
+                        o.insert("jets".into(), serde_json::json!(s.actuator.jets));
+                        o.insert(
+                            "saturated_steps".into(),
+                            serde_json::json!(s.actuator.saturated_steps),
+                        );
+                    }
+                    v
                 })
                 .collect(),
         )

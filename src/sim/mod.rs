@@ -31,10 +31,12 @@ pub mod controllers;
 pub mod docking;
 pub mod environment;
 pub mod guard;
+pub mod mesh;
 pub mod monitor;
 pub mod motion;
 pub mod output;
 pub mod overlap;
+pub mod plume;
 pub mod snapshot;
 
 use crate::guarantee::{BodyView, Guarantee, GuaranteeStatus, MonitorView, PairDistance};

@@ -127,6 +127,9 @@ pub fn primitive_triangles(p: &Primitive) -> Vec<[Point3<f64>; 3]> {
                 }
             }
         }
+        Primitive::Mesh { mesh, .. } => {
+            out.extend((0..mesh.triangles.len()).map(|k| mesh.corners(k)))
+        }
     }
     out
 }

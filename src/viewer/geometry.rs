@@ -284,7 +284,33 @@ pub fn primitive_mesh(p: &Primitive) -> Mesh {
             .build(),
         Primitive::Ball { radius_m } => Sphere::new(*radius_m as f32).mesh().uv(32, 16),
         Primitive::ConvexHull { points_m } => hull_mesh(points_m),
+        // The same triangles the monitor judges.
+        Primitive::Mesh { mesh, .. } => {
+            triangle_mesh((0..mesh.triangles.len()).map(|k| mesh.corners(k)))
+        }
     }
+}
+
+/// Triangle list of the given triangles, one normal per face (flat shading).
+pub fn triangle_mesh(tris: impl Iterator<Item = [Point3<f64>; 3]>) -> Mesh {
+    let mut pos: Vec<[f32; 3]> = Vec::new();
+    let mut nrm: Vec<[f32; 3]> = Vec::new();
+    for t in tris {
+        let [a, b, c] = t.map(|p| Vec3::new(p.x as f32, p.y as f32, p.z as f32));
+        let n = (b - a).cross(c - a).normalize_or_zero();
+        for p in [a, b, c] {
+            pos.push(p.to_array());
+            nrm.push(n.to_array());
+        }
+    }
+    let idx: Vec<u32> = (0..pos.len() as u32).collect();
+    Mesh::new(
+        PrimitiveTopology::TriangleList,
+        RenderAssetUsages::default(),
+    )
+    .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, pos)
+    .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, nrm)
+    .with_inserted_indices(Indices::U32(idx))
 }
 
 /// Triangle list of the convex hull of `points`, one normal per face.
