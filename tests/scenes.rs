@@ -37,7 +37,7 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
     (
         "min_impact_speed_1e300",
         65,
-        "docking.0.contact.0.min_impact_speed_m_s",
+        "docking.contact.min_impact_speed_m_s",
         "the largest value of a speed",
     ),
     (
@@ -130,7 +130,7 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
     (
         "magnet_1e308",
         61,
-        "docking.0.magnet.f0_n",
+        "docking.magnet.f0_n",
         "the largest value of a force",
     ),
     (
@@ -242,7 +242,7 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
     (
         "table_gravity_1e308",
         24,
-        "environment.0.gravity_m_s2",
+        "environment.gravity_m_s2",
         "the largest value of an acceleration",
     ),
     (

@@ -60,7 +60,6 @@ use crate::geometry::heart::HeartParams;
 use crate::geometry::superquadric::{RadialForm, SuperquadricParams};
 use nalgebra::{Matrix2, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
-use std::f64::consts::PI;
 
 /// Which gradient of φ_tot the control law uses (see the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -591,7 +590,7 @@ mod tests {
         let obs = Xu2019Observation {
             t_s: 0.0,
             pos_lab_m: Vector2::new(0.9, 1.4),
-            theta_rad: PI / 2.0,
+            theta_rad: std::f64::consts::FRAC_PI_2,
             vel_lab_m_s: Vector2::zeros(),
             omega_rad_s: 0.0,
         };
