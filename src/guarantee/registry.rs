@@ -161,17 +161,24 @@ static REGISTRY: LazyLock<RwLock<BTreeMap<String, ParamsFn>>> = LazyLock::new(||
 fn builtin() -> Vec<(&'static str, ParamsFn)> {
     use super::builtin::{ApproachConeParams, KeepOutSphereParams, MinDistanceParams};
     use super::requirements::{
-        ClosingSpeedGateParams, KeepOutEllipsoidParams, LineOfSightParams, PassiveSafetyParams,
+        ClosingSpeedGateParams, KeepOutEllipsoidParams, PassiveSafetyParams,
     };
-    vec![
+    #[allow(unused_mut)]
+    let mut kinds: Vec<(&'static str, ParamsFn)> = vec![
         ("MinDistance", de_params::<MinDistanceParams>),
         ("KeepOutSphere", de_params::<KeepOutSphereParams>),
         ("ApproachCone", de_params::<ApproachConeParams>),
         ("KeepOutEllipsoid", de_params::<KeepOutEllipsoidParams>),
         ("ClosingSpeedGate", de_params::<ClosingSpeedGateParams>),
         ("PassiveSafety", de_params::<PassiveSafetyParams>),
-        ("LineOfSight", de_params::<LineOfSightParams>),
-    ]
+    ];
+    // Needs the full geometry (parry): only with the Bevy + rapier layer.
+    #[cfg(feature = "sim")]
+    kinds.push((
+        "LineOfSight",
+        de_params::<super::requirements::LineOfSightParams>,
+    ));
+    kinds
 }
 
 /// Registers a kind of guarantee under `name`: scene entries `name(field: …, …)` are read as

@@ -8,7 +8,7 @@ use super::{Guarantee, MonitorView, MotionBounds, Reads};
 use crate::control::registry::BuildError;
 use crate::scene::validate::MAX_POSITION_M;
 use crate::scene::{Environment, OrbitSpec, Scene};
-use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use serde::Deserialize;
 
 /// The frame a requirement's zone is fixed in.
@@ -602,313 +602,324 @@ impl Guarantee for PassiveSafety {
     }
 }
 
-/// `LineOfSight(name, sensor_body, position_m, boresight, half_fov_deg, range_m, target,
-/// port, standoff_m, clearance_m)`: a sensor fixed on `sensor_body` (at `position_m`, body
-/// frame, looking along `boresight`) keeps the point `standoff_m` out along the outward axis of
-/// `target`'s port `port` inside its field of view (half-angle `half_fov_deg`) and range
-/// (`range_m`), and the segment between them clear of every part of every body by
-/// `clearance_m` — the sensor's own body and the target's arrays included.
-///
-/// Margin (m): the smallest of (range_m − d), d·sin(α − θ) (the point's distance to the
-/// edge of the field of view, clamped to ±d beyond ±90°) and the signed distance from the
-/// segment to the nearest part less `clearance_m` (parry's distance between the segment and
-/// each collider, its penetration depth when they overlap), with d the segment's length, θ
-/// the angle off the boresight, α the half field of view. Judged on every step interval:
-/// with u_S, u_T the speed bounds of the two end points (centre-of-mass speed + Ω·lever arm)
-/// and w = max over bodies of (speed + Ω·extent), the three terms change at most at
-/// u_S + u_T, 2(u_S + u_T) + Ω_S·d_max and max(u_S, u_T) + w.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct LineOfSightParams {
-    /// Guarantee name.
-    pub name: String,
-    /// The body carrying the sensor.
-    pub sensor_body: String,
-    /// Sensor position, sensor body frame (from the body origin, as parts), m.
-    pub position_m: [f64; 3],
-    /// Boresight, sensor body frame (any length > 0).
-    pub boresight: [f64; 3],
-    /// Half field of view, deg (0 < α < 90).
-    pub half_fov_deg: f64,
-    /// Sensor range, m.
-    pub range_m: f64,
-    /// The body carrying the point to keep in view.
-    pub target: String,
-    /// Its port.
-    pub port: String,
-    /// The point's distance out along the port's outward axis, m (it must lie outside every
-    /// part of the target).
-    pub standoff_m: f64,
-    /// Required clearance of the segment from every part, m (default 0).
-    #[serde(default)]
-    pub clearance_m: f64,
-}
+/// The line-of-sight requirement: it needs the full geometry (parry's ray casts and distances),
+/// so it exists only with the `sim` feature (the Bevy + rapier layer).
+#[cfg(feature = "sim")]
+mod line_of_sight {
+    use super::*;
+    use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
-impl GuaranteeParams for LineOfSightParams {
-    fn name(&self) -> &str {
-        &self.name
+    /// `LineOfSight(name, sensor_body, position_m, boresight, half_fov_deg, range_m, target,
+    /// port, standoff_m, clearance_m)`: a sensor fixed on `sensor_body` (at `position_m`, body
+    /// frame, looking along `boresight`) keeps the point `standoff_m` out along the outward axis of
+    /// `target`'s port `port` inside its field of view (half-angle `half_fov_deg`) and range
+    /// (`range_m`), and the segment between them clear of every part of every body by
+    /// `clearance_m` — the sensor's own body and the target's arrays included.
+    ///
+    /// Margin (m): the smallest of (range_m − d), d·sin(α − θ) (the point's distance to the
+    /// edge of the field of view, clamped to ±d beyond ±90°) and the signed distance from the
+    /// segment to the nearest part less `clearance_m` (parry's distance between the segment and
+    /// each collider, its penetration depth when they overlap), with d the segment's length, θ
+    /// the angle off the boresight, α the half field of view. Judged on every step interval:
+    /// with u_S, u_T the speed bounds of the two end points (centre-of-mass speed + Ω·lever arm)
+    /// and w = max over bodies of (speed + Ω·extent), the three terms change at most at
+    /// u_S + u_T, 2(u_S + u_T) + Ω_S·d_max and max(u_S, u_T) + w.
+    #[derive(Debug, Clone, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct LineOfSightParams {
+        /// Guarantee name.
+        pub name: String,
+        /// The body carrying the sensor.
+        pub sensor_body: String,
+        /// Sensor position, sensor body frame (from the body origin, as parts), m.
+        pub position_m: [f64; 3],
+        /// Boresight, sensor body frame (any length > 0).
+        pub boresight: [f64; 3],
+        /// Half field of view, deg (0 < α < 90).
+        pub half_fov_deg: f64,
+        /// Sensor range, m.
+        pub range_m: f64,
+        /// The body carrying the point to keep in view.
+        pub target: String,
+        /// Its port.
+        pub port: String,
+        /// The point's distance out along the port's outward axis, m (it must lie outside every
+        /// part of the target).
+        pub standoff_m: f64,
+        /// Required clearance of the segment from every part, m (default 0).
+        #[serde(default)]
+        pub clearance_m: f64,
     }
-    fn bodies(&self) -> Vec<(&'static str, &str)> {
-        vec![("sensor_body", &self.sensor_body), ("target", &self.target)]
-    }
-    fn check(&self, scene: &Scene) -> Result<(), BuildError> {
-        for (k, v) in self.position_m.iter().enumerate() {
-            if !(v.is_finite() && v.abs() <= crate::scene::validate::MAX_BODY_OFFSET_M) {
+
+    impl GuaranteeParams for LineOfSightParams {
+        fn name(&self) -> &str {
+            &self.name
+        }
+        fn bodies(&self) -> Vec<(&'static str, &str)> {
+            vec![("sensor_body", &self.sensor_body), ("target", &self.target)]
+        }
+        fn check(&self, scene: &Scene) -> Result<(), BuildError> {
+            for (k, v) in self.position_m.iter().enumerate() {
+                if !(v.is_finite() && v.abs() <= crate::scene::validate::MAX_BODY_OFFSET_M) {
+                    return Err(BuildError::at(
+                        format!("position_m.{k}"),
+                        "must be a finite offset within the body's limits",
+                    ));
+                }
+            }
+            let b = Vector3::from(self.boresight);
+            if !(b.iter().all(|x| x.is_finite()) && b.norm() > 1e-9) {
                 return Err(BuildError::at(
-                    format!("position_m.{k}"),
-                    "must be a finite offset within the body's limits",
+                    "boresight",
+                    "must be a finite, non-zero direction",
                 ));
             }
-        }
-        let b = Vector3::from(self.boresight);
-        if !(b.iter().all(|x| x.is_finite()) && b.norm() > 1e-9) {
-            return Err(BuildError::at(
-                "boresight",
-                "must be a finite, non-zero direction",
-            ));
-        }
-        let a = self.half_fov_deg;
-        if !(a.is_finite() && a > 0.0 && a < 90.0) {
-            return Err(BuildError::at(
-                "half_fov_deg",
-                format!("must be an angle in (0, 90) deg, got {a}"),
-            ));
-        }
-        finite_positive("range_m", self.range_m, "metres")?;
-        if !(self.standoff_m.is_finite() && self.standoff_m >= 0.0 && self.standoff_m <= 1e3) {
-            return Err(BuildError::at(
-                "standoff_m",
-                format!("must be from 0 to 1000 m, got {}", self.standoff_m),
-            ));
-        }
-        if !(self.clearance_m.is_finite() && self.clearance_m >= 0.0 && self.clearance_m <= 1e3) {
-            return Err(BuildError::at(
-                "clearance_m",
-                format!("must be from 0 to 1000 m, got {}", self.clearance_m),
-            ));
-        }
-        let t = scene.bodies.iter().find(|x| x.name == self.target);
-        if t.and_then(|t| crate::scene::parts::port_frame(t, &self.port))
-            .is_none()
-        {
-            return Err(BuildError::at(
-                "port",
-                format!("body `{}` has no port `{}`", self.target, self.port),
-            ));
-        }
-        Ok(())
-    }
-    fn build(&self, ctx: &GuaranteeContext) -> Result<Box<dyn Guarantee>, BuildError> {
-        let s = ctx.body("sensor_body", &self.sensor_body)?;
-        let t = ctx.body("target", &self.target)?;
-        let (port_m, axis) = crate::scene::parts::port_frame(&ctx.scene.bodies[t], &self.port)
-            .ok_or_else(|| BuildError::at("port", "no such port"))?;
-        let point_m = port_m + axis.normalize() * self.standoff_m;
-        let com = |i: usize| Vector3::from(ctx.scene.bodies[i].com_m);
-        let mut parts = Vec::new();
-        for (i, cols) in ctx.parts.iter().enumerate() {
-            for c in cols {
-                let Some(shape) = crate::sim::build::primitive_shape(&c.shape) else {
-                    continue;
-                };
-                parts.push(LosPart {
-                    body: i,
-                    name: c.name.clone(),
-                    // Part pose relative to the body's centre of mass (body axes).
-                    pose_com: Isometry3::from_parts(
-                        Translation3::from(-com(i)),
-                        UnitQuaternion::identity(),
-                    ) * c.pose_body,
-                    shape,
-                });
+            let a = self.half_fov_deg;
+            if !(a.is_finite() && a > 0.0 && a < 90.0) {
+                return Err(BuildError::at(
+                    "half_fov_deg",
+                    format!("must be an angle in (0, 90) deg, got {a}"),
+                ));
             }
+            finite_positive("range_m", self.range_m, "metres")?;
+            if !(self.standoff_m.is_finite() && self.standoff_m >= 0.0 && self.standoff_m <= 1e3) {
+                return Err(BuildError::at(
+                    "standoff_m",
+                    format!("must be from 0 to 1000 m, got {}", self.standoff_m),
+                ));
+            }
+            if !(self.clearance_m.is_finite() && self.clearance_m >= 0.0 && self.clearance_m <= 1e3)
+            {
+                return Err(BuildError::at(
+                    "clearance_m",
+                    format!("must be from 0 to 1000 m, got {}", self.clearance_m),
+                ));
+            }
+            let t = scene.bodies.iter().find(|x| x.name == self.target);
+            if t.and_then(|t| crate::scene::parts::port_frame(t, &self.port))
+                .is_none()
+            {
+                return Err(BuildError::at(
+                    "port",
+                    format!("body `{}` has no port `{}`", self.target, self.port),
+                ));
+            }
+            Ok(())
         }
-        // The end points must be outside every part (else the segment is blocked from the start
-        // whatever happens): a located error.
-        let inside = |body: usize, p: &Vector3<f64>| -> Option<String> {
-            parts.iter().filter(|q| q.body == body).find_map(|q| {
-                let local = q.pose_com.inverse_transform_point(&(p - com(body)).into());
-                let l32 = bevy_rapier3d::rapier::math::Vector::new(
-                    local.x as f32,
-                    local.y as f32,
-                    local.z as f32,
-                );
-                q.shape.contains_local_point(l32).then(|| q.name.clone())
-            })
-        };
-        let sensor_m = Vector3::from(self.position_m);
-        if let Some(p) = inside(s, &sensor_m) {
-            return Err(BuildError::at(
-                "position_m",
-                format!("the sensor is inside part `{p}` of `{}`", self.sensor_body),
-            ));
+        fn build(&self, ctx: &GuaranteeContext) -> Result<Box<dyn Guarantee>, BuildError> {
+            let s = ctx.body("sensor_body", &self.sensor_body)?;
+            let t = ctx.body("target", &self.target)?;
+            let (port_m, axis) = crate::scene::parts::port_frame(&ctx.scene.bodies[t], &self.port)
+                .ok_or_else(|| BuildError::at("port", "no such port"))?;
+            let point_m = port_m + axis.normalize() * self.standoff_m;
+            let com = |i: usize| Vector3::from(ctx.scene.bodies[i].com_m);
+            let mut parts = Vec::new();
+            for (i, cols) in ctx.parts.iter().enumerate() {
+                for c in cols {
+                    let Some(shape) = crate::sim::build::primitive_shape(&c.shape) else {
+                        continue;
+                    };
+                    parts.push(LosPart {
+                        body: i,
+                        name: c.name.clone(),
+                        // Part pose relative to the body's centre of mass (body axes).
+                        pose_com: Isometry3::from_parts(
+                            Translation3::from(-com(i)),
+                            UnitQuaternion::identity(),
+                        ) * c.pose_body,
+                        shape,
+                    });
+                }
+            }
+            // The end points must be outside every part (else the segment is blocked from the start
+            // whatever happens): a located error.
+            let inside = |body: usize, p: &Vector3<f64>| -> Option<String> {
+                parts.iter().filter(|q| q.body == body).find_map(|q| {
+                    let local = q.pose_com.inverse_transform_point(&(p - com(body)).into());
+                    let l32 = bevy_rapier3d::rapier::math::Vector::new(
+                        local.x as f32,
+                        local.y as f32,
+                        local.z as f32,
+                    );
+                    q.shape.contains_local_point(l32).then(|| q.name.clone())
+                })
+            };
+            let sensor_m = Vector3::from(self.position_m);
+            if let Some(p) = inside(s, &sensor_m) {
+                return Err(BuildError::at(
+                    "position_m",
+                    format!("the sensor is inside part `{p}` of `{}`", self.sensor_body),
+                ));
+            }
+            if let Some(p) = inside(t, &point_m) {
+                return Err(BuildError::at(
+                    "standoff_m",
+                    format!(
+                        "the point {} m out of port `{}` is inside part `{p}` of `{}`: give a larger standoff_m",
+                        self.standoff_m, self.port, self.target
+                    ),
+                ));
+            }
+            Ok(Box::new(LineOfSight {
+                name: self.name.clone(),
+                sensor_body: s,
+                sensor_off: sensor_m - com(s),
+                boresight: Vector3::from(self.boresight).normalize(),
+                half_fov_rad: self.half_fov_deg.to_radians(),
+                range_m: self.range_m,
+                target: t,
+                point_off: point_m - com(t),
+                clearance_m: self.clearance_m,
+                parts,
+            }))
         }
-        if let Some(p) = inside(t, &point_m) {
-            return Err(BuildError::at(
-                "standoff_m",
-                format!(
-                    "the point {} m out of port `{}` is inside part `{p}` of `{}`: give a larger standoff_m",
-                    self.standoff_m, self.port, self.target
-                ),
-            ));
-        }
-        Ok(Box::new(LineOfSight {
-            name: self.name.clone(),
-            sensor_body: s,
-            sensor_off: sensor_m - com(s),
-            boresight: Vector3::from(self.boresight).normalize(),
-            half_fov_rad: self.half_fov_deg.to_radians(),
-            range_m: self.range_m,
-            target: t,
-            point_off: point_m - com(t),
-            clearance_m: self.clearance_m,
-            parts,
-        }))
     }
-}
 
-/// One collider as [`LineOfSight`] sees it.
-#[derive(Clone)]
-pub struct LosPart {
-    /// Body index.
-    pub body: usize,
-    /// Collider name.
-    pub name: String,
-    /// Pose relative to the body's centre of mass, body axes.
-    pub pose_com: Isometry3<f64>,
-    /// Shape.
-    pub shape: bevy_rapier3d::rapier::prelude::SharedShape,
-}
+    /// One collider as [`LineOfSight`] sees it.
+    #[derive(Clone)]
+    pub struct LosPart {
+        /// Body index.
+        pub body: usize,
+        /// Collider name.
+        pub name: String,
+        /// Pose relative to the body's centre of mass, body axes.
+        pub pose_com: Isometry3<f64>,
+        /// Shape.
+        pub shape: bevy_rapier3d::rapier::prelude::SharedShape,
+    }
 
-/// [`LineOfSightParams`] as the monitor checks it.
-#[derive(Clone)]
-pub struct LineOfSight {
-    /// Name.
-    pub name: String,
-    /// Sensor body.
-    pub sensor_body: usize,
-    /// Sensor position from the sensor body's centre of mass, body frame, m.
-    pub sensor_off: Vector3<f64>,
-    /// Unit boresight, body frame.
-    pub boresight: Vector3<f64>,
-    /// Half field of view, rad.
-    pub half_fov_rad: f64,
-    /// Range, m.
-    pub range_m: f64,
-    /// Target body.
-    pub target: usize,
-    /// Target point from the target's centre of mass, body frame, m.
-    pub point_off: Vector3<f64>,
-    /// Required clearance, m.
-    pub clearance_m: f64,
-    /// Every collider of every body.
-    pub parts: Vec<LosPart>,
-}
+    /// [`LineOfSightParams`] as the monitor checks it.
+    #[derive(Clone)]
+    pub struct LineOfSight {
+        /// Name.
+        pub name: String,
+        /// Sensor body.
+        pub sensor_body: usize,
+        /// Sensor position from the sensor body's centre of mass, body frame, m.
+        pub sensor_off: Vector3<f64>,
+        /// Unit boresight, body frame.
+        pub boresight: Vector3<f64>,
+        /// Half field of view, rad.
+        pub half_fov_rad: f64,
+        /// Range, m.
+        pub range_m: f64,
+        /// Target body.
+        pub target: usize,
+        /// Target point from the target's centre of mass, body frame, m.
+        pub point_off: Vector3<f64>,
+        /// Required clearance, m.
+        pub clearance_m: f64,
+        /// Every collider of every body.
+        pub parts: Vec<LosPart>,
+    }
 
-impl LineOfSight {
-    /// (range term, field-of-view term, obstruction term and the closest part), m.
-    pub fn terms(&self, v: &MonitorView) -> (f64, f64, f64, Option<&str>) {
-        let sb = &v.bodies[self.sensor_body];
-        let s = sb.pos_m + sb.att * self.sensor_off;
-        let tb = &v.bodies[self.target];
-        let p = tb.pos_m + tb.att * self.point_off;
-        let los = p - s;
-        let d = los.norm();
-        let range = self.range_m - d;
-        let bore = sb.att * self.boresight;
-        let fov = if d > 0.0 {
-            let theta = (bore.dot(&los) / d).clamp(-1.0, 1.0).acos();
-            let phi = self.half_fov_rad - theta;
-            if phi.abs() <= std::f64::consts::FRAC_PI_2 {
-                d * phi.sin()
+    impl LineOfSight {
+        /// (range term, field-of-view term, obstruction term and the closest part), m.
+        pub fn terms(&self, v: &MonitorView) -> (f64, f64, f64, Option<&str>) {
+            let sb = &v.bodies[self.sensor_body];
+            let s = sb.pos_m + sb.att * self.sensor_off;
+            let tb = &v.bodies[self.target];
+            let p = tb.pos_m + tb.att * self.point_off;
+            let los = p - s;
+            let d = los.norm();
+            let range = self.range_m - d;
+            let bore = sb.att * self.boresight;
+            let fov = if d > 0.0 {
+                let theta = (bore.dot(&los) / d).clamp(-1.0, 1.0).acos();
+                let phi = self.half_fov_rad - theta;
+                if phi.abs() <= std::f64::consts::FRAC_PI_2 {
+                    d * phi.sin()
+                } else {
+                    d * phi.signum()
+                }
             } else {
-                d * phi.signum()
+                0.0
+            };
+            // The segment in a frame at the sensor point with world axes.
+            let seg = bevy_rapier3d::parry::shape::Segment::new(
+                bevy_rapier3d::rapier::math::Vector::ZERO,
+                bevy_rapier3d::rapier::math::Vector::new(los.x as f32, los.y as f32, los.z as f32),
+            );
+            let seg_pose = Isometry3::from_parts(Translation3::from(s), UnitQuaternion::identity());
+            let mut obs = f64::INFINITY;
+            let mut closest = None;
+            for q in &self.parts {
+                let b = &v.bodies[q.body];
+                let pose = Isometry3::from_parts(Translation3::from(b.pos_m), b.att) * q.pose_com;
+                let dist = segment_clearance(&seg_pose, &los, &seg, &pose, &*q.shape);
+                if dist < obs {
+                    obs = dist;
+                    closest = Some(q.name.as_str());
+                }
             }
-        } else {
-            0.0
-        };
-        // The segment in a frame at the sensor point with world axes.
-        let seg = bevy_rapier3d::parry::shape::Segment::new(
-            bevy_rapier3d::rapier::math::Vector::ZERO,
-            bevy_rapier3d::rapier::math::Vector::new(los.x as f32, los.y as f32, los.z as f32),
-        );
-        let seg_pose = Isometry3::from_parts(Translation3::from(s), UnitQuaternion::identity());
-        let mut obs = f64::INFINITY;
-        let mut closest = None;
-        for q in &self.parts {
-            let b = &v.bodies[q.body];
-            let pose = Isometry3::from_parts(Translation3::from(b.pos_m), b.att) * q.pose_com;
-            let dist = segment_clearance(&seg_pose, &los, &seg, &pose, &*q.shape);
-            if dist < obs {
-                obs = dist;
-                closest = Some(q.name.as_str());
-            }
+            (range, fov, obs - self.clearance_m, closest)
         }
-        (range, fov, obs - self.clearance_m, closest)
     }
-}
 
-/// Signed clearance of the segment from the origin of `pose_a` along `los` (world axes) to
-/// the shape `b` at `pose_b`, m: parry's distance when a ray cast along the segment (solid
-/// shape, so a start inside counts) does not hit the shape and GJK finds them apart; else
-/// minus the
-/// penetration depth (parry's EPA), or minus the f32 resolution of the relative pose where the
-/// overlap is too thin for EPA — a blocked line is never reported clear.
-fn segment_clearance(
-    pose_a: &Isometry3<f64>,
-    los: &Vector3<f64>,
-    seg: &dyn bevy_rapier3d::rapier::prelude::Shape,
-    pose_b: &Isometry3<f64>,
-    b: &dyn bevy_rapier3d::rapier::prelude::Shape,
-) -> f64 {
-    use bevy_rapier3d::parry::query::Ray;
-    use bevy_rapier3d::rapier::math::{Pose, Vector};
-    let rel64 = pose_a.inv_mul(pose_b);
-    let rel = crate::sim::conv::pose(&rel64);
-    let ray = Ray::new(
-        Vector::ZERO,
-        Vector::new(los.x as f32, los.y as f32, los.z as f32),
-    );
-    let resolution = crate::sim::monitor::F32_REL_TOL * (1.0 + rel64.translation.vector.norm());
-    if b.cast_ray(&rel, &ray, 1.0, true).is_none() {
-        let d = crate::sim::monitor::shape_distance(pose_a, seg, pose_b, b);
-        // Not hit, but touching to GJK's precision: counted as blocked (conservative).
-        return if d > 0.0 { d } else { -resolution };
+    /// Signed clearance of the segment from the origin of `pose_a` along `los` (world axes) to
+    /// the shape `b` at `pose_b`, m: parry's distance when a ray cast along the segment (solid
+    /// shape, so a start inside counts) does not hit the shape and GJK finds them apart; else
+    /// minus the
+    /// penetration depth (parry's EPA), or minus the f32 resolution of the relative pose where the
+    /// overlap is too thin for EPA — a blocked line is never reported clear.
+    fn segment_clearance(
+        pose_a: &Isometry3<f64>,
+        los: &Vector3<f64>,
+        seg: &dyn bevy_rapier3d::rapier::prelude::Shape,
+        pose_b: &Isometry3<f64>,
+        b: &dyn bevy_rapier3d::rapier::prelude::Shape,
+    ) -> f64 {
+        use bevy_rapier3d::parry::query::Ray;
+        use bevy_rapier3d::rapier::math::{Pose, Vector};
+        let rel64 = pose_a.inv_mul(pose_b);
+        let rel = crate::sim::conv::pose(&rel64);
+        let ray = Ray::new(
+            Vector::ZERO,
+            Vector::new(los.x as f32, los.y as f32, los.z as f32),
+        );
+        let resolution = crate::sim::monitor::F32_REL_TOL * (1.0 + rel64.translation.vector.norm());
+        if b.cast_ray(&rel, &ray, 1.0, true).is_none() {
+            let d = crate::sim::monitor::shape_distance(pose_a, seg, pose_b, b);
+            // Not hit, but touching to GJK's precision: counted as blocked (conservative).
+            return if d > 0.0 { d } else { -resolution };
+        }
+        match bevy_rapier3d::parry::query::contact(&Pose::IDENTITY, seg, &rel, b, 0.0) {
+            Ok(Some(c)) if (c.dist as f64) < -resolution => c.dist as f64,
+            _ => -resolution,
+        }
     }
-    match bevy_rapier3d::parry::query::contact(&Pose::IDENTITY, seg, &rel, b, 0.0) {
-        Ok(Some(c)) if (c.dist as f64) < -resolution => c.dist as f64,
-        _ => -resolution,
-    }
-}
 
-impl Guarantee for LineOfSight {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn margin(&self, v: &MonitorView) -> f64 {
-        let (a, b, c, _) = self.terms(v);
-        a.min(b).min(c)
-    }
-    /// See [`LineOfSightParams`].
-    fn rate_bound(&self, m: &dyn MotionBounds) -> Option<f64> {
-        let (s, t) = (self.sensor_body, self.target);
-        let u_s = m.speed_bound(s) + m.omega_bound(s) * self.sensor_off.norm();
-        let u_t = m.speed_bound(t) + m.omega_bound(t) * self.point_off.norm();
-        let d_max = m.separation_bound(s, t) + self.sensor_off.norm() + self.point_off.norm();
-        let n = self.parts.iter().map(|q| q.body + 1).max().unwrap_or(0);
-        let w = (0..n)
-            .map(|i| m.speed_bound(i) + m.omega_bound(i) * m.extent_m(i))
-            .fold(0.0, f64::max);
-        let range = u_s + u_t;
-        let fov = 2.0 * (u_s + u_t) + m.omega_bound(s) * d_max;
-        let obs = u_s.max(u_t) + w;
-        Some(range.max(fov).max(obs))
-    }
-    fn reads(&self) -> Reads {
-        Reads::Bodies
-    }
-    /// parry's distances are f32 (≈ 1e-6 relative): refine to 10 µm.
-    fn tolerance(&self) -> f64 {
-        1e-5
+    impl Guarantee for LineOfSight {
+        fn name(&self) -> &str {
+            &self.name
+        }
+        fn margin(&self, v: &MonitorView) -> f64 {
+            let (a, b, c, _) = self.terms(v);
+            a.min(b).min(c)
+        }
+        /// See [`LineOfSightParams`].
+        fn rate_bound(&self, m: &dyn MotionBounds) -> Option<f64> {
+            let (s, t) = (self.sensor_body, self.target);
+            let u_s = m.speed_bound(s) + m.omega_bound(s) * self.sensor_off.norm();
+            let u_t = m.speed_bound(t) + m.omega_bound(t) * self.point_off.norm();
+            let d_max = m.separation_bound(s, t) + self.sensor_off.norm() + self.point_off.norm();
+            let n = self.parts.iter().map(|q| q.body + 1).max().unwrap_or(0);
+            let w = (0..n)
+                .map(|i| m.speed_bound(i) + m.omega_bound(i) * m.extent_m(i))
+                .fold(0.0, f64::max);
+            let range = u_s + u_t;
+            let fov = 2.0 * (u_s + u_t) + m.omega_bound(s) * d_max;
+            let obs = u_s.max(u_t) + w;
+            Some(range.max(fov).max(obs))
+        }
+        fn reads(&self) -> Reads {
+            Reads::Bodies
+        }
+        /// parry's distances are f32 (≈ 1e-6 relative): refine to 10 µm.
+        fn tolerance(&self) -> f64 {
+            1e-5
+        }
     }
 }
+#[cfg(feature = "sim")]
+pub use line_of_sight::*;
