@@ -43,13 +43,13 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
     (
         "hold_velocity_1e9",
         101,
-        "controllers.1.params.phases.hold100.translation.0.0.hold_vel_m_s",
+        "controllers.1.params.phases.hold100.translation.0.hold_vel_m_s",
         "the largest value of a speed",
     ),
     (
         "gain_1e200",
         102,
-        "controllers.1.params.phases.hold100.translation.0.0.gains.damping_ratio",
+        "controllers.1.params.phases.hold100.translation.0.gains.damping_ratio",
         "the largest number a scene may hold",
     ),
     (
