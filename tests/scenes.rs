@@ -209,6 +209,24 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "from 8 to 1024",
     ),
     (
+        "sequencer_any_empty",
+        78,
+        "controllers.0.params.phases.0.exits.0.when",
+        "`Any([])` combines no condition: it can never hold",
+    ),
+    (
+        "sequencer_range_negative",
+        78,
+        "controllers.0.params.phases.0.exits.0.when.0.1",
+        "`RangeBelow(-1)` can never hold",
+    ),
+    (
+        "sequencer_states_empty",
+        80,
+        "controllers.0.params.phases.1.exits.0.when",
+        "`DockingState([])` names no state",
+    ),
+    (
         "scene_name_newline",
         7,
         "name",

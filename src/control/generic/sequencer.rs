@@ -27,7 +27,10 @@
 //! # Checked when the scene loads (located errors)
 //! Phase names unique and non-empty; every exit names an existing phase; only the last phase
 //! may have no exits (any other could never be left); every phase but the first is the target
-//! of some exit (else it could never be entered); numbers finite; `MarginBelow` names a
+//! of some exit (else it could never be entered); numbers finite; no condition that can never
+//! hold or always holds where a choice was meant (`Any([])`, `All([])`, `DockingState([])`, a
+//! range ≤ 0 m below or < 0 m above, a negative time or one beyond the scene's duration,
+//! `Settled` with a bound ≤ 0); `MarginBelow` names a
 //! guarantee of the scene; `DockingState` names states of a scene with a docking mechanism.
 
 use crate::control::interface::{
@@ -146,6 +149,10 @@ fn check_condition(
     if depth > 16 {
         return Err(BuildError::at(field, "conditions nest more than 16 deep"));
     }
+    // A condition that can never hold (or always holds where a choice was meant) is a scene
+    // error: the phase would never be left, or the condition says nothing.
+    let never = |why: String| -> Result<(), BuildError> { Err(BuildError::at(field, why)) };
+    let duration_s = ctx.build.scene.duration_s;
     match c {
         Condition::RangeBelow(v) | Condition::RangeAbove(v) => {
             num(*v, "the range (m)")?;
@@ -154,6 +161,19 @@ fn check_condition(
                     format!("controllers.{}.target", ctx.build.index),
                     "range conditions need the entry's `target`",
                 ));
+            }
+            match c {
+                Condition::RangeBelow(_) if *v <= 0.0 => {
+                    return never(format!(
+                        "a range is ≥ 0 m, so `RangeBelow({v})` can never hold"
+                    ));
+                }
+                Condition::RangeAbove(_) if *v < 0.0 => {
+                    return never(format!(
+                        "a range is ≥ 0 m, so `RangeAbove({v})` always holds (use `InPhaseFor(0.0)` to leave at once)"
+                    ));
+                }
+                _ => {}
             }
         }
         Condition::PortRangeBelow(v) => {
@@ -164,8 +184,25 @@ fn check_condition(
                     "`PortRangeBelow` needs the entry's ports (or a docking mechanism between the two bodies)",
                 ));
             }
+            if *v <= 0.0 {
+                return never(format!(
+                    "a range is ≥ 0 m, so `PortRangeBelow({v})` can never hold"
+                ));
+            }
         }
-        Condition::InPhaseFor(v) | Condition::TimeAbove(v) => num(*v, "the time (s)")?,
+        Condition::InPhaseFor(v) | Condition::TimeAbove(v) => {
+            num(*v, "the time (s)")?;
+            if *v < 0.0 {
+                return never(format!(
+                    "a time is ≥ 0 s, so a negative time ({v} s) always holds (use `InPhaseFor(0.0)` to leave at once)"
+                ));
+            }
+            if *v > duration_s {
+                return never(format!(
+                    "{v} s is beyond the scene's duration ({duration_s} s): the condition can never hold"
+                ));
+            }
+        }
         Condition::MarginBelow(name, v) => {
             num(*v, "the margin")?;
             if !ctx.build.scene.guarantees.iter().any(|g| g.name() == name) {
@@ -182,6 +219,9 @@ fn check_condition(
                     "`DockingState` needs the scene's `docking` mechanism",
                 ));
             }
+            if states.is_empty() {
+                return never("`DockingState([])` names no state: it can never hold".into());
+            }
             if let Some(s) = states.iter().find(|s| !DOCK_STATES.contains(&s.as_str())) {
                 return Err(BuildError::at(
                     field,
@@ -195,8 +235,20 @@ fn check_condition(
         Condition::Settled { pos_m, vel_m_s } => {
             num(*pos_m, "pos_m")?;
             num(*vel_m_s, "vel_m_s")?;
+            if *pos_m <= 0.0 || *vel_m_s <= 0.0 {
+                return never(format!(
+                    "an error's norm is ≥ 0, so `Settled` below pos_m = {pos_m} m, vel_m_s = {vel_m_s} m/s can never hold: both must be > 0"
+                ));
+            }
         }
         Condition::All(v) | Condition::Any(v) => {
+            if v.is_empty() {
+                return never(if matches!(c, Condition::Any(_)) {
+                    "`Any([])` combines no condition: it can never hold".into()
+                } else {
+                    "`All([])` combines no condition: it always holds (use `InPhaseFor(0.0)` to leave at once)".into()
+                });
+            }
             for (i, c) in v.iter().enumerate() {
                 check_condition(c, &format!("{field}.0.{i}"), ctx, depth + 1)?;
             }
