@@ -215,6 +215,12 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "`Any([])` combines no condition: it can never hold",
     ),
     (
+        "sequencer_law_wrong_slot",
+        81,
+        "controllers.1.params.phases.0.translation",
+        "`Attitude` commands a torque only",
+    ),
+    (
         "sequencer_range_negative",
         78,
         "controllers.0.params.phases.0.exits.0.when.0.1",

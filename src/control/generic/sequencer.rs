@@ -36,7 +36,8 @@
 use crate::control::interface::{
     ActuationReport, Command, Controller, ControllerEvent, DiagnosticsAt, Observation,
 };
-use crate::control::registry::{BuildError, LawContext, LawParams, LawParamsSpec};
+use crate::control::registry::{BuildError, Commands, LawContext, LawParams, LawParamsSpec};
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 /// When a phase is left.
@@ -348,6 +349,27 @@ impl LawParams for SequencerParams {
         let prefix = super::unique_prefix(ctx, "seq");
         let mut phases = Vec::with_capacity(self.phases.len());
         for (i, p) in self.phases.iter().enumerate() {
+            for (spec, field, refused, carries) in [
+                (
+                    &p.translation,
+                    "translation",
+                    Commands::Torque,
+                    "a torque only",
+                ),
+                (&p.attitude, "attitude", Commands::Force, "a force only"),
+            ] {
+                if let Some(s) = spec.as_ref().filter(|s| s.params.commands() == refused) {
+                    return Err(BuildError::at(
+                        format!("phases.{i}.{field}"),
+                        format!(
+                            "`{}` commands {carries}: as the phase's `{field}` law nothing of its \
+                             command would be used (translation laws give the force, attitude laws \
+                             the torque)",
+                            s.kind
+                        ),
+                    ));
+                }
+            }
             let build = |ctx: &mut LawContext, spec: &Option<LawParamsSpec>, field: &str| {
                 spec.as_ref()
                     .map(|s| {
@@ -372,6 +394,7 @@ impl LawParams for SequencerParams {
                 exits: p.exits.clone(),
                 release_docking: p.release_docking,
                 cols: (0, 0, 0),
+                dropped: (false, false),
             });
         }
         // Column layout: [phase index] then each phase's translation and attitude columns.
@@ -402,6 +425,8 @@ struct RunningPhase {
     release_docking: bool,
     /// (first column, translation columns, attitude columns).
     cols: (usize, usize, usize),
+    /// Whether the translation (.0) / attitude (.1) law's unused part was reported dropped.
+    dropped: (bool, bool),
 }
 
 /// The running `Sequencer`.
@@ -487,15 +512,32 @@ impl Controller for Sequencer {
         }
         let ph = &mut self.phases[self.active];
         let mut cmd = Command::zero();
-        if let Some((_, law)) = ph.translation.as_mut() {
+        let mut dropped = Vec::new();
+        if let Some((kind, law)) = ph.translation.as_mut() {
             let c = law.command(obs);
             cmd.force_n = c.force_n;
             cmd.force_frame = c.force_frame;
+            if !ph.dropped.0 && (c.torque_nm != Vector3::zeros() || c.valves.is_some()) {
+                ph.dropped.0 = true;
+                dropped.push(("translation", kind.clone(), "torque_nm and valves"));
+            }
         }
-        if let Some((_, law)) = ph.attitude.as_mut() {
+        if let Some((kind, law)) = ph.attitude.as_mut() {
             let c = law.command(obs);
             cmd.torque_nm = c.torque_nm;
             cmd.torque_frame = c.torque_frame;
+            if !ph.dropped.1 && (c.force_n != Vector3::zeros() || c.valves.is_some()) {
+                ph.dropped.1 = true;
+                dropped.push(("attitude", kind.clone(), "force_n and valves"));
+            }
+        }
+        for (slot, law, what) in dropped {
+            self.events.push(ControllerEvent {
+                kind: "sequencer_dropped".into(),
+                data: serde_json::json!({"sequencer": self.prefix, "phase": ph.name,
+                    "slot": slot, "law": law, "dropped": what,
+                    "why": "a phase's translation law gives only the force, its attitude law only the torque"}),
+            });
         }
         cmd
     }
