@@ -207,8 +207,37 @@ impl Success {
     }
 
     /// Checks names and values against the base scene's guarantees; `(path, message)`.
-    fn check(&self, path: &str, guarantees: &[(String, String)]) -> Result<(), (String, String)> {
+    fn check(
+        &self,
+        path: &str,
+        guarantees: &[(String, String)],
+        has_docking: bool,
+    ) -> Result<(), (String, String)> {
+        use crate::control::generic::sequencer::DOCK_STATES;
         match self {
+            Success::Latched | Success::StateIn(_) if !has_docking => Err((
+                path.to_string(),
+                "a docking criterion needs the base scene's `docking` mechanism: it could never be met"
+                    .into(),
+            )),
+            Success::StateIn(v) if v.is_empty() => Err((
+                path.to_string(),
+                "`StateIn([])` names no state: it could never be met".into(),
+            )),
+            Success::StateIn(v) if v.iter().any(|s| !DOCK_STATES.contains(&s.as_str())) => {
+                let bad = v
+                    .iter()
+                    .find(|s| !DOCK_STATES.contains(&s.as_str()))
+                    .map(String::as_str)
+                    .unwrap_or_default();
+                Err((
+                    path.to_string(),
+                    format!(
+                        "unknown docking state {bad:?}; one of {}",
+                        DOCK_STATES.join(", ")
+                    ),
+                ))
+            }
             Success::GuaranteeHeld(n) if !guarantees.iter().any(|(g, _)| g == n) => Err((
                 path.to_string(),
                 format!(
@@ -230,9 +259,11 @@ impl Success {
                 }
                 v.iter()
                     .enumerate()
-                    .try_for_each(|(i, c)| c.check(&format!("{path}.0.{i}"), guarantees))
+                    .try_for_each(|(i, c)| {
+                        c.check(&format!("{path}.0.{i}"), guarantees, has_docking)
+                    })
             }
-            Success::Not(c) => c.check(&format!("{path}.0"), guarantees),
+            Success::Not(c) => c.check(&format!("{path}.0"), guarantees, has_docking),
             _ => Ok(()),
         }
     }
@@ -555,6 +586,7 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
             },
         )?;
     }
+    let has_docking = loaded.scene.docking.is_some();
     let sim = Simulation::new(&loaded)?;
     c.guarantees = sim
         .guarantees()
@@ -588,7 +620,7 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
             });
         }
     }
-    if let Err((p, m)) = c.spec.success.check("success", &c.guarantees) {
+    if let Err((p, m)) = c.spec.success.check("success", &c.guarantees, has_docking) {
         let (line, col) = crate::scene::load::locate(&text, &p)
             .map(|(s, _)| crate::scene::load::line_col(&text, s))
             .unwrap_or((0, 0));

@@ -449,6 +449,38 @@ fn val_success_criteria_match_the_recorded_columns() {
     let e = rpod::trials::load(&f).err().expect("refused");
     assert_eq!((e.line, e.field.as_str()), (3, "success.0.0"), "{e}");
     assert!(e.message.contains("no guarantee `nope`"), "{e}");
+    // A docking state that does not exist, and no state at all: criteria that could never be
+    // met are located errors (not a campaign of 0 % success).
+    for (criterion, words) in [
+        ("StateIn([\"LATCHD\"])", "unknown docking state \"LATCHD\""),
+        ("StateIn([])", "names no state"),
+    ] {
+        std::fs::write(
+            &f,
+            text.replace("GuaranteeHeld(\"clearance_5cm\")", criterion),
+        )
+        .unwrap();
+        let e = rpod::trials::load(&f).err().expect("refused");
+        assert_eq!((e.line, e.field.as_str()), (3, "success.0.0"), "{e}");
+        assert!(e.message.contains(words), "{e}");
+    }
+    // A docking criterion over a scene without a docking mechanism.
+    let free = std::fs::canonicalize("scenes/free_drift.ron").unwrap();
+    std::fs::write(
+        &f,
+        text.replace(&scene.display().to_string(), &free.display().to_string())
+            .replace(
+                "GuaranteeHeld(\"clearance_5cm\"), MinClearance(0.01)",
+                "Latched",
+            ),
+    )
+    .unwrap();
+    let e = rpod::trials::load(&f).err().expect("refused");
+    assert_eq!(e.field, "success.0.0", "{e}");
+    assert!(
+        e.message.contains("needs the base scene's `docking`"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
 
