@@ -35,6 +35,18 @@ fn every_bundled_scene_passes_check() {
 /// orbits and far-away bodies (once reported as overlaps).
 const CORPUS: &[(&str, usize, &str, &str)] = &[
     (
+        "law_guarantee_name_comma",
+        73,
+        "controllers.0",
+        "guarantee name: a name is 1 to 64 characters",
+    ),
+    (
+        "law_guarantee_name_taken",
+        73,
+        "controllers.0",
+        "a guarantee named `clearance_20cm` already exists",
+    ),
+    (
         "min_impact_speed_1e300",
         65,
         "docking.contact.min_impact_speed_m_s",

@@ -284,7 +284,34 @@ pub struct Guarantees {
 }
 
 impl Guarantees {
-    /// Registers a guarantee.
+    /// Whether a guarantee from outside the scene's list (a law's, a user's) may join: its
+    /// name follows the one name rule of every scene name and is not taken (it becomes two
+    /// `trajectory.csv` columns and a key of `summary.json`), its unit is 1 to 16 of
+    /// A-Z a-z 0-9 _ /.
+    pub fn admissible(&self, g: &dyn Guarantee) -> Result<(), String> {
+        if let Some(p) = crate::scene::validate::name_problem(g.name()) {
+            return Err(format!("guarantee name: {p}"));
+        }
+        if self.status.iter().any(|s| s.name == g.name()) {
+            return Err(format!("a guarantee named `{}` already exists", g.name()));
+        }
+        let unit = g.unit();
+        if unit.is_empty()
+            || unit.len() > 16
+            || !unit
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "_/".contains(c))
+        {
+            return Err(format!(
+                "guarantee `{}`: unit {unit:?} must be 1 to 16 of A-Z a-z 0-9 _ /",
+                g.name()
+            ));
+        }
+        Ok(())
+    }
+
+    /// Registers a guarantee (checked by [`Guarantees::admissible`] where it does not come
+    /// from the validated scene).
     pub fn register(&mut self, g: Box<dyn Guarantee>) {
         self.status.push(GuaranteeStatus::new(g.name(), g.unit()));
         self.list.push(g);

@@ -274,17 +274,10 @@ impl LawParams for SequencerParams {
         entered[0] = true;
         for (i, p) in self.phases.iter().enumerate() {
             let f = format!("phases.{i}");
-            if p.name.is_empty()
-                || p.name.len() > 64
-                || !p
-                    .name
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '_')
-            {
-                return Err(BuildError::at(
-                    format!("{f}.name"),
-                    "a phase name is 1–64 letters, digits or `_`",
-                ));
+            // The one name rule of every scene name (phase names become column names and
+            // event fields).
+            if let Some(problem) = crate::scene::validate::name_problem(&p.name) {
+                return Err(BuildError::at(format!("{f}.name"), problem));
             }
             if names[..i].contains(&p.name.as_str()) {
                 return Err(BuildError::at(
