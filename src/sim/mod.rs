@@ -338,20 +338,42 @@ pub struct EventLog {
     pub pending: Vec<Event>,
     /// Total raised.
     pub count: u64,
+    /// Bytes of event data raised (JSON), for the run's limit
+    /// ([`guard::MAX_EVENT_BYTES_PER_RUN`]).
+    pub bytes: u64,
 }
+
+/// Most bytes of JSON one event's data may hold; a larger one (a law's huge diagnostic, a
+/// condition written out in full) is kept as its first [`EVENT_HEAD_CHARS`] characters with
+/// `truncated_bytes`, so one event cannot flood `events.jsonl`.
+pub const MAX_EVENT_DATA_BYTES: usize = 16 << 10;
+
+/// Characters kept of an event's data beyond [`MAX_EVENT_DATA_BYTES`].
+pub const EVENT_HEAD_CHARS: usize = 1024;
 
 impl EventLog {
     /// Raises an event.
     pub fn push(&mut self, t_s: f64, kind: &str, data: serde_json::Value) {
-        let data = match data {
+        let mut data = match data {
             serde_json::Value::Object(m) => m,
             _ => serde_json::Map::new(),
         };
-        self.pending.push(Event {
-            t_s,
-            kind: kind.to_string(),
-            data,
-        });
+        let len = serde_json::to_string(&data).map_or(0, |j| j.len());
+        if len > MAX_EVENT_DATA_BYTES {
+            let head: String = serde_json::to_string(&data)
+                .unwrap_or_default()
+                .chars()
+                .take(EVENT_HEAD_CHARS)
+                .collect();
+            data = serde_json::Map::new();
+            data.insert("truncated_bytes".into(), len.into());
+            data.insert("head".into(), head.into());
+        }
+        self.bytes += len.min(MAX_EVENT_DATA_BYTES) as u64 + kind.len() as u64 + 24;
+        // A kind is a short word (`contact_start`); a law's may be anything: at most 64
+        // characters are kept.
+        let kind: String = kind.chars().take(64).collect();
+        self.pending.push(Event { t_s, kind, data });
         self.count += 1;
     }
 }

@@ -489,7 +489,11 @@ impl Controller for Sequencer {
                 .expect("checked when built");
             self.active = to;
             self.entered_s = Some(obs.t_s);
-            let reason = format!("{:?}", e.when);
+            // The condition as written, at most 256 characters (a condition may be large).
+            let mut reason = format!("{:?}", e.when);
+            if reason.chars().count() > 256 {
+                reason = reason.chars().take(255).chain(['…']).collect();
+            }
             self.events.push(ControllerEvent {
                 kind: "phase".into(),
                 data: serde_json::json!({"sequencer": self.prefix, "from": from,
