@@ -324,6 +324,19 @@ impl TrialsSpec {
             .collect()
     }
 
+    /// One value per parameter that stands for it when the campaign is checked: a grid's first
+    /// value, a uniform draw's midpoint, a normal draw's mean (independent of seed and order).
+    pub fn representative(&self) -> Vec<f64> {
+        self.parameters
+            .iter()
+            .map(|p| match p {
+                Parameter::Grid { values, .. } => values.first().copied().unwrap_or(0.0),
+                Parameter::Uniform { min, max, .. } => 0.5 * (min + max),
+                Parameter::Normal { mean, .. } => *mean,
+            })
+            .collect()
+    }
+
     fn validate(&self, file: &str, text: &str) -> Result<(), SceneError> {
         let err = |path: &str, msg: String| {
             let (line, col) = crate::scene::load::locate(text, path)
@@ -541,7 +554,7 @@ pub struct Campaign {
 }
 
 /// Reads and checks a trials file; the base scene and every parameter path are checked by
-/// building trial 0.
+/// building the representative trial ([`TrialsSpec::representative`]) and every grid value.
 pub fn load(path: &Path) -> Result<Campaign, SceneError> {
     let file = path.display().to_string();
     let text = crate::scene::load::read_text(path, "trials file")?;
@@ -573,8 +586,36 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
         fingerprint,
         guarantees: Vec::new(),
     };
-    // Trial 0 must build: catches bad paths and values now rather than in every worker.
-    let loaded = load_scene_file(&c.scene_path, &overrides(&c, 0))?;
+    // Checked now rather than in every worker, the same way whatever the order of the grid
+    // values or the seed: every grid value (each with the other parameters at their
+    // representative values: a grid's first value, a draw's centre) must make a valid scene —
+    // a grid value is the user's explicit choice, an invalid one a mistake; a random draw
+    // that makes an invalid scene is that trial's `INVALID` outcome. The representative
+    // trial must build (paths, references).
+    let repr = c.spec.representative();
+    for (i, p) in c.spec.parameters.iter().enumerate() {
+        let Parameter::Grid { values, .. } = p else {
+            continue;
+        };
+        for (j, v) in values.iter().enumerate() {
+            let mut vals = repr.clone();
+            vals[i] = *v;
+            if let Err(e) = load_scene_file(&c.scene_path, &overrides_of(&c.spec, &vals)) {
+                let at = format!("parameters.{i}.values.{j}");
+                let (line, col) = crate::scene::load::locate(&text, &at)
+                    .map(|(s, _)| crate::scene::load::line_col(&text, s))
+                    .unwrap_or((0, 0));
+                return Err(SceneError {
+                    file,
+                    line,
+                    col,
+                    field: at,
+                    message: format!("grid value {v:?} makes an invalid scene: {e}"),
+                });
+            }
+        }
+    }
+    let loaded = load_scene_file(&c.scene_path, &overrides_of(&c.spec, &repr))?;
     if let Some(d) = c.spec.duration_s {
         crate::scene::validate::check_steps("duration_s", d, loaded.scene.dt_s).map_err(
             |(_, m)| SceneError {
@@ -636,10 +677,14 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
 }
 
 fn overrides(c: &Campaign, k: usize) -> Vec<String> {
-    c.spec
-        .parameters
+    overrides_of(&c.spec, &c.spec.values(k))
+}
+
+/// The `--set` overrides that give the parameters these values.
+fn overrides_of(spec: &TrialsSpec, values: &[f64]) -> Vec<String> {
+    spec.parameters
         .iter()
-        .zip(c.spec.values(k))
+        .zip(values)
         .map(|(p, v)| format!("{}={v:?}", p.path()))
         .collect()
 }
