@@ -9,7 +9,7 @@
 //!   neutral pose R is P translated by `height_m` along +z. The ring attach points r_i are
 //!   given in R.
 //!
-//! States and forces are in the world frame (any inertial frame); [`PlatformState`] holds the
+//! States and forces are in the world frame (any inertial frame); [`RigidState`] holds the
 //! ring's pose and velocities there, and [`Base`] the pose and velocities of P.
 //!
 //! # Legs
@@ -184,18 +184,52 @@ impl Base {
     }
 }
 
-/// The ring's state, world frame.
+/// A rigid body's state (the ring's, or the chaser's), world frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PlatformState {
-    /// Ring centre of mass, m.
+pub struct RigidState {
+    /// Centre of mass, m.
     pub pos_m: Vector3<f64>,
-    /// Ring velocity, m/s.
+    /// Velocity of the centre of mass, m/s.
     pub vel_m_s: Vector3<f64>,
-    /// Ring attitude (R → world).
+    /// Attitude (body frame → world; for the ring, R → world).
     pub att: UnitQuaternion<f64>,
-    /// Ring angular velocity, rad/s.
+    /// Angular velocity, rad/s.
     pub omega_rad_s: Vector3<f64>,
 }
+
+/// The chaser as a free rigid body carrying the platform ([`Platform::step_free_base`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Carrier {
+    /// Mass, kg.
+    pub mass_kg: f64,
+    /// Inertia about the centre of mass, body frame, kg·m².
+    pub inertia_kg_m2: Matrix3<f64>,
+    /// The platform frame P in the body frame (whose origin is the centre of mass).
+    pub port_body: Isometry3<f64>,
+}
+
+impl Carrier {
+    /// The platform frame's motion with the chaser in state `s`.
+    pub fn base(&self, s: &RigidState) -> Base {
+        let pose = Isometry3::from_parts(Translation3::from(s.pos_m), s.att) * self.port_body;
+        let p = pose.translation.vector;
+        Base {
+            pose,
+            vel_m_s: s.vel_m_s + s.omega_rad_s.cross(&(p - s.pos_m)),
+            omega_rad_s: s.omega_rad_s,
+        }
+    }
+
+    /// The chaser's kinetic energy, J.
+    pub fn kinetic_energy_j(&self, s: &RigidState) -> f64 {
+        let w_b = s.att.inverse() * s.omega_rad_s;
+        0.5 * self.mass_kg * s.vel_m_s.norm_squared() + 0.5 * w_b.dot(&(self.inertia_kg_m2 * w_b))
+    }
+}
+
+/// External wrenches held over a step: (force on the ring at its centre of mass, moment on
+/// it, force on the chaser at its centre of mass, moment on it), world, N and N·m.
+pub type HeldWrenches = [Vector3<f64>; 4];
 
 /// The legs' loads at one configuration.
 #[derive(Debug, Clone, PartialEq)]
@@ -227,8 +261,10 @@ pub struct Platform {
     pub inertia: Matrix3<f64>,
     /// Its inverse.
     pub inertia_inv: Matrix3<f64>,
-    /// Largest sub-step, s.
+    /// Largest sub-step with the base fixed, s.
     pub h_max_s: f64,
+    /// Smallest effective mass of the ring at its attach points, min(m, J_min/ρ²), kg.
+    pub ring_min_mass_kg: f64,
 }
 
 fn positive(field: &str, v: f64) -> Result<(), PlatformError> {
@@ -373,27 +409,34 @@ impl Platform {
         } else {
             spec.ring_mass_kg
         };
-        let n = legs.len() as f64;
-        let k_max = n * (spec.stiffness_n_m + spec.stop_stiffness_n_m);
-        let period = 2.0 * std::f64::consts::PI * (m_min / k_max).sqrt();
-        let h_max_s = (period / f64::from(spec.substeps_per_period))
-            .min(m_min / (5.0 * n * spec.damping_n_s_m));
-        Ok(Platform {
+        let mut p = Platform {
             spec: spec.clone(),
             legs,
             inertia,
             inertia_inv,
-            h_max_s,
-        })
+            h_max_s: 0.0,
+            ring_min_mass_kg: m_min,
+        };
+        p.h_max_s = p.h_bound(m_min);
+        Ok(p)
+    }
+
+    /// The largest sub-step for a smallest effective mass `m_min` (kg) at the legs, s.
+    fn h_bound(&self, m_min: f64) -> f64 {
+        let n = self.legs.len() as f64;
+        let k_max = n * (self.spec.stiffness_n_m + self.spec.stop_stiffness_n_m);
+        let period = 2.0 * std::f64::consts::PI * (m_min / k_max).sqrt();
+        (period / f64::from(self.spec.substeps_per_period))
+            .min(m_min / (5.0 * n * self.spec.damping_n_s_m))
     }
 
     /// The ring's state at the neutral pose of a base, moving with it (rigidly attached).
-    pub fn neutral_state(&self, base: &Base) -> PlatformState {
+    pub fn neutral_state(&self, base: &Base) -> RigidState {
         let pos = base
             .pose
             .transform_point(&(Vector3::z() * self.spec.height_m).into())
             .coords;
-        PlatformState {
+        RigidState {
             pos_m: pos,
             vel_m_s: base.point_vel(&pos),
             att: base.pose.rotation,
@@ -402,7 +445,7 @@ impl Platform {
     }
 
     /// The ring's pose relative to the platform frame P (R in P).
-    pub fn ring_pose_in_base(&self, base: &Base, ring: &PlatformState) -> Isometry3<f64> {
+    pub fn ring_pose_in_base(&self, base: &Base, ring: &RigidState) -> Isometry3<f64> {
         base.pose.inverse() * Isometry3::from_parts(Translation3::from(ring.pos_m), ring.att)
     }
 
@@ -425,7 +468,7 @@ impl Platform {
     }
 
     /// The legs' loads with the base and the ring in the given states.
-    pub fn loads(&self, base: &Base, ring: &PlatformState) -> PlatformLoads {
+    pub fn loads(&self, base: &Base, ring: &RigidState) -> PlatformLoads {
         let mut out = PlatformLoads {
             legs: Vec::with_capacity(self.legs.len()),
             force_on_ring_n: Vector3::zeros(),
@@ -467,16 +510,10 @@ impl Platform {
     }
 
     /// The ring's kinetic energy, J.
-    pub fn kinetic_energy_j(&self, ring: &PlatformState) -> f64 {
+    pub fn kinetic_energy_j(&self, ring: &RigidState) -> f64 {
         let w_b = ring.att.inverse() * ring.omega_rad_s;
         0.5 * self.spec.ring_mass_kg * ring.vel_m_s.norm_squared()
             + 0.5 * w_b.dot(&(self.inertia * w_b))
-    }
-
-    /// The number of sub-steps for a step of `dt`.
-    pub fn substeps(&self, dt: f64) -> u32 {
-        // Bounded: h_max_s > 0 and dt is a scene step; the cast saturates.
-        ((dt / self.h_max_s).ceil() as u32).max(1)
     }
 
     /// Advances the ring over `dt` with the base held at `base` (a base that does not move
@@ -487,19 +524,92 @@ impl Platform {
     pub fn step_fixed_base(
         &self,
         base: &Base,
-        ring: &mut PlatformState,
+        ring: &mut RigidState,
         f_ext_n: &Vector3<f64>,
         m_ext_nm: &Vector3<f64>,
         dt: f64,
     ) -> (f64, f64) {
-        let n = self.substeps(dt);
+        let n = ((dt / self.h_max_s).ceil() as u32).max(1);
+        let mut unused = self.neutral_state(base);
+        let held = [*f_ext_n, *m_ext_nm, Vector3::zeros(), Vector3::zeros()];
+        self.advance(None, base, &mut unused, ring, &held, dt, n)
+    }
+
+    /// Advances the chaser (a free rigid body carrying the platform) and the ring together
+    /// over `dt` with the held external wrenches; the legs' loads act on both, equal and
+    /// opposite, so the pair's momentum and angular momentum change only by the external
+    /// wrenches. The sub-step bound uses half the smaller of the two bodies' smallest effective
+    /// masses at the legs (a lower bound on the pair's reduced mass there). Returns what
+    /// [`Platform::step_fixed_base`] does.
+    pub fn step_free_base(
+        &self,
+        carrier: &Carrier,
+        chaser: &mut RigidState,
+        ring: &mut RigidState,
+        held: &HeldWrenches,
+        dt: f64,
+    ) -> (f64, f64) {
+        let j_min = carrier.inertia_kg_m2.symmetric_eigenvalues().min();
+        let rho = self
+            .legs
+            .iter()
+            .map(|l| {
+                (carrier.port_body * nalgebra::Point3::from(l.base_p_m))
+                    .coords
+                    .norm()
+            })
+            .fold(0.0_f64, f64::max);
+        let m_c = if rho > 0.0 {
+            carrier.mass_kg.min(j_min / (rho * rho))
+        } else {
+            carrier.mass_kg
+        };
+        let h = self.h_bound(0.5 * self.ring_min_mass_kg.min(m_c));
+        let n = ((dt / h).ceil() as u32).max(1);
+        let base = carrier.base(chaser);
+        self.advance(Some(carrier), &base, chaser, ring, held, dt, n)
+    }
+
+    /// The sub-stepped kick–drift–kick of the ring and, with a carrier, the chaser.
+    #[allow(clippy::too_many_arguments)]
+    fn advance(
+        &self,
+        carrier: Option<&Carrier>,
+        fixed: &Base,
+        chaser: &mut RigidState,
+        ring: &mut RigidState,
+        held: &HeldWrenches,
+        dt: f64,
+        n: u32,
+    ) -> (f64, f64) {
         let h = dt / f64::from(n);
         let m = self.spec.ring_mass_kg;
-        let ii = |s: &PlatformState| {
-            let r = s.att.to_rotation_matrix().into_inner();
-            r * self.inertia_inv * r.transpose()
+        let world_inv = |att: &UnitQuaternion<f64>, j_inv: &Matrix3<f64>| {
+            let r = att.to_rotation_matrix().into_inner();
+            r * j_inv * r.transpose()
         };
-        let mut loads = self.loads(base, ring);
+        let c_inv = carrier.and_then(|c| c.inertia_kg_m2.try_inverse());
+        let base_of = |c: &RigidState| carrier.map_or(*fixed, |k| k.base(c));
+        let loads_at = |c: &RigidState, r: &RigidState| self.loads(&base_of(c), r);
+        // Half-kicks of both bodies by the legs' loads and the held wrenches.
+        let kick = |c: &mut RigidState, r: &mut RigidState, l: &PlatformLoads| {
+            r.vel_m_s += (l.force_on_ring_n + held[0]) * (0.5 * h / m);
+            r.omega_rad_s +=
+                world_inv(&r.att, &self.inertia_inv) * (l.moment_on_ring_nm + held[1]) * (0.5 * h);
+            if let (Some(k), Some(ji)) = (carrier, c_inv.as_ref()) {
+                let p = base_of(c).pose.translation.vector;
+                let tau = l.moment_on_base_nm + (p - c.pos_m).cross(&l.force_on_base_n) + held[3];
+                c.vel_m_s += (l.force_on_base_n + held[2]) * (0.5 * h / k.mass_kg);
+                c.omega_rad_s += world_inv(&c.att, ji) * tau * (0.5 * h);
+            }
+        };
+        let drift = |s: &mut RigidState, j: &Matrix3<f64>, j_inv: &Matrix3<f64>| {
+            s.pos_m += s.vel_m_s * h;
+            let (att, om) = rotate_rk4(&s.att, &s.omega_rad_s, &Vector3::zeros(), j, j_inv, h);
+            s.att = att;
+            s.omega_rad_s = om;
+        };
+        let mut loads = loads_at(chaser, ring);
         let mut dissipated = 0.0;
         let mut peak = loads
             .legs
@@ -507,34 +617,23 @@ impl Platform {
             .fold(0.0_f64, |a, l| a.max(l.force_n.abs()));
         for _ in 0..n {
             let p0 = loads.damper_power_w;
-            let kick = |s: &mut PlatformState, l: &PlatformLoads| {
-                s.vel_m_s += (l.force_on_ring_n + f_ext_n) * (0.5 * h / m);
-                s.omega_rad_s += ii(s) * (l.moment_on_ring_nm + m_ext_nm) * (0.5 * h);
-            };
-            kick(ring, &loads);
-            ring.pos_m += ring.vel_m_s * h;
-            let (att, om) = rotate_rk4(
-                &ring.att,
-                &ring.omega_rad_s,
-                &Vector3::zeros(),
-                &self.inertia,
-                &self.inertia_inv,
-                h,
-            );
-            ring.att = att;
-            ring.omega_rad_s = om;
-            // The second half-kick at the drifted pose: the damping needs the end-of-step
-            // velocities, so a predictor half-kick with the loads at the half-step velocities
-            // gives them to first order, and the half-kick from the half-step state with the
-            // loads there is second order (Heun's corrector).
-            let half = *ring;
-            kick(ring, &self.loads(base, ring));
-            let predicted = self.loads(base, ring);
-            *ring = half;
-            kick(ring, &predicted);
+            kick(chaser, ring, &loads);
+            drift(ring, &self.inertia, &self.inertia_inv);
+            if let (Some(k), Some(ji)) = (carrier, c_inv.as_ref()) {
+                drift(chaser, &k.inertia_kg_m2, ji);
+            }
+            // The second half-kick at the drifted poses: the damping needs the end-of-step
+            // velocities, so one fixed-point iteration of the implicit half-kick
+            // v₁ = v½ + ½h·a(x₁, v₁) from v½ (a trial half-kick with the loads at v½, then the
+            // half-kick from v½ with the loads at the trial velocities) keeps it second order.
+            let (c_half, r_half) = (*chaser, *ring);
+            kick(chaser, ring, &loads_at(chaser, ring));
+            let trial = loads_at(chaser, ring);
+            (*chaser, *ring) = (c_half, r_half);
+            kick(chaser, ring, &trial);
             // The loads at the end of the sub-step (its velocities): the dissipated power for
             // the energy balance, and the next sub-step's first half-kick.
-            loads = self.loads(base, ring);
+            loads = loads_at(chaser, ring);
             dissipated += 0.5 * (p0 + loads.damper_power_w) * h;
             peak = loads.legs.iter().fold(peak, |a, l| a.max(l.force_n.abs()));
         }
