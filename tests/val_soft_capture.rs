@@ -329,6 +329,18 @@ fn bad_platform_inputs_name_the_field() {
             "leg 0",
         ),
     ];
+    let id = Isometry3::identity();
+    let j = Matrix3::identity();
+    assert_eq!(Carrier::new(0.0, j, id).unwrap_err().field, "mass_kg");
+    assert_eq!(Carrier::new(f64::NAN, j, id).unwrap_err().field, "mass_kg");
+    assert_eq!(
+        Carrier::new(1.0, -j, id).unwrap_err().field,
+        "inertia_kg_m2"
+    );
+    assert_eq!(
+        Carrier::new(1.0, Matrix3::zeros(), id).unwrap_err().field,
+        "inertia_kg_m2"
+    );
     for (edit, field) in cases {
         let mut s = good.clone();
         edit(&mut s);
@@ -340,11 +352,12 @@ fn bad_platform_inputs_name_the_field() {
 /// A 300 kg chaser (inertia diag(200, 250, 300) kg·m²) with its port 1 m ahead of its centre
 /// of mass along body +z.
 fn chaser() -> Carrier {
-    Carrier {
-        mass_kg: 300.0,
-        inertia_kg_m2: Matrix3::from_diagonal(&Vector3::new(200.0, 250.0, 300.0)),
-        port_body: Isometry3::translation(0.0, 0.0, 1.0),
-    }
+    Carrier::new(
+        300.0,
+        Matrix3::from_diagonal(&Vector3::new(200.0, 250.0, 300.0)),
+        Isometry3::translation(0.0, 0.0, 1.0),
+    )
+    .unwrap()
 }
 
 #[test]

@@ -197,18 +197,47 @@ pub struct RigidState {
     pub omega_rad_s: Vector3<f64>,
 }
 
-/// The chaser as a free rigid body carrying the platform ([`Platform::step_free_base`]).
+/// The chaser as a free rigid body carrying the platform ([`Platform::step_free_base`]);
+/// built by [`Carrier::new`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Carrier {
     /// Mass, kg.
     pub mass_kg: f64,
     /// Inertia about the centre of mass, body frame, kg·m².
     pub inertia_kg_m2: Matrix3<f64>,
+    /// Its inverse, 1/(kg·m²).
+    inertia_inv: Matrix3<f64>,
     /// The platform frame P in the body frame (whose origin is the centre of mass).
     pub port_body: Isometry3<f64>,
 }
 
 impl Carrier {
+    /// A carrier of positive finite mass and a symmetric positive-definite inertia (else an
+    /// error naming `mass_kg` or `inertia_kg_m2`).
+    pub fn new(
+        mass_kg: f64,
+        inertia_kg_m2: Matrix3<f64>,
+        port_body: Isometry3<f64>,
+    ) -> Result<Self, PlatformError> {
+        positive("mass_kg", mass_kg)?;
+        let symmetric =
+            (inertia_kg_m2 - inertia_kg_m2.transpose()).norm() <= 1e-12 * inertia_kg_m2.norm();
+        let inertia_inv = inertia_kg_m2
+            .try_inverse()
+            .filter(|_| {
+                symmetric
+                    && inertia_kg_m2.iter().all(|x| x.is_finite())
+                    && inertia_kg_m2.symmetric_eigenvalues().min() > 0.0
+            })
+            .ok_or_else(|| err("inertia_kg_m2", "must be symmetric positive definite"))?;
+        Ok(Carrier {
+            mass_kg,
+            inertia_kg_m2,
+            inertia_inv,
+            port_body,
+        })
+    }
+
     /// The platform frame's motion with the chaser in state `s`.
     pub fn base(&self, s: &RigidState) -> Base {
         let pose = Isometry3::from_parts(Translation3::from(s.pos_m), s.att) * self.port_body;
@@ -588,7 +617,6 @@ impl Platform {
             let r = att.to_rotation_matrix().into_inner();
             r * j_inv * r.transpose()
         };
-        let c_inv = carrier.and_then(|c| c.inertia_kg_m2.try_inverse());
         let base_of = |c: &RigidState| carrier.map_or(*fixed, |k| k.base(c));
         let loads_at = |c: &RigidState, r: &RigidState| self.loads(&base_of(c), r);
         // Half-kicks of both bodies by the legs' loads and the held wrenches.
@@ -596,11 +624,11 @@ impl Platform {
             r.vel_m_s += (l.force_on_ring_n + held[0]) * (0.5 * h / m);
             r.omega_rad_s +=
                 world_inv(&r.att, &self.inertia_inv) * (l.moment_on_ring_nm + held[1]) * (0.5 * h);
-            if let (Some(k), Some(ji)) = (carrier, c_inv.as_ref()) {
+            if let Some(k) = carrier {
                 let p = base_of(c).pose.translation.vector;
                 let tau = l.moment_on_base_nm + (p - c.pos_m).cross(&l.force_on_base_n) + held[3];
                 c.vel_m_s += (l.force_on_base_n + held[2]) * (0.5 * h / k.mass_kg);
-                c.omega_rad_s += world_inv(&c.att, ji) * tau * (0.5 * h);
+                c.omega_rad_s += world_inv(&c.att, &k.inertia_inv) * tau * (0.5 * h);
             }
         };
         let drift = |s: &mut RigidState, j: &Matrix3<f64>, j_inv: &Matrix3<f64>| {
@@ -619,8 +647,8 @@ impl Platform {
             let p0 = loads.damper_power_w;
             kick(chaser, ring, &loads);
             drift(ring, &self.inertia, &self.inertia_inv);
-            if let (Some(k), Some(ji)) = (carrier, c_inv.as_ref()) {
-                drift(chaser, &k.inertia_kg_m2, ji);
+            if let Some(k) = carrier {
+                drift(chaser, &k.inertia_kg_m2, &k.inertia_inv);
             }
             // The second half-kick at the drifted poses: the damping needs the end-of-step
             // velocities, so one fixed-point iteration of the implicit half-kick
