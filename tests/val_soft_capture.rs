@@ -45,6 +45,8 @@
 //! - **Free base conservation**: equal and opposite leg forces along the leg: linear momentum
 //!   constant to rounding (1e-12 relative), angular momentum to 1e-9 (the RK4 torque-free
 //!   drift's truncation), energy balance as above.
+//! - **Format**: the RON the documentation shows reads back to the specs the tests build
+//!   (defaults included); an unknown field is refused.
 //! - **Bad input**: zero or negative stiffness, damping and stroke, and legs that cannot reach
 //!   the ring through their stroke are errors that name the field.
 
@@ -541,4 +543,27 @@ fn val_peak_leg_force_converges_in_dt() {
     );
     assert!((a.0 - b.0).abs() < 1e-4 * b.0);
     assert!((a.1 - b.1).abs() <= 1e-3 + 1e-12);
+}
+
+#[test]
+fn val_platform_spec_reads_from_ron() {
+    let text = "(
+        ring_mass_kg: 50.0, ring_inertia_kg_m2: (4.0, 4.0, 8.0), height_m: 0.4,
+        layout: Hexapod(base_radius_m: 0.6, ring_radius_m: 0.45,
+                        base_pair_half_angle_deg: 10.0, ring_pair_half_angle_deg: 10.0),
+        stiffness_n_m: 5e4, damping_n_s_m: 300.0, stroke_min_m: -0.05, stroke_max_m: 0.05,
+        stop_stiffness_n_m: 1e6,
+    )";
+    let spec: PlatformSpec = ron::from_str(text).unwrap();
+    // The defaults: no preload, 40 sub-steps per period.
+    assert_eq!(spec, hexapod(5e4, 300.0, 50.0));
+    let legs: PlatformSpec = ron::from_str(
+        "(ring_mass_kg: 20.0, ring_inertia_kg_m2: (1.0, 1.0, 1.5), height_m: 0.5,
+          layout: Legs([((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))]), stiffness_n_m: 2000.0,
+          damping_n_s_m: 40.0, stroke_min_m: -0.3, stroke_max_m: 0.3, stop_stiffness_n_m: 1e5)",
+    )
+    .unwrap();
+    assert_eq!(legs, one_leg(2000.0, 40.0, 20.0));
+    // An unknown field is refused.
+    assert!(ron::from_str::<PlatformSpec>("(ring_mass: 1.0)").is_err());
 }

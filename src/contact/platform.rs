@@ -73,7 +73,8 @@ pub enum LegLayout {
     Legs(Vec<([f64; 3], [f64; 3])>),
 }
 
-/// The platform's design (`docking.mechanism: SoftCapture((platform: (...), ...))`).
+/// The platform's design, in RON as in `tests/val_soft_capture.rs` (not yet read from a scene:
+/// the soft-capture mechanism type that will carry it is issue 28's next step).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlatformSpec {
