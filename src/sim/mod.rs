@@ -285,11 +285,12 @@ pub struct Guarantees {
 
 impl Guarantees {
     /// Whether a guarantee from outside the scene's list (a law's, a user's) may join: its
-    /// name follows the one name rule of every scene name and is not taken (it becomes two
+    /// name follows the one name rule of every scene name (or joins up to 4 such names with
+    /// `.`, as a law composes `capture.p.e` from body names) and is not taken (it becomes two
     /// `trajectory.csv` columns and a key of `summary.json`), its unit is 1 to 16 of
     /// A-Z a-z 0-9 _ /.
     pub fn admissible(&self, g: &dyn Guarantee) -> Result<(), String> {
-        if let Some(p) = crate::scene::validate::name_problem(g.name()) {
+        if let Some(p) = crate::scene::validate::composed_name_problem(g.name()) {
             return Err(format!("guarantee name: {p}"));
         }
         if self.status.iter().any(|s| s.name == g.name()) {
