@@ -13,6 +13,16 @@
 //!   - plate beside the path (z₀ = ρ ± 1 mm): struck at 1 mm inside, clear by 1 mm·cos α
 //!     outside (the worst margin, while x ∈ [5, 6]).
 //!
+//! Impingement load (`actuation::plume_load`, momentum flux F/(Ω r²) inside the cone,
+//! Ω = 2π(1 − cos α), fully absorbed): on a square plate of half-side a normal to the axis at
+//! distance d, inside the cone, the axial force is (F/Ω)∫∫ d²/r⁴ dA
+//! = (F/Ω)·4A/√(1+A²)·atan(A/√(1+A²)), A = a/d (the view-factor integral of a differential
+//! area to a parallel rectangle, four corner rectangles); on a plate covering the whole
+//! section it is F(1 + cos α)/2; every ray's force is along a line through the nozzle, so the
+//! moment about any point c is (nozzle − c) × the total force. The grid counts a cell the
+//! plate's edge crosses whole or not at all: the tolerance is the flux of the cells the edge
+//! crosses, counted in the test from the cells' arcs (exact classification of the others).
+//!
 //! Tolerances: parry's f32 GJK against the plume's pyramid errs by up to 4e-5 of the shapes'
 //! size (10 m here: 4e-4 m; 2.9e-4 m is the largest seen over the 20 000 poses of
 //! `regress_plume_pyramid_distance_never_a_false_overlap`), and the pyramid exceeds the cone
@@ -295,4 +305,120 @@ fn regress_plume_keep_off_bad_input_is_located() {
         Ok(l) => Simulation::new(&l).err().expect("accepted"),
     };
     assert!(e.field.ends_with("jets.0.max_thrust_n"), "{e}");
+}
+
+/// The jet of the load tests: at the origin, exhausting along +z, α = 15°, L = 10 m, 4 N.
+fn load_jet() -> rpod::actuation::rcs::JetSpec {
+    rpod::actuation::rcs::JetSpec {
+        name: "j".into(),
+        pos_m: [0.0, 0.0, 0.0],
+        direction: [0.0, 0.0, -1.0],
+        max_thrust_n: 4.0,
+        min_impulse_bit_ns: 0.0,
+        plume: Some(rpod::actuation::rcs::PlumeSpec {
+            half_angle_deg: ALPHA_DEG,
+            length_m: LEN_M,
+        }),
+    }
+}
+
+#[test]
+fn val_plume_load_on_a_plate_matches_the_closed_form() {
+    use bevy_rapier3d::rapier::prelude as rp;
+    use nalgebra::{Isometry3, Vector3};
+    use rpod::actuation::plume_load::cone_rays;
+    use rpod::sim::plume::plume_loads;
+    let f = 4.0;
+    let a = ALPHA_DEG.to_radians();
+    let omega = std::f64::consts::TAU * (1.0 - a.cos());
+    let id = Isometry3::identity();
+    let (rings, sectors) = (200usize, 400usize);
+    let rays = cone_rays(a, rings, sectors);
+    // A square plate (1 mm thick) with its face at z = d, centred on the axis, inside the cone.
+    let (d, half) = (3.0f64, 0.5f64);
+    assert!(half * 2f64.sqrt() < d * a.tan());
+    let plate = vec![(
+        Isometry3::translation(0.0, 0.0, d + 0.0005),
+        rp::SharedShape::cuboid(half as f32, half as f32, 0.0005),
+    )];
+    let com = Vector3::new(0.0, 0.7, d);
+    let loads = plume_loads(&load_jet(), f, &id, &plate, &rays, &com);
+    assert_eq!(loads.len(), 1);
+    let big_a = half / d;
+    let s = big_a / (1.0 + big_a * big_a).sqrt();
+    let want = f / omega * 4.0 * s * s.atan();
+    // The flux of the cells the plate's edge crosses (each cell: rings equal in cos θ, sectors
+    // in φ; its projection on the plate's plane is an annular sector of radii d·tan θ).
+    let g = |p: f64| p.cos().abs().max(p.sin().abs());
+    let (mut cut, c_min) = (0usize, a.cos());
+    for i in 0..rings {
+        let c_in = 1.0 - (1.0 - c_min) * i as f64 / rings as f64;
+        let c_out = 1.0 - (1.0 - c_min) * (i + 1) as f64 / rings as f64;
+        let (r_in, r_out) = (d * c_in.acos().tan(), d * c_out.acos().tan());
+        for j in 0..sectors {
+            let (p0, p1) = (
+                std::f64::consts::TAU * j as f64 / sectors as f64,
+                std::f64::consts::TAU * (j + 1) as f64 / sectors as f64,
+            );
+            let (mut gmax, mut gmin) = (g(p0).max(g(p1)), g(p0).min(g(p1)));
+            for k in 0..8 {
+                let q = k as f64 * std::f64::consts::FRAC_PI_4;
+                if q > p0 && q < p1 {
+                    if k % 2 == 0 {
+                        gmax = 1.0;
+                    } else {
+                        gmin = std::f64::consts::FRAC_1_SQRT_2;
+                    }
+                }
+            }
+            // The square is star-shaped about the axis: the cell is inside iff its outer arc
+            // is, outside iff its inner arc is.
+            let inside = r_out * gmax <= half;
+            let outside = r_in * gmin > half;
+            if !inside && !outside {
+                cut += 1;
+            }
+        }
+    }
+    let tol = f * cut as f64 / (rings * sectors) as f64;
+    let got = loads[0].force_n;
+    assert!(
+        (got.z - want).abs() <= tol && tol < 0.03 * want,
+        "axial {} vs closed form {want} (cut-cell flux {tol})",
+        got.z
+    );
+    assert!(got.x.abs() < 1e-9 && got.y.abs() < 1e-9, "{got}");
+    // Every force acts along a line through the nozzle (the origin).
+    let m_want = (-com).cross(&got);
+    assert!(
+        (loads[0].moment_nm - m_want).norm() < 1e-9,
+        "{}",
+        loads[0].moment_nm
+    );
+    // A plate covering the whole section: F(1 + cos α)/2 (the midpoint rule in cos θ is exact).
+    let wide = vec![(
+        Isometry3::translation(0.0, 0.0, d + 0.0005),
+        rp::SharedShape::cuboid(5.0, 5.0, 0.0005),
+    )];
+    let loads = plume_loads(&load_jet(), f, &id, &wide, &rays, &com);
+    let want = f * (1.0 + a.cos()) / 2.0;
+    assert!(
+        (loads[0].force_n.z - want).abs() < 1e-9 * f,
+        "{} vs {want}",
+        loads[0].force_n.z
+    );
+    // The 1/r² fall-off: the same flux through a plate twice as far covering twice the
+    // section, and nothing beyond the plume's length.
+    let far = vec![(
+        Isometry3::translation(0.0, 0.0, 2.0 * d + 0.0005),
+        rp::SharedShape::cuboid(2.0 * half as f32, 2.0 * half as f32, 0.0005),
+    )];
+    let near = plume_loads(&load_jet(), f, &id, &plate, &rays, &com)[0].force_n;
+    let far_f = plume_loads(&load_jet(), f, &id, &far, &rays, &com)[0].force_n;
+    assert!((near - far_f).norm() < 1e-9, "{near} vs {far_f}");
+    let beyond = vec![(
+        Isometry3::translation(0.0, 0.0, LEN_M + 0.01),
+        rp::SharedShape::cuboid(5.0, 5.0, 0.0005),
+    )];
+    assert!(plume_loads(&load_jet(), f, &id, &beyond, &rays, &com).is_empty());
 }

@@ -161,6 +161,58 @@ pub fn plume_hits(
     out
 }
 
+/// The impingement load of one jet's plume ([`crate::actuation::plume_load`]) on `parts`
+/// (pose, shape; any frame, the jet's `jet_frame` in the same one) at thrust `thrust_n`, with
+/// moments about `about`: parry ray casts (solid shapes, so a ray starting inside a part
+/// strikes it at 0) from the nozzle along each ray of `rays`, the nearest part within the
+/// plume's length taking the ray's flux. `PartLoad::part` indexes `parts`. Nothing without a
+/// plume or thrust.
+pub fn plume_loads(
+    jet: &JetSpec,
+    thrust_n: f64,
+    jet_frame: &Isometry3<f64>,
+    parts: &[(Isometry3<f64>, rp::SharedShape)],
+    rays: &[crate::actuation::plume_load::PlumeRay],
+    about: &Vector3<f64>,
+) -> Vec<crate::actuation::plume_load::PartLoad> {
+    use bevy_rapier3d::parry::query::Ray;
+    use bevy_rapier3d::rapier::math::Vector as V;
+    let Some((apex, axis, _, len)) = plume_cone(jet) else {
+        return Vec::new();
+    };
+    if thrust_n <= 0.0 {
+        return Vec::new();
+    }
+    let apex = jet_frame * nalgebra::Point3::from(apex);
+    let axis = jet_frame.rotation * axis;
+    crate::actuation::plume_load::impingement(
+        thrust_n,
+        &apex.coords,
+        &axis,
+        rays,
+        len,
+        about,
+        |o, d, max| {
+            let mut best: Option<(f64, usize)> = None;
+            for (k, (pose, shape)) in parts.iter().enumerate() {
+                let lo = pose.inverse_transform_point(&nalgebra::Point3::from(*o));
+                let ld = pose.rotation.inverse() * d;
+                let ray = Ray::new(
+                    V::new(lo.x as f32, lo.y as f32, lo.z as f32),
+                    V::new(ld.x as f32, ld.y as f32, ld.z as f32),
+                );
+                if let Some(t) = shape.cast_local_ray(&ray, max as f32, true) {
+                    let t = f64::from(t);
+                    if best.is_none_or(|b| t < b.0) {
+                        best = Some((t, k));
+                    }
+                }
+            }
+            best
+        },
+    )
+}
+
 /// The jets of `body`'s `Rcs` actuators in a scene's controllers (the plumed ones).
 fn scene_plumed_jets<'a>(controllers: &'a [ControllerSpec], body: &str) -> Vec<&'a JetSpec> {
     controllers
