@@ -256,6 +256,7 @@ impl Actuator {
                 }
                 report.valves = Some(flags);
                 let w = rcs::wrench(jets, &thrust);
+                report.jet_thrust_n = Some(thrust);
                 (
                     frames.body * Vector3::new(w[0], w[1], w[2]),
                     frames.body * Vector3::new(w[3], w[4], w[5]),

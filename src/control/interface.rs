@@ -372,6 +372,8 @@ pub struct ActuationReport {
     pub torque_world_nm: Vector3<f64>,
     /// Valve states this step (thruster actuators).
     pub valves: Option<Vec<bool>>,
+    /// Each jet's mean thrust over this step, N (`Rcs` actuators; jet order).
+    pub jet_thrust_n: Option<Vec<f64>>,
     /// Propellant used so far, kg (thruster actuators).
     pub propellant_used_kg: f64,
     /// Velocity increment commanded so far, ∫|F|/m dt, m/s.

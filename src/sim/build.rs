@@ -360,6 +360,7 @@ impl Simulation {
         super::contact_model::install(&mut app, loaded)?;
         super::airbearing::install(&mut app, loaded)?;
         super::controllers::install(&mut app, loaded)?;
+        super::plume::install_loads(&mut app);
         app.finish();
         app.cleanup();
         // The monitor's geometry, broad phase, and the pairs guarantees name.
@@ -699,7 +700,16 @@ impl Simulation {
 
     /// The run summary (the content of `summary.json`).
     pub fn summary(&self) -> serde_json::Value {
-        self.with_meshes(self.summary_core())
+        let mut v = self.with_meshes(self.summary_core());
+        if let (Some(p), Some(o)) = (
+            self.app
+                .world()
+                .get_resource::<super::plume::PlumeLoadState>(),
+            v.as_object_mut(),
+        ) {
+            o.insert("plume_loads".into(), p.summary());
+        }
+        v
     }
 
     fn summary_core(&self) -> serde_json::Value {

@@ -95,6 +95,8 @@ pub enum Order {
     MechanismForces,
     /// Actuate, then: the controllers' commands.
     ControllerForces,
+    /// Actuate, last: the plume impingement loads of the jets the controllers fire.
+    PlumeForces,
     /// Environment, first: an air-bearing table's forces (film, friction, tilt).
     TableForces,
     /// Environment, then: gravity (differential, J2, gravity gradient).
@@ -1305,7 +1307,11 @@ pub fn add_pipeline(app: &mut App) {
             .chain(),
     );
     schedule.configure_sets((
-        (Order::MechanismForces, Order::ControllerForces)
+        (
+            Order::MechanismForces,
+            Order::ControllerForces,
+            Order::PlumeForces,
+        )
             .chain()
             .in_set(Stage::Actuate),
         (Order::TableForces, Order::Gravity)
@@ -1322,6 +1328,7 @@ pub fn add_pipeline(app: &mut App) {
     ));
     schedule.add_systems((
         environment_gravity.in_set(Order::Gravity),
+        plume::plume_forces.in_set(Order::PlumeForces),
         (physics_step, advance_orbit).chain().in_set(Stage::Physics),
         (monitor::distances, monitor::contacts)
             .chain()

@@ -704,3 +704,293 @@ mod tests {
         assert!(glob_match("*", "x") && glob_match("a*c", "abbc") && !glob_match("a*c", "abd"));
     }
 }
+
+/// Plume impingement loads applied in a run (issue 26 §6): for every firing jet of an `Rcs`
+/// actuator with a plume, the load of [`plume_loads`] (the model of
+/// [`crate::actuation::plume_load`], the default ray grid) on the parts of every other body,
+/// added to the struck body's [`super::Wrench`] as a force through its centre of mass and the
+/// moment about it, world frame.
+///
+/// - **Only the struck body.** The reaction on the firing body is not applied: the jet's
+///   thrust already is the reaction to the momentum it emits, and the plume's own parts are
+///   not cast against (a jet never strikes its own body).
+/// - **First order in dt.** The load is computed once per step from the poses at the start of
+///   the step and the jets' mean thrust over it, and held over the step like every other
+///   force (zero-order hold); a part entering or leaving the plume within a step is counted
+///   from the start-of-step geometry.
+/// - **No cost while nothing fires.** A step without a firing plumed jet only clears the
+///   columns; a scene without plumed jets has no [`PlumeLoadState`] and no columns at all.
+///
+/// Outputs: per body the total plume force, world frame, in the trajectory columns
+/// `BODY.plume_fx_n`, `BODY.plume_fy_n`, `BODY.plume_fz_n` (the load of the step that ends
+/// at the row's time); per struck part (`body/collider`) in `summary.json` under
+/// `plume_loads`: the peak |F| (N) and the start time of the step it acted over (s), the
+/// impulse ∫|F| dt (N·s) and the vector impulse ∫F dt (N·s, world frame).
+#[derive(bevy::prelude::Resource)]
+pub struct PlumeLoadState {
+    /// Every part of every body.
+    parts: Vec<LoadPart>,
+    /// Indices into `parts` per body.
+    body_parts: Vec<Vec<usize>>,
+    /// Per body: the largest distance of a part's bounding sphere from the centre of mass, m.
+    extent_m: Vec<f64>,
+    /// Per body: the columns fx, fy, fz.
+    cols: Vec<[usize; 3]>,
+    /// Ray grids by half-angle (f64 bits).
+    rays: Vec<(u64, Vec<crate::actuation::plume_load::PlumeRay>)>,
+    /// Per part: the force of the current step, N (world).
+    now: Vec<Vector3<f64>>,
+    /// Per part: the running statistics.
+    stats: Vec<PartStats>,
+    /// The columns hold a nonzero load (cleared on the next step without one).
+    dirty: bool,
+}
+
+/// A part as the load casts rays against it.
+struct LoadPart {
+    name: String,
+    /// Pose relative to the body's centre of mass, body axes.
+    pose_com: Isometry3<f64>,
+    radius_m: f64,
+    shape: rp::SharedShape,
+}
+
+/// Running plume-load statistics of one part.
+#[derive(Debug, Clone, Default)]
+struct PartStats {
+    struck: bool,
+    peak_n: f64,
+    peak_t_s: f64,
+    impulse_abs_ns: f64,
+    impulse_ns: Vector3<f64>,
+}
+
+/// Installs [`PlumeLoadState`] when some controller's `Rcs` actuator has a jet with a plume
+/// (call after the controllers and the bodies are built): its columns start at 0.
+pub fn install_loads(app: &mut bevy::prelude::App) {
+    let w = app.world();
+    let plumed = w
+        .get_resource::<super::controllers::ControllerHost>()
+        .is_some_and(|h| {
+            h.slots.iter().any(|s| match &s.actuator.spec {
+                ActuatorSpec::Rcs { jets, .. } => jets.iter().any(|j| j.plume.is_some()),
+                _ => false,
+            })
+        });
+    if !plumed {
+        return;
+    }
+    let roster = w.resource::<super::Roster>();
+    let mut parts = Vec::new();
+    let mut body_parts = Vec::new();
+    let mut extent_m = Vec::new();
+    for (b, (be, pes)) in roster.bodies.iter().zip(&roster.parts).enumerate() {
+        let com = w
+            .get::<super::SimBody>(*be)
+            .map_or_else(Vector3::zeros, |s| s.com_body_m);
+        let to_com = Isometry3::from_parts(Translation3::from(-com), UnitQuaternion::identity());
+        let mut idx = Vec::new();
+        let mut ext: f64 = 0.0;
+        for pe in pes {
+            let Some(p) = w.get::<super::Part>(*pe) else {
+                continue;
+            };
+            let pose_com = to_com * p.pose_body;
+            ext = ext.max(pose_com.translation.vector.norm() + p.bound_radius_m);
+            idx.push(parts.len());
+            parts.push(LoadPart {
+                name: format!("{}/{}", roster.names[b], p.name),
+                pose_com,
+                radius_m: p.bound_radius_m,
+                shape: p.shape.clone(),
+            });
+        }
+        body_parts.push(idx);
+        extent_m.push(ext);
+    }
+    let names = roster.names.clone();
+    let n = parts.len();
+    let mut diag = app.world_mut().resource_mut::<super::output::Diagnostics>();
+    let cols: Vec<[usize; 3]> = names
+        .iter()
+        .map(|b| {
+            let c = ["fx", "fy", "fz"].map(|a| diag.column(&format!("{b}.plume_{a}_n")));
+            for k in c {
+                diag.values[k] = 0.0;
+            }
+            c
+        })
+        .collect();
+    app.insert_resource(PlumeLoadState {
+        parts,
+        body_parts,
+        extent_m,
+        cols,
+        rays: Vec::new(),
+        now: vec![Vector3::zeros(); n],
+        stats: vec![PartStats::default(); n],
+        dirty: false,
+    });
+}
+
+impl PlumeLoadState {
+    /// `summary.json`'s `plume_loads`: every part struck so far (see [`PlumeLoadState`]).
+    pub fn summary(&self) -> serde_json::Value {
+        let m: serde_json::Map<String, serde_json::Value> = self
+            .parts
+            .iter()
+            .zip(&self.stats)
+            .filter(|(_, s)| s.struck)
+            .map(|(p, s)| {
+                (
+                    p.name.clone(),
+                    serde_json::json!({
+                        "peak_force_n": s.peak_n,
+                        "peak_t_s": s.peak_t_s,
+                        "impulse_n_s": s.impulse_abs_ns,
+                        "impulse_vector_world_n_s": [s.impulse_ns.x, s.impulse_ns.y, s.impulse_ns.z],
+                    }),
+                )
+            })
+            .collect();
+        serde_json::Value::Object(m)
+    }
+
+    /// The ray grid of a cone of half-angle `alpha_rad` (made once).
+    fn rays(&mut self, alpha_rad: f64) -> usize {
+        let key = alpha_rad.to_bits();
+        if let Some(k) = self.rays.iter().position(|r| r.0 == key) {
+            return k;
+        }
+        use crate::actuation::plume_load::{DEFAULT_RINGS, DEFAULT_SECTORS, cone_rays};
+        self.rays
+            .push((key, cone_rays(alpha_rad, DEFAULT_RINGS, DEFAULT_SECTORS)));
+        self.rays.len() - 1
+    }
+}
+
+/// Actuate, after the controllers ([`super::Order::PlumeForces`]): the plume loads of the
+/// jets firing over this step on the bodies they strike (see [`PlumeLoadState`]).
+pub fn plume_forces(
+    clock: bevy::prelude::Res<super::Clock>,
+    roster: bevy::prelude::Res<super::Roster>,
+    host: Option<bevy::prelude::Res<super::controllers::ControllerHost>>,
+    state: Option<bevy::prelude::ResMut<PlumeLoadState>>,
+    mut diag: bevy::prelude::ResMut<super::output::Diagnostics>,
+    mut q: bevy::prelude::Query<(&super::BodyState, &mut super::Wrench)>,
+) {
+    let (Some(host), Some(mut state)) = (host, state) else {
+        return;
+    };
+    let st = &mut *state;
+    // The firing plumed jets: (body, jet, mean thrust).
+    let mut firing: Vec<(usize, &JetSpec, f64)> = Vec::new();
+    for s in &host.slots {
+        let (ActuatorSpec::Rcs { jets, .. }, Some(u)) =
+            (&s.actuator.spec, s.report.jet_thrust_n.as_deref())
+        else {
+            continue;
+        };
+        for (j, u) in jets.iter().zip(u) {
+            if *u > 0.0 && j.plume.is_some() {
+                firing.push((s.body, j, *u));
+            }
+        }
+    }
+    if firing.is_empty() {
+        if st.dirty {
+            for c in st.cols.iter().flatten() {
+                diag.values[*c] = 0.0;
+            }
+            st.dirty = false;
+        }
+        return;
+    }
+    let frames: Vec<Option<Isometry3<f64>>> = roster
+        .bodies
+        .iter()
+        .map(|e| {
+            q.get(*e)
+                .ok()
+                .map(|(s, _)| Isometry3::from_parts(Translation3::from(s.pos_m), s.att))
+        })
+        .collect();
+    let nb = frames.len();
+    let mut force = vec![Vector3::zeros(); nb];
+    let mut torque = vec![Vector3::zeros(); nb];
+    let mut touched: Vec<usize> = Vec::new();
+    let mut cast: Vec<(Isometry3<f64>, rp::SharedShape)> = Vec::new();
+    let mut cast_idx: Vec<usize> = Vec::new();
+    for (fb, j, u) in firing {
+        let (Some(Some(jf)), Some((apex, _, alpha, _))) = (frames.get(fb), plume_cone(j)) else {
+            continue;
+        };
+        let reach = plume_reach_m(j);
+        let nozzle = jf * nalgebra::Point3::from(apex);
+        let ri = st.rays(alpha);
+        for (b, bf) in frames.iter().enumerate() {
+            let Some(bf) = bf else { continue };
+            if b == fb
+                || (bf.translation.vector - nozzle.coords).norm()
+                    > reach - apex.norm() + st.extent_m[b]
+            {
+                continue;
+            }
+            cast.clear();
+            cast_idx.clear();
+            for &pi in &st.body_parts[b] {
+                let p = &st.parts[pi];
+                let pose = bf * p.pose_com;
+                // The plume lies within its slant length of the nozzle.
+                if (pose.translation.vector - nozzle.coords).norm()
+                    > reach - apex.norm() + p.radius_m
+                {
+                    continue;
+                }
+                cast.push((pose, p.shape.clone()));
+                cast_idx.push(pi);
+            }
+            if cast.is_empty() {
+                continue;
+            }
+            let com = bf.translation.vector;
+            for l in plume_loads(j, u, jf, &cast, &st.rays[ri].1, &com) {
+                let pi = cast_idx[l.part];
+                if st.now[pi] == Vector3::zeros() {
+                    touched.push(pi);
+                }
+                st.now[pi] += l.force_n;
+                force[b] += l.force_n;
+                torque[b] += l.moment_nm;
+            }
+        }
+    }
+    let (t, dt) = (clock.t_s(), clock.dt_s);
+    touched.sort_unstable();
+    touched.dedup();
+    for pi in touched {
+        let f = std::mem::take(&mut st.now[pi]);
+        let s = &mut st.stats[pi];
+        let m = f.norm();
+        if !s.struck || m > s.peak_n {
+            s.peak_n = m;
+            s.peak_t_s = t;
+        }
+        s.struck = true;
+        s.impulse_abs_ns += m * dt;
+        s.impulse_ns += f * dt;
+    }
+    for (b, e) in roster.bodies.iter().enumerate() {
+        for (k, c) in st.cols[b].iter().enumerate() {
+            diag.values[*c] = force[b][k];
+        }
+        if force[b] == Vector3::zeros() && torque[b] == Vector3::zeros() {
+            continue;
+        }
+        if let Ok((_, mut w)) = q.get_mut(*e) {
+            w.force_n += force[b];
+            w.torque_nm += torque[b];
+        }
+    }
+    st.dirty = true;
+}
