@@ -58,11 +58,20 @@ pub enum ActuatorSpec {
         /// Specific impulse, s (default 220 s, a hydrazine monopropellant thruster).
         #[serde(default = "rcs_isp")]
         isp_s: f64,
+        /// The plumes of these jets load the parts of other bodies they strike
+        /// (`sim::plume::PlumeLoadState`; default true). `false` keeps only the geometry (the
+        /// `PlumeKeepOff` guarantee), e.g. to study clearance with the struck body unmoved.
+        #[serde(default = "yes")]
+        plume_loads: bool,
     },
 }
 
 fn rcs_isp() -> f64 {
     220.0
+}
+
+fn yes() -> bool {
+    true
 }
 
 impl ActuatorSpec {
@@ -87,7 +96,7 @@ impl ActuatorSpec {
                 }
                 Ok(())
             }
-            ActuatorSpec::Rcs { jets, isp_s } => super::rcs::validate_jets(jets, *isp_s),
+            ActuatorSpec::Rcs { jets, isp_s, .. } => super::rcs::validate_jets(jets, *isp_s),
             ActuatorSpec::PlanarThrusters {
                 params,
                 thrust_noise,
@@ -216,7 +225,7 @@ impl Actuator {
             }
         };
         let (f_world, t_world) = match &self.spec {
-            ActuatorSpec::Rcs { jets, isp_s } => {
+            ActuatorSpec::Rcs { jets, isp_s, .. } => {
                 use super::rcs;
                 let thrust: Vec<f64> = match &cmd.valves {
                     Some(v) => jets

@@ -718,6 +718,7 @@ mod tests {
 ///   the step and the jets' mean thrust over it, and held over the step like every other
 ///   force (zero-order hold); a part entering or leaving the plume within a step is counted
 ///   from the start-of-step geometry.
+/// - **Switch.** An `Rcs` actuator with `plume_loads: false` applies none (default true).
 /// - **No cost while nothing fires.** A step without a firing plumed jet only clears the
 ///   columns; a scene without plumed jets has no [`PlumeLoadState`] and no columns at all.
 ///
@@ -773,7 +774,9 @@ pub fn install_loads(app: &mut bevy::prelude::App) {
         .get_resource::<super::controllers::ControllerHost>()
         .is_some_and(|h| {
             h.slots.iter().any(|s| match &s.actuator.spec {
-                ActuatorSpec::Rcs { jets, .. } => jets.iter().any(|j| j.plume.is_some()),
+                ActuatorSpec::Rcs {
+                    jets, plume_loads, ..
+                } => *plume_loads && jets.iter().any(|j| j.plume.is_some()),
                 _ => false,
             })
         });
@@ -886,8 +889,14 @@ pub fn plume_forces(
     // The firing plumed jets: (body, jet, mean thrust).
     let mut firing: Vec<(usize, &JetSpec, f64)> = Vec::new();
     for s in &host.slots {
-        let (ActuatorSpec::Rcs { jets, .. }, Some(u)) =
-            (&s.actuator.spec, s.report.jet_thrust_n.as_deref())
+        let (
+            ActuatorSpec::Rcs {
+                jets,
+                plume_loads: true,
+                ..
+            },
+            Some(u),
+        ) = (&s.actuator.spec, s.report.jet_thrust_n.as_deref())
         else {
             continue;
         };
