@@ -132,6 +132,28 @@ fn val_closing_speed_gate_crossed_at_a_known_time() {
     assert!((f(&g["worst_margin"]) + 0.5).abs() < 1e-12, "{g}");
 }
 
+/// Beyond the outermost gate no gate applies: the margin is the scene's speed limit less the
+/// closing speed (finite: the run is not stopped by the guard, as an infinite margin did),
+/// then the gate's once inside it. Same straight line as above, from 20.005 m with one gate
+/// at 10 m: margin 10⁵ − 1 m/s until t = 10.01 s, then 0.5 − 1 = −0.5 m/s.
+#[test]
+fn val_closing_speed_gate_beyond_the_outermost_gate_is_finite() {
+    let (_, s) = run(free_scene(
+        &[
+            body("target", BALL, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), ""),
+            body("chaser", BALL, (20.005, 0.0, 0.0), (-1.0, 0.0, 0.0), ""),
+        ],
+        r#"ClosingSpeedGate(name: "gates", body: "chaser", around: "target",
+              gates: [(10.0, 0.5)])"#,
+        12.0,
+    ));
+    let g = guarantee(&s, "gates");
+    assert_eq!(g["verdict"], "violated");
+    assert!((f(&g["first_violation_s"]) - 10.01).abs() < 1e-9, "{g}");
+    assert!((f(&g["worst_margin"]) + 0.5).abs() < 1e-12, "{g}");
+    assert!(f(&g["last_margin"]).is_finite(), "{g}");
+}
+
 #[test]
 fn gates_out_of_order_and_bad_values_are_located_errors() {
     for (gates, field) in [

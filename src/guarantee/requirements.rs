@@ -175,7 +175,9 @@ impl Guarantee for KeepOutEllipsoid {
 /// most the tightest limit among the gates whose range applies (|r| ≤ within_m). Gates are
 /// listed outermost first (within_m strictly decreasing).
 ///
-/// Margin (m/s): limit − closing speed; +∞ beyond the outermost gate (no limit applies).
+/// Margin (m/s): limit − closing speed; beyond the outermost gate the limit is
+/// [`MAX_SPEED_M_S`](crate::scene::validate::MAX_SPEED_M_S) (no gate applies; the margin stays
+/// finite, as every output must).
 /// Judged at the samples only ("samples only" in the outputs): the closing speed changes with
 /// the relative acceleration (thrust included), which the monitor's motion bounds do not
 /// bound, and the limit steps at each gate's range.
@@ -317,9 +319,11 @@ impl Guarantee for ClosingSpeedGate {
         let (pa, va) = point_state(&v.bodies[self.around], &self.off_around);
         let (r, rd) = (pb - pa, vb - va);
         let range = r.norm();
-        let Some(limit) = self.limit_m_s(range) else {
-            return f64::INFINITY;
-        };
+        // Beyond the outermost gate no gate applies: the limit is the scene's limit on any
+        // speed (the guard stops a run past it), so the margin stays finite and ≥ 0 there.
+        let limit = self
+            .limit_m_s(range)
+            .unwrap_or(crate::scene::validate::MAX_SPEED_M_S);
         // At zero range the direction is undefined: the closing speed is at most |ṙ|.
         let closing = if range > 0.0 {
             -r.dot(&rd) / range
