@@ -1121,19 +1121,23 @@ fn check_guarantees(
         };
         let w = st.worst_margin;
         let abs_tol = inv.tolerance();
+        let floor = inv.margin_floor();
         let thr = |b: f64| {
             let x = w.min(b);
-            if x >= 0.0 {
+            let t = if x >= 0.0 {
                 (x - abs_tol.max(POSITIVE_MARGIN_REL_TOL * x)).max(0.0)
             } else {
                 x - abs_tol.max(NEGATIVE_MARGIN_REL_TOL * x.abs())
-            }
+            };
+            // The margin never goes below its floor: every sub-interval clears a threshold at
+            // or under it, whatever its rate bound says.
+            if t <= floor { f64::NEG_INFINITY } else { t }
         };
         let mut finding = IntervalFinding {
             min_value: m1.value,
             min_t_s: t,
             inside: false,
-            lower: interval_lower_bound(m0.lower, m1.lower, rate, dt),
+            lower: interval_lower_bound(m0.lower, m1.lower, rate, dt).max(floor),
             first_violation_s: None,
             restored_s: None,
             unresolved: false,
@@ -1155,7 +1159,7 @@ fn check_guarantees(
                 finding.min_t_s = t0 + r.t;
                 finding.inside = true;
             }
-            finding.lower = r.lower;
+            finding.lower = r.lower.max(floor);
             finding.evals += r.evals;
         }
         let t_tol = dt * EVENT_TIME_TOL;

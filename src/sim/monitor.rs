@@ -697,11 +697,15 @@ pub fn distances(
                 value: prev.distance_m,
                 lower: prev.lower_m,
             };
+            // A distance is never negative: a threshold at or under zero (the pair has touched
+            // already) is cleared by every sub-interval, whatever the rate bound (no refinement
+            // while two bodies stay in contact, latched or not).
             let thr = |b: f64| {
                 let w = w.min(b);
-                w - min_distance_tolerance_m(w)
+                let t = w - min_distance_tolerance_m(w);
+                if t <= 0.0 { f64::NEG_INFINITY } else { t }
             };
-            if interval_lower_bound(d0.lower, hit.d.lower, rate, dt) < thr(hit.d.value) {
+            if interval_lower_bound(d0.lower, hit.d.lower, rate, dt).max(0.0) < thr(hit.d.value) {
                 let mut at = (hit.a, hit.b);
                 let mut parts_at = Vec::new();
                 let r = minimize(dt, d0, hit.d, rate, thr, MAX_MIN_EVALS, dt * 1e-9, |tau| {
@@ -724,7 +728,7 @@ pub fn distances(
                         inside: r.t > 0.0,
                     };
                 }
-                mon.min_lower_m = mon.min_lower_m.min(r.lower);
+                mon.min_lower_m = mon.min_lower_m.min(r.lower.max(0.0));
             }
         }
         if !mon.min_per_pair[k].distance_m.is_finite() || best.distance_m < w {
