@@ -508,6 +508,9 @@ impl guarantee_bounds::MotionBounds for motion::StepMotion {
     fn separation_bound(&self, i: usize, j: usize) -> f64 {
         motion::StepMotion::separation_bound(self, i, j)
     }
+    fn distance_rate_bound(&self, i: usize, j: usize) -> f64 {
+        motion::StepMotion::distance_rate_bound(self, i, j)
+    }
 }
 
 /// The step's motion bounds with the bound on the Hill frame's rate (orbit scenes).
@@ -534,6 +537,9 @@ impl guarantee_bounds::MotionBounds for FrameMotion<'_> {
     }
     fn separation_bound(&self, i: usize, j: usize) -> f64 {
         self.motion.separation_bound(i, j)
+    }
+    fn distance_rate_bound(&self, i: usize, j: usize) -> f64 {
+        self.motion.distance_rate_bound(i, j)
     }
     fn hill_rate_bound_rad_s(&self) -> Option<f64> {
         self.hill_rate_rad_s

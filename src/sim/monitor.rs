@@ -419,7 +419,9 @@ pub fn closest_parts(
     }
     candidates.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
     for (c, &(lb, a, b)) in candidates.iter().enumerate() {
-        if lb >= best {
+        // No distance is below zero: once a touching pair is found, the rest cannot win (and
+        // a later zero would not replace it either).
+        if lb >= best || best <= 0.0 {
             count.pruned += (candidates.len() - c) as u64;
             break;
         }
@@ -430,7 +432,8 @@ pub fn closest_parts(
             (best, ba, bb) = (d, a, b);
         }
     }
-    if !certify || !best.is_finite() {
+    if !certify || !best.is_finite() || best <= 0.0 {
+        // (At zero the certified lower bound is zero: 0 ≤ lower ≤ best.)
         return PartPairHit {
             d: Bracket::exact(best),
             a: ba,
