@@ -35,6 +35,18 @@ fn every_bundled_scene_passes_check() {
 /// orbits and far-away bodies (once reported as overlaps).
 const CORPUS: &[(&str, usize, &str, &str)] = &[
     (
+        "law_guarantee_name_comma",
+        73,
+        "controllers.0",
+        "guarantee name: a name is 1 to 64 characters",
+    ),
+    (
+        "law_guarantee_name_taken",
+        73,
+        "controllers.0",
+        "a guarantee named `clearance_20cm` already exists",
+    ),
+    (
         "min_impact_speed_1e300",
         65,
         "docking.contact.min_impact_speed_m_s",
@@ -207,6 +219,30 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         54,
         "bodies.chaser.parts.bus.shape.segments",
         "from 8 to 1024",
+    ),
+    (
+        "sequencer_any_empty",
+        78,
+        "controllers.0.params.phases.0.exits.0.when",
+        "`Any([])` combines no condition: it can never hold",
+    ),
+    (
+        "sequencer_law_wrong_slot",
+        81,
+        "controllers.1.params.phases.0.translation",
+        "`Attitude` commands a torque only",
+    ),
+    (
+        "sequencer_range_negative",
+        78,
+        "controllers.0.params.phases.0.exits.0.when.0.1",
+        "`RangeBelow(-1)` can never hold",
+    ),
+    (
+        "sequencer_states_empty",
+        80,
+        "controllers.0.params.phases.1.exits.0.when",
+        "`DockingState([])` names no state",
     ),
     (
         "scene_name_newline",

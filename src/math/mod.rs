@@ -5,4 +5,5 @@
 pub mod mrp;
 pub mod ode;
 pub mod polygon;
+pub mod rigid;
 pub mod rng;

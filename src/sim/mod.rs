@@ -284,7 +284,34 @@ pub struct Guarantees {
 }
 
 impl Guarantees {
-    /// Registers a guarantee.
+    /// Whether a guarantee from outside the scene's list (a law's, a user's) may join: its
+    /// name follows the one name rule of every scene name and is not taken (it becomes two
+    /// `trajectory.csv` columns and a key of `summary.json`), its unit is 1 to 16 of
+    /// A-Z a-z 0-9 _ /.
+    pub fn admissible(&self, g: &dyn Guarantee) -> Result<(), String> {
+        if let Some(p) = crate::scene::validate::name_problem(g.name()) {
+            return Err(format!("guarantee name: {p}"));
+        }
+        if self.status.iter().any(|s| s.name == g.name()) {
+            return Err(format!("a guarantee named `{}` already exists", g.name()));
+        }
+        let unit = g.unit();
+        if unit.is_empty()
+            || unit.len() > 16
+            || !unit
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "_/".contains(c))
+        {
+            return Err(format!(
+                "guarantee `{}`: unit {unit:?} must be 1 to 16 of A-Z a-z 0-9 _ /",
+                g.name()
+            ));
+        }
+        Ok(())
+    }
+
+    /// Registers a guarantee (checked by [`Guarantees::admissible`] where it does not come
+    /// from the validated scene).
     pub fn register(&mut self, g: Box<dyn Guarantee>) {
         self.status.push(GuaranteeStatus::new(g.name(), g.unit()));
         self.list.push(g);
@@ -311,20 +338,42 @@ pub struct EventLog {
     pub pending: Vec<Event>,
     /// Total raised.
     pub count: u64,
+    /// Bytes of event data raised (JSON), for the run's limit
+    /// ([`guard::MAX_EVENT_BYTES_PER_RUN`]).
+    pub bytes: u64,
 }
+
+/// Most bytes of JSON one event's data may hold; a larger one (a law's huge diagnostic, a
+/// condition written out in full) is kept as its first [`EVENT_HEAD_CHARS`] characters with
+/// `truncated_bytes`, so one event cannot flood `events.jsonl`.
+pub const MAX_EVENT_DATA_BYTES: usize = 16 << 10;
+
+/// Characters kept of an event's data beyond [`MAX_EVENT_DATA_BYTES`].
+pub const EVENT_HEAD_CHARS: usize = 1024;
 
 impl EventLog {
     /// Raises an event.
     pub fn push(&mut self, t_s: f64, kind: &str, data: serde_json::Value) {
-        let data = match data {
+        let mut data = match data {
             serde_json::Value::Object(m) => m,
             _ => serde_json::Map::new(),
         };
-        self.pending.push(Event {
-            t_s,
-            kind: kind.to_string(),
-            data,
-        });
+        let len = serde_json::to_string(&data).map_or(0, |j| j.len());
+        if len > MAX_EVENT_DATA_BYTES {
+            let head: String = serde_json::to_string(&data)
+                .unwrap_or_default()
+                .chars()
+                .take(EVENT_HEAD_CHARS)
+                .collect();
+            data = serde_json::Map::new();
+            data.insert("truncated_bytes".into(), len.into());
+            data.insert("head".into(), head.into());
+        }
+        self.bytes += len.min(MAX_EVENT_DATA_BYTES) as u64 + kind.len() as u64 + 24;
+        // A kind is a short word (`contact_start`); a law's may be anything: at most 64
+        // characters are kept.
+        let kind: String = kind.chars().take(64).collect();
+        self.pending.push(Event { t_s, kind, data });
         self.count += 1;
     }
 }
@@ -403,35 +452,7 @@ fn advance_orbit(mut orbit: Option<ResMut<OrbitEnv>>, clock: Res<Clock>) {
     }
 }
 
-/// One RK4 step of Euler's equations J ω̇_b = τ_b − ω_b × J ω_b with quaternion kinematics
-/// q̇ = ½ q ⊗ (0, ω_b), in f64; the torque is held constant in the world frame over the step.
-/// Returns the new attitude (body → world) and world-frame angular velocity.
-pub fn rotate_rk4(
-    att: &UnitQuaternion<f64>,
-    omega_world: &Vector3<f64>,
-    torque_world: &Vector3<f64>,
-    j: &Matrix3<f64>,
-    j_inv: &Matrix3<f64>,
-    dt: f64,
-) -> (UnitQuaternion<f64>, Vector3<f64>) {
-    use nalgebra::Quaternion;
-    let f = |q: &Quaternion<f64>, w: &Vector3<f64>| {
-        let qn = UnitQuaternion::from_quaternion(*q);
-        let tau_b = qn.inverse() * torque_world;
-        let wd = j_inv * (tau_b - w.cross(&(j * w)));
-        let qd = q * Quaternion::from_imag(*w) * 0.5;
-        (qd, wd)
-    };
-    let q0 = att.into_inner();
-    let w0 = att.inverse() * omega_world;
-    let (k1q, k1w) = f(&q0, &w0);
-    let (k2q, k2w) = f(&(q0 + k1q * (dt / 2.0)), &(w0 + k1w * (dt / 2.0)));
-    let (k3q, k3w) = f(&(q0 + k2q * (dt / 2.0)), &(w0 + k2w * (dt / 2.0)));
-    let (k4q, k4w) = f(&(q0 + k3q * dt), &(w0 + k3w * dt));
-    let q1 = UnitQuaternion::from_quaternion(q0 + (k1q + k2q * 2.0 + k3q * 2.0 + k4q) * (dt / 6.0));
-    let w1 = w0 + (k1w + k2w * 2.0 + k3w * 2.0 + k4w) * (dt / 6.0);
-    (q1, q1 * w1)
-}
+pub use crate::math::rigid::rotate_rk4;
 
 /// rapier is stepped while the axis-aligned boxes of two bodies' colliders can be within this
 /// of each other during the step, m: rapier's broad phase pairs colliders whose boxes, grown by
