@@ -209,6 +209,12 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "from 1 to 64, got 4000000000",
     ),
     (
+        "plume_unknown_part",
+        24,
+        "guarantees.arrays.parts.1",
+        "`solar_array_*` matches no part of `target`",
+    ),
+    (
         "port_name_space",
         53,
         "bodies.chaser.ports.0.name",

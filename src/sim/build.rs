@@ -636,6 +636,7 @@ impl Simulation {
         let t = w.resource::<Clock>().t_s();
         let m = {
             let mon = w.resource::<MonitorState>();
+            let jets = super::jets_view(w.get_resource::<super::controllers::ControllerHost>());
             let view = crate::guarantee::MonitorView {
                 t_s: t,
                 bodies: &mon.bodies,
@@ -647,6 +648,7 @@ impl Simulation {
                         vel_eci_m_s: v,
                     }
                 }),
+                jets: &jets,
             };
             g.margin_bracket(&view)
         };

@@ -285,11 +285,12 @@ pub struct Guarantees {
 
 impl Guarantees {
     /// Whether a guarantee from outside the scene's list (a law's, a user's) may join: its
-    /// name follows the one name rule of every scene name and is not taken (it becomes two
+    /// name follows the one name rule of every scene name (or joins up to 4 such names with
+    /// `.`, as a law composes `capture.p.e` from body names) and is not taken (it becomes two
     /// `trajectory.csv` columns and a key of `summary.json`), its unit is 1 to 16 of
     /// A-Z a-z 0-9 _ /.
     pub fn admissible(&self, g: &dyn Guarantee) -> Result<(), String> {
-        if let Some(p) = crate::scene::validate::name_problem(g.name()) {
+        if let Some(p) = crate::scene::validate::composed_name_problem(g.name()) {
             return Err(format!("guarantee name: {p}"));
         }
         if self.status.iter().any(|s| s.name == g.name()) {
@@ -1039,10 +1040,12 @@ fn check_guarantees(
     geo: Res<monitor::MonitorGeometry>,
     mut scratch: Local<monitor::DistanceScratch>,
     orbit: Option<Res<OrbitEnv>>,
+    host: Option<Res<controllers::ControllerHost>>,
 ) {
     use crate::geometry::bounds::{Bracket, Crossing, first_below, interval_lower_bound, minimize};
     use crate::guarantee::{IntervalFinding, Reads, ReferenceView};
     let t = clock.t_s();
+    let jets = jets_view(host.as_deref());
     let orbit = orbit.as_deref();
     let reference_at = |back_s: f64| {
         orbit.map(|o| {
@@ -1060,6 +1063,7 @@ fn check_guarantees(
         bodies: &mon.bodies,
         pairs: &mon.pairs,
         reference: reference_at(0.0),
+        jets: &jets,
     };
     let frame_motion = FrameMotion {
         motion: &motion,
@@ -1084,18 +1088,17 @@ fn check_guarantees(
         let st = &mut g.status[k];
         let Some(rate) = rate else {
             let m = m1.value;
-            match st.update(t, m) {
-                Some(true) => log.push(
-                    t,
-                    "guarantee_violated",
-                    serde_json::json!({"name": st.name, "margin": m, "unit": st.unit}),
-                ),
-                Some(false) => log.push(
-                    t,
-                    "guarantee_restored",
-                    serde_json::json!({"name": st.name, "margin": m, "unit": st.unit}),
-                ),
-                None => {}
+            if let Some(violated) = st.update(t, m) {
+                let kind = if violated {
+                    "guarantee_violated"
+                } else {
+                    "guarantee_restored"
+                };
+                let mut e = serde_json::json!({"name": st.name, "margin": m, "unit": st.unit});
+                if let Some(d) = inv.detail(&view) {
+                    e["detail"] = d;
+                }
+                log.push(t, kind, e);
             }
             g.last[k] = m1;
             continue;
@@ -1104,9 +1107,13 @@ fn check_guarantees(
         let t0 = t - dt;
         let m0 = g.last[k];
         let reads = inv.reads();
-        let mut eval = |tau: f64| -> Bracket {
+        // The bodies (and the pairs the guarantee reads) at τ into the step.
+        let mut fill = |tau: f64,
+                        bodies_at: &mut Vec<BodyView>,
+                        pairs_at: &mut Vec<PairDistance>,
+                        count: &mut monitor::QueryCount| {
             if bodies_at.len() != mon.bodies.len() {
-                bodies_at = mon.bodies.clone();
+                *bodies_at = mon.bodies.clone();
             }
             for (v, p) in bodies_at.iter_mut().zip(&motion.paths) {
                 let s = p.state_at(tau);
@@ -1126,7 +1133,7 @@ fn check_guarantees(
                     let p = &mon.pairs[*k];
                     (p.part_a, p.part_b)
                 });
-                let h = monitor::pair_at(&geo, &motion, i, j, tau, warm, &mut scratch, &mut count);
+                let h = monitor::pair_at(&geo, &motion, i, j, tau, warm, &mut scratch, count);
                 pairs_at.push(PairDistance {
                     a: i,
                     b: j,
@@ -1138,14 +1145,22 @@ fn check_guarantees(
                     t_s: t0 + tau,
                 });
             }
+        };
+        let mut eval = |tau: f64| -> Bracket {
+            fill(tau, &mut bodies_at, &mut pairs_at, &mut count);
             let v = MonitorView {
                 t_s: t0 + tau,
                 bodies: &bodies_at,
                 pairs: &pairs_at,
                 reference: reference_at(tau - dt),
+                jets: &jets,
             };
             inv.margin_bracket(&v)
         };
+        // A margin reading step inputs starts the step from its value under this step's
+        // inputs (the sample at t₀ was taken under the previous step's).
+        let was_ok = g.last[k].value >= 0.0;
+        let m0 = if inv.step_inputs() { eval(0.0) } else { m0 };
         let w = st.worst_margin;
         let abs_tol = inv.tolerance();
         let floor = inv.margin_floor();
@@ -1170,6 +1185,16 @@ fn check_guarantees(
             unresolved: false,
             evals: 0,
         };
+        if inv.step_inputs() && m0.value < finding.min_value {
+            // Only a margin re-evaluated at t₀ under this step's inputs can be below both the
+            // sample at t₁ and what the search finds: it holds just after t₀.
+            finding.min_value = m0.value;
+            finding.min_t_s = t0;
+            finding.inside = true;
+        }
+        // A floor the step's inputs give (see `Guarantee::step_floor`).
+        let floor = floor.max(inv.step_floor(&view).unwrap_or(f64::NEG_INFINITY));
+        finding.lower = finding.lower.max(floor);
         if finding.lower < thr(m1.value) {
             let r = minimize(
                 dt,
@@ -1191,6 +1216,10 @@ fn check_guarantees(
         }
         let t_tol = dt * EVENT_TIME_TOL;
         let went_negative = finding.min_value < 0.0 || m1.value < 0.0;
+        if was_ok && m0.value < 0.0 {
+            // Violated from the step's start (the step's inputs changed there).
+            finding.first_violation_s = Some((t0, t0));
+        }
         if m0.value >= 0.0 && went_negative {
             let c = first_below(dt, m0, m1, rate, 0.0, t_tol, MAX_CROSSING_EVALS, &mut eval);
             finding.first_violation_s = match c {
@@ -1217,17 +1246,56 @@ fn check_guarantees(
             } else {
                 "guarantee_restored"
             };
-            log.push(
-                c.t_s,
-                kind,
-                serde_json::json!({"name": st.name, "margin": c.margin, "unit": st.unit,
-                    "found": if c.inside { "interval" } else { "sample" },
-                    "t_tol_s": c.t_tol_s, "t_step_s": t}),
+            let mut e = serde_json::json!({"name": st.name, "margin": c.margin, "unit": st.unit,
+                "found": if c.inside { "interval" } else { "sample" },
+                "t_tol_s": c.t_tol_s, "t_step_s": t});
+            // The detail where the new state is known to hold: the end of the time bracket.
+            // (Its queries are not counted: the counts report the judgement's cost.)
+            let tau = (c.t_s + c.t_tol_s - t0).clamp(0.0, dt);
+            fill(
+                tau,
+                &mut bodies_at,
+                &mut pairs_at,
+                &mut monitor::QueryCount::default(),
             );
+            let v = MonitorView {
+                t_s: t0 + tau,
+                bodies: &bodies_at,
+                pairs: &pairs_at,
+                reference: reference_at(tau - dt),
+                jets: &jets,
+            };
+            if let Some(d) = inv.detail(&v) {
+                e["detail"] = d;
+            }
+            log.push(c.t_s, kind, e);
         }
         g.last[k] = m1;
     }
     g.interval_queries += count.exact;
+}
+
+/// Every `Rcs` actuator's jets and their firing flags over the current step, for
+/// [`MonitorView::jets`] (a slot whose command frame was missing fires nothing).
+pub(crate) fn jets_view(
+    host: Option<&controllers::ControllerHost>,
+) -> Vec<crate::guarantee::JetsView<'_>> {
+    let Some(host) = host else {
+        return Vec::new();
+    };
+    host.slots
+        .iter()
+        .filter_map(|s| match &s.actuator.spec {
+            crate::actuation::actuator::ActuatorSpec::Rcs { jets, .. } => {
+                Some(crate::guarantee::JetsView {
+                    body: s.body,
+                    jets,
+                    firing: s.report.valves.as_deref().unwrap_or(&[]),
+                })
+            }
+            _ => None,
+        })
+        .collect()
 }
 
 /// Adds the pipeline to an app: the `SimStep` schedule with its chained stages and the systems
