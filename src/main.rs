@@ -120,6 +120,11 @@ enum Cmd {
         /// Instead of the scene: the swarm table for these body counts (e.g. 2,4,8,…,256).
         #[arg(long, value_delimiter = ',')]
         swarm: Vec<usize>,
+        /// Instead of the scene: the cliffs (a spinning chaser, an attitude law through the
+        /// latch and in contact, free_drift against bare rapier), each as a ratio to its plain
+        /// case in the same run; SCENE's folder must hold docking_aligned.ron and free_drift.ron.
+        #[arg(long)]
+        cliffs: bool,
     },
     /// Write an N-body swarm scene (tumbling winged spacecraft on a 20 m grid in orbit).
     Swarm {
@@ -487,6 +492,24 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
             match rpod::bench::run_swarm(&swarm, steps) {
+                Ok(report) => {
+                    out!("{report}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            }
+        }
+        Cmd::Bench {
+            scene,
+            steps,
+            cliffs: true,
+            ..
+        } => {
+            let folder = scene.parent().unwrap_or(std::path::Path::new("."));
+            match rpod::bench::run_cliffs(folder, steps) {
                 Ok(report) => {
                     out!("{report}");
                     ExitCode::SUCCESS
