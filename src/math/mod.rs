@@ -6,3 +6,4 @@ pub mod mrp;
 pub mod ode;
 pub mod polygon;
 pub mod rng;
+pub mod stats;
