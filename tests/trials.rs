@@ -382,7 +382,8 @@ fn val_success_criteria_match_the_recorded_columns() {
     let text = format!(
         r#"Trials(name: "criteria", scene: "{}", duration_s: 30.0, count: 4,
     parameters: [Grid(path: "bodies.chaser.initial.pos_m.1", values: [0.0, 0.05, 0.4, 0.9])],
-    success: All([GuaranteeHeld("clearance_5cm"), MinClearance(0.01)]))"#,
+    success: All([GuaranteeHeld("clearance_5cm"), MinClearance(0.01)]),
+    confidence: 0.9, required_probability: 0.9973)"#,
         scene.display()
     );
     std::fs::write(&f, &text).unwrap();
@@ -401,15 +402,18 @@ fn val_success_criteria_match_the_recorded_columns() {
             .position(|c| c == n)
             .unwrap_or_else(|| panic!("{n}: {h:?}"))
     };
-    let mut successes = 0;
+    let (mut successes, mut held) = (0, 0);
     for r in rdr.records().map(|r| r.unwrap()) {
         let worst: f64 = r[col("guarantee.clearance_5cm.worst_margin_m")]
             .parse()
             .unwrap();
         let first = &r[col("guarantee.clearance_5cm.first_violation_s")];
         let clearance: f64 = r[col("min_clearance_non_docking_m")].parse().unwrap();
-        // Held ⇔ never violated ⇔ worst margin ≥ 0.
+        // Held ⇔ never violated ⇔ worst margin ≥ 0; the verdict says the same.
         assert_eq!(first.is_empty(), worst >= 0.0, "{r:?}");
+        let verdict = &r[col("guarantee.clearance_5cm.verdict")];
+        assert_eq!(verdict == "held", first.is_empty(), "{r:?}");
+        held += usize::from(verdict == "held");
         let expect = first.is_empty() && clearance >= 0.01;
         assert_eq!(
             &r[col("success")],
@@ -436,6 +440,27 @@ fn val_success_criteria_match_the_recorded_columns() {
     );
     assert_eq!(s["successes"], successes);
     assert!(s.get("capture_probability").is_none(), "{s}");
+    // The programme's statements: the one-sided Clopper–Pearson lower bound at 90 % (closed
+    // form with no failure, (1 − c)^(1/n); 0 with no success), the zero-failure run count
+    // ⌈ln(0.1)/ln(0.9973)⌉ = 852, and per requirement the held count from the verdicts.
+    let lb = s["success_probability_lower_bound"].as_f64().unwrap();
+    match successes {
+        0 => assert_eq!(lb, 0.0),
+        4 => assert!((lb - 0.1f64.powf(0.25)).abs() < 1e-15),
+        _ => assert!(lb > 0.0 && lb < successes as f64 / 4.0, "{lb}"),
+    }
+    assert!(
+        s["success_statement"]
+            .as_str()
+            .unwrap()
+            .starts_with("met with probability ≥ ")
+    );
+    assert_eq!(s["zero_failure_runs_needed"], 852);
+    assert_eq!(s["success_requirement_shown"], false);
+    let req = &s["requirements"][0];
+    assert_eq!(req["guarantee"], "clearance_5cm");
+    assert_eq!(req["held"], held);
+    assert_eq!(req["trials"], 4);
     assert_eq!(s["provenance"]["rpod_version"], env!("CARGO_PKG_VERSION"));
     // An unknown guarantee is a located error.
     std::fs::write(
