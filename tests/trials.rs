@@ -590,3 +590,80 @@ fn regress_envelope_plot_colours_by_a_column_and_draws_small_multiples() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// The requirements campaign's per-requirement output, on 2 short trials of
+/// `scenes/requirements_approach.ron` (60 s: the hold 100 m out, where the passive-safety,
+/// line-of-sight and closing-speed requirements are active): every guarantee of the scene has
+/// its verdict column; each row's verdict is the one the trial's own `summary.json` gives
+/// (`--keep-runs`); `summary.json`'s per-requirement counts are the column's counts and its
+/// lower bound is the Clopper–Pearson one (with no failure the closed form (1 − c)^(1/n)).
+#[test]
+fn val_requirements_campaign_reports_each_requirement() {
+    let d = tmp("requirements");
+    let scene = std::fs::canonicalize("scenes/requirements_approach.ron").unwrap();
+    let f = d.join("r.ron");
+    // The bundled campaign's dispersions, shortened.
+    let bundled = read(Path::new("scenes/trials/requirements_campaign.ron"));
+    let text = bundled
+        .replace(
+            "\"../requirements_approach.ron\"",
+            &format!("{:?}", scene.display().to_string()),
+        )
+        .replace("duration_s: 2000.0", "duration_s: 60.0")
+        .replace("count: 20", "count: 2");
+    assert_ne!(text, bundled);
+    std::fs::write(&f, &text).unwrap();
+    let out = d.join("out");
+    trials(&[
+        f.to_str().unwrap(),
+        "--keep-runs",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let csv_text = read(&out.join("trials.csv"));
+    let mut rdr = csv::Reader::from_reader(csv_text.as_bytes());
+    let h = rdr.headers().unwrap().clone();
+    let col = |n: &str| {
+        h.iter()
+            .position(|c| c == n)
+            .unwrap_or_else(|| panic!("{n}: {h:?}"))
+    };
+    let names = [
+        "kos_30m_corridor_20deg",
+        "closing_speed_gates",
+        "passive_safety_3m",
+        "docking_target_in_view",
+    ];
+    let rows: Vec<csv::StringRecord> = rdr.records().map(|r| r.unwrap()).collect();
+    assert_eq!(rows.len(), 2);
+    let s: serde_json::Value = serde_json::from_str(&read(&out.join("summary.json"))).unwrap();
+    for (i, name) in names.iter().enumerate() {
+        let mut held = 0;
+        for r in &rows {
+            let verdict = &r[col(&format!("guarantee.{name}.verdict"))];
+            let k: usize = r[col("index")].parse().unwrap();
+            let run: serde_json::Value =
+                serde_json::from_str(&read(&out.join(format!("runs/{k:06}/summary.json"))))
+                    .unwrap();
+            let g = run["guarantees"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|g| g["name"] == *name)
+                .unwrap_or_else(|| panic!("{name} in {run}"));
+            assert_eq!(g["verdict"], *verdict, "trial {k} {name}");
+            held += usize::from(verdict == "held");
+        }
+        let req = &s["requirements"][i];
+        assert_eq!(req["guarantee"], *name);
+        assert_eq!(req["held"], held, "{req}");
+        assert_eq!(req["trials"], 2);
+        let lb = req["probability_lower_bound"].as_f64().unwrap();
+        match held {
+            0 => assert_eq!(lb, 0.0),
+            2 => assert!((lb - 0.1f64.sqrt()).abs() < 1e-15, "{lb}"),
+            _ => assert!(lb > 0.0 && lb < 0.5, "{lb}"),
+        }
+    }
+    assert_eq!(s["zero_failure_runs_needed"], 852);
+}
