@@ -609,7 +609,7 @@ fn val_requirements_campaign_reports_each_requirement() {
             "\"../requirements_approach.ron\"",
             &format!("{:?}", scene.display().to_string()),
         )
-        .replace("duration_s: 2000.0", "duration_s: 60.0")
+        .replace("duration_s: 2300.0", "duration_s: 60.0")
         .replace("count: 20", "count: 2");
     assert_ne!(text, bundled);
     std::fs::write(&f, &text).unwrap();
@@ -631,7 +631,7 @@ fn val_requirements_campaign_reports_each_requirement() {
     let names = [
         "kos_30m_corridor_20deg",
         "closing_speed_gates",
-        "passive_safety_3m",
+        "passive_safety_2p5m",
         "docking_target_in_view",
     ];
     let rows: Vec<csv::StringRecord> = rdr.records().map(|r| r.unwrap()).collect();
