@@ -648,7 +648,15 @@ fn overrides(c: &Campaign, k: usize) -> Vec<String> {
         .parameters
         .iter()
         .zip(c.spec.values(k))
-        .map(|(p, v)| format!("{}={v:?}", p.path()))
+        .map(|(p, v)| {
+            // A whole number is written without a fraction, so that it also sets an integer
+            // field (a sensor's `seed`); RON reads it into a float field all the same.
+            if v.fract() == 0.0 && v.abs() < 9.0e15 {
+                format!("{}={}", p.path(), v as i64)
+            } else {
+                format!("{}={v:?}", p.path())
+            }
+        })
         .collect()
 }
 
