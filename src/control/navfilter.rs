@@ -445,6 +445,7 @@ mod tests {
         let m = nees.len() as f64;
         let sum: f64 = nees.iter().sum();
         let (lo, hi) = (chi2_quantile(0.005, 6.0 * m), chi2_quantile(0.995, 6.0 * m));
+        println!("NEES sum {sum:.1} in [{lo:.1}, {hi:.1}] ({m} runs)");
         assert!(
             lo < sum && sum < hi,
             "NEES sum {sum} outside [{lo}, {hi}] (6M = {})",
@@ -454,6 +455,7 @@ mod tests {
         let k = nis.len() as f64;
         let s: f64 = nis.iter().sum();
         let (lo, hi) = (chi2_quantile(0.005, 3.0 * k), chi2_quantile(0.995, 3.0 * k));
+        println!("NIS sum {s:.1} in [{lo:.1}, {hi:.1}] ({k} updates)");
         assert!(
             lo < s && s < hi,
             "NIS sum {s} outside [{lo}, {hi}] (3K = {})",
