@@ -83,6 +83,21 @@ pub struct MonitorView<'a> {
     pub pairs: &'a [PairDistance],
     /// The reference orbit at `t_s` (orbit scenes; `None` elsewhere).
     pub reference: Option<ReferenceView>,
+    /// Every `Rcs` actuator's jets and which of them fire over the current step (empty
+    /// without jets). The flags are constant over a step: the actuator sets them before the
+    /// physics step and they hold until the next one.
+    pub jets: &'a [JetsView<'a>],
+}
+
+/// One `Rcs` actuator's jets as the monitor sees them over the current step.
+#[derive(Debug, Clone, Copy)]
+pub struct JetsView<'a> {
+    /// The body the jets are on (scene order).
+    pub body: usize,
+    /// The layout (positions from the centre of mass, body frame).
+    pub jets: &'a [crate::actuation::rcs::JetSpec],
+    /// Per jet: it delivers a non-zero impulse in the current step.
+    pub firing: &'a [bool],
 }
 
 /// The reference orbit of an orbit scene at one instant: the ECI state of the world frame's
@@ -200,6 +215,29 @@ pub trait Guarantee: Send + Sync {
     /// the worst margin is known to within max(this, 0.1 % of its size) (default 1e-6).
     fn tolerance(&self) -> f64 {
         1e-6
+    }
+    /// What a `guarantee_violated` / `guarantee_restored` event names besides the margin
+    /// (e.g. the jet and the part of a plume keep-off), from the view where the change was
+    /// found; added to the event as `detail` (default: nothing).
+    fn detail(&self, view: &MonitorView) -> Option<serde_json::Value> {
+        let _ = view;
+        None
+    }
+    /// The margin also reads inputs that are constant over a step and change only at its
+    /// start (the jets firing in it, [`MonitorView::jets`]). The monitor then evaluates the
+    /// margin again at the step's start with this step's inputs — the sample there was taken
+    /// with the previous step's — so that the interval judgement starts from the margin that
+    /// holds on the step (default `false`).
+    fn step_inputs(&self) -> bool {
+        false
+    }
+    /// A lower bound of the margin over the whole current step known from the step's inputs
+    /// alone (e.g. no jet fires, so no plume can strike), or `None` (default). The monitor
+    /// takes it into its interval bound, so a margin that sits at such a floor is proven,
+    /// not left unresolved.
+    fn step_floor(&self, view: &MonitorView) -> Option<f64> {
+        let _ = view;
+        None
     }
 }
 

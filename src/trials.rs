@@ -220,8 +220,37 @@ impl Success {
     }
 
     /// Checks names and values against the base scene's guarantees; `(path, message)`.
-    fn check(&self, path: &str, guarantees: &[(String, String)]) -> Result<(), (String, String)> {
+    fn check(
+        &self,
+        path: &str,
+        guarantees: &[(String, String)],
+        has_docking: bool,
+    ) -> Result<(), (String, String)> {
+        use crate::control::generic::sequencer::DOCK_STATES;
         match self {
+            Success::Latched | Success::StateIn(_) if !has_docking => Err((
+                path.to_string(),
+                "a docking criterion needs the base scene's `docking` mechanism: it could never be met"
+                    .into(),
+            )),
+            Success::StateIn(v) if v.is_empty() => Err((
+                path.to_string(),
+                "`StateIn([])` names no state: it could never be met".into(),
+            )),
+            Success::StateIn(v) if v.iter().any(|s| !DOCK_STATES.contains(&s.as_str())) => {
+                let bad = v
+                    .iter()
+                    .find(|s| !DOCK_STATES.contains(&s.as_str()))
+                    .map(String::as_str)
+                    .unwrap_or_default();
+                Err((
+                    path.to_string(),
+                    format!(
+                        "unknown docking state {bad:?}; one of {}",
+                        DOCK_STATES.join(", ")
+                    ),
+                ))
+            }
             Success::GuaranteeHeld(n) if !guarantees.iter().any(|(g, _)| g == n) => Err((
                 path.to_string(),
                 format!(
@@ -243,9 +272,11 @@ impl Success {
                 }
                 v.iter()
                     .enumerate()
-                    .try_for_each(|(i, c)| c.check(&format!("{path}.0.{i}"), guarantees))
+                    .try_for_each(|(i, c)| {
+                        c.check(&format!("{path}.0.{i}"), guarantees, has_docking)
+                    })
             }
-            Success::Not(c) => c.check(&format!("{path}.0"), guarantees),
+            Success::Not(c) => c.check(&format!("{path}.0"), guarantees, has_docking),
             _ => Ok(()),
         }
     }
@@ -302,6 +333,19 @@ impl TrialsSpec {
                     let u2 = uniform01(self.seed, k, i, 1);
                     mean + sd * (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
                 }
+            })
+            .collect()
+    }
+
+    /// One value per parameter that stands for it when the campaign is checked: a grid's first
+    /// value, a uniform draw's midpoint, a normal draw's mean (independent of seed and order).
+    pub fn representative(&self) -> Vec<f64> {
+        self.parameters
+            .iter()
+            .map(|p| match p {
+                Parameter::Grid { values, .. } => values.first().copied().unwrap_or(0.0),
+                Parameter::Uniform { min, max, .. } => 0.5 * (min + max),
+                Parameter::Normal { mean, .. } => *mean,
             })
             .collect()
     }
@@ -543,7 +587,7 @@ pub struct Campaign {
 }
 
 /// Reads and checks a trials file; the base scene and every parameter path are checked by
-/// building trial 0.
+/// building the representative trial ([`TrialsSpec::representative`]) and every grid value.
 pub fn load(path: &Path) -> Result<Campaign, SceneError> {
     let file = path.display().to_string();
     let text = crate::scene::load::read_text(path, "trials file")?;
@@ -576,8 +620,36 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
         guarantees: Vec::new(),
         guarantee_judged: Vec::new(),
     };
-    // Trial 0 must build: catches bad paths and values now rather than in every worker.
-    let loaded = load_scene_file(&c.scene_path, &overrides(&c, 0))?;
+    // Checked now rather than in every worker, the same way whatever the order of the grid
+    // values or the seed: every grid value (each with the other parameters at their
+    // representative values: a grid's first value, a draw's centre) must make a valid scene —
+    // a grid value is the user's explicit choice, an invalid one a mistake; a random draw
+    // that makes an invalid scene is that trial's `INVALID` outcome. The representative
+    // trial must build (paths, references).
+    let repr = c.spec.representative();
+    for (i, p) in c.spec.parameters.iter().enumerate() {
+        let Parameter::Grid { values, .. } = p else {
+            continue;
+        };
+        for (j, v) in values.iter().enumerate() {
+            let mut vals = repr.clone();
+            vals[i] = *v;
+            if let Err(e) = load_scene_file(&c.scene_path, &overrides_of(&c.spec, &vals)) {
+                let at = format!("parameters.{i}.values.{j}");
+                let (line, col) = crate::scene::load::locate(&text, &at)
+                    .map(|(s, _)| crate::scene::load::line_col(&text, s))
+                    .unwrap_or((0, 0));
+                return Err(SceneError {
+                    file,
+                    line,
+                    col,
+                    field: at,
+                    message: format!("grid value {v:?} makes an invalid scene: {e}"),
+                });
+            }
+        }
+    }
+    let loaded = load_scene_file(&c.scene_path, &overrides_of(&c.spec, &repr))?;
     if let Some(d) = c.spec.duration_s {
         crate::scene::validate::check_steps("duration_s", d, loaded.scene.dt_s).map_err(
             |(_, m)| SceneError {
@@ -589,6 +661,7 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
             },
         )?;
     }
+    let has_docking = loaded.scene.docking.is_some();
     let sim = Simulation::new(&loaded)?;
     c.guarantees = sim
         .guarantees()
@@ -596,6 +669,10 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
         .iter()
         .map(|g| (g.name.clone(), g.unit.clone()))
         .collect();
+    // How each guarantee is judged is decided by the monitor on its first step (interval
+    // with a rate bound, samples only without): one step of trial 0 tells.
+    let mut sim = sim;
+    sim.step(1);
     c.guarantee_judged = sim
         .guarantees()
         .status
@@ -628,7 +705,7 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
             });
         }
     }
-    if let Err((p, m)) = c.spec.success.check("success", &c.guarantees) {
+    if let Err((p, m)) = c.spec.success.check("success", &c.guarantees, has_docking) {
         let (line, col) = crate::scene::load::locate(&text, &p)
             .map(|(s, _)| crate::scene::load::line_col(&text, s))
             .unwrap_or((0, 0));
@@ -644,11 +721,15 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
 }
 
 fn overrides(c: &Campaign, k: usize) -> Vec<String> {
-    c.spec
-        .parameters
+    overrides_of(&c.spec, &c.spec.values(k))
+}
+
+/// The `--set` overrides that give the parameters these values.
+fn overrides_of(spec: &TrialsSpec, values: &[f64]) -> Vec<String> {
+    spec.parameters
         .iter()
-        .zip(c.spec.values(k))
-        .map(|(p, v)| {
+        .zip(values)
+        .map(|(p, &v)| {
             // A whole number is written without a fraction, so that it also sets an integer
             // field (a sensor's `seed`); RON reads it into a float field all the same.
             if v.fract() == 0.0 && v.abs() < 9.0e15 {

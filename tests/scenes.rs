@@ -35,6 +35,18 @@ fn every_bundled_scene_passes_check() {
 /// orbits and far-away bodies (once reported as overlaps).
 const CORPUS: &[(&str, usize, &str, &str)] = &[
     (
+        "law_guarantee_name_comma",
+        73,
+        "controllers.0",
+        "guarantee name: a name is 1 to 64 characters",
+    ),
+    (
+        "law_guarantee_name_taken",
+        73,
+        "controllers.0",
+        "a guarantee named `clearance_20cm` already exists",
+    ),
+    (
         "min_impact_speed_1e300",
         65,
         "docking.contact.min_impact_speed_m_s",
@@ -197,6 +209,12 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "from 1 to 64, got 4000000000",
     ),
     (
+        "plume_unknown_part",
+        24,
+        "guarantees.arrays.parts.1",
+        "`solar_array_*` matches no part of `target`",
+    ),
+    (
         "port_name_space",
         53,
         "bodies.chaser.ports.0.name",
@@ -207,6 +225,30 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         54,
         "bodies.chaser.parts.bus.shape.segments",
         "from 8 to 1024",
+    ),
+    (
+        "sequencer_any_empty",
+        78,
+        "controllers.0.params.phases.0.exits.0.when",
+        "`Any([])` combines no condition: it can never hold",
+    ),
+    (
+        "sequencer_law_wrong_slot",
+        81,
+        "controllers.1.params.phases.0.translation",
+        "`Attitude` commands a torque only",
+    ),
+    (
+        "sequencer_range_negative",
+        78,
+        "controllers.0.params.phases.0.exits.0.when.0.1",
+        "`RangeBelow(-1)` can never hold",
+    ),
+    (
+        "sequencer_states_empty",
+        80,
+        "controllers.0.params.phases.1.exits.0.when",
+        "`DockingState([])` names no state",
     ),
     (
         "scene_name_newline",

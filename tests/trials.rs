@@ -326,9 +326,11 @@ fn regress_merge_refuses_mismatched_missing_and_duplicated_shards() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// A trial whose sampled values make an invalid scene is `INVALID` (its own outcome, not a
+/// A trial whose *drawn* values make an invalid scene is `INVALID` (its own outcome, not a
 /// failed run, not in the probability's denominator), with the scene error as its reason,
-/// quoted as CSV needs.
+/// quoted as CSV needs; which trials those are follows from the drawn values in `trials.csv`
+/// (a mass ≤ 0 kg is invalid). A *grid* value that makes an invalid scene is a located error
+/// at load, wherever it stands in the list (the check does not depend on the values' order).
 #[test]
 fn regress_invalid_trials_are_their_own_outcome() {
     let d = tmp("invalid");
@@ -337,8 +339,8 @@ fn regress_invalid_trials_are_their_own_outcome() {
     std::fs::write(
         &f,
         format!(
-            r#"Trials(name: "inv", scene: "{}", duration_s: 5.0, count: 3,
-    parameters: [Grid(path: "bodies.chaser.mass_kg", values: [300.0, -1.0, 250.0])],
+            r#"Trials(name: "inv", scene: "{}", duration_s: 5.0, count: 6,
+    parameters: [Uniform(path: "bodies.chaser.mass_kg", min: -300.0, max: 500.0)],
     success: NoCollision)"#,
             scene.display()
         ),
@@ -351,21 +353,54 @@ fn regress_invalid_trials_are_their_own_outcome() {
     let h = rdr.headers().unwrap().clone();
     let col = |n: &str| h.iter().position(|c| c == n).unwrap();
     let rows: Vec<csv::StringRecord> = rdr.records().map(|r| r.unwrap()).collect();
-    assert_eq!(rows.len(), 3);
-    assert_eq!(&rows[1][col("outcome")], "INVALID");
-    assert_eq!(&rows[1][col("success")], "false");
-    assert!(
-        rows[1][col("reason")].contains("field `bodies.chaser.mass_kg`: must be a positive number"),
-        "{:?}",
-        &rows[1]
-    );
+    assert_eq!(rows.len(), 6);
+    let mut invalid = 0;
+    for r in &rows {
+        let m: f64 = r[col("bodies.chaser.mass_kg")].parse().unwrap();
+        if m <= 0.0 {
+            invalid += 1;
+            assert_eq!(&r[col("outcome")], "INVALID", "{r:?}");
+            assert_eq!(&r[col("success")], "false");
+            assert!(
+                r[col("reason")]
+                    .contains("field `bodies.chaser.mass_kg`: must be a positive number"),
+                "{r:?}"
+            );
+        } else {
+            assert_ne!(&r[col("outcome")], "INVALID", "{r:?}");
+        }
+    }
+    // The seed's draws give both kinds (else the test would assert nothing of one of them).
+    assert!(invalid > 0 && invalid < 6, "{invalid}");
     let s: serde_json::Value = serde_json::from_str(&read(&out.join("summary.json"))).unwrap();
-    assert_eq!(s["invalid"], 1);
-    assert_eq!(s["valid_trials"], 2);
-    assert_eq!(s["successes"], 2);
+    assert_eq!(s["invalid"], invalid);
+    assert_eq!(s["valid_trials"], 6 - invalid);
+    assert_eq!(s["successes"], 6 - invalid);
     assert_eq!(s["success_probability"], 1.0);
     // NoCollision is not about docking: no capture probability.
     assert!(s.get("capture_probability").is_none(), "{s}");
+    // An invalid grid value: refused at load, located at the value, in any position.
+    for (values, j) in [("[300.0, -1.0, 250.0]", 1), ("[-1.0, 300.0, 250.0]", 0)] {
+        let g = d.join("grid.ron");
+        std::fs::write(
+            &g,
+            format!(
+                r#"Trials(name: "inv", scene: "{}", duration_s: 5.0, count: 3,
+    parameters: [Grid(path: "bodies.chaser.mass_kg", values: {values})],
+    success: NoCollision)"#,
+                scene.display()
+            ),
+        )
+        .unwrap();
+        let e = rpod::trials::load(&g).err().expect("refused");
+        assert_eq!(e.field, format!("parameters.0.values.{j}"), "{e}");
+        assert_eq!(e.line, 2, "{e}");
+        assert!(
+            e.message.contains("grid value -1.0 makes an invalid scene"),
+            "{e}"
+        );
+        assert!(e.message.contains("must be a positive number"), "{e}");
+    }
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -474,6 +509,38 @@ fn val_success_criteria_match_the_recorded_columns() {
     let e = rpod::trials::load(&f).err().expect("refused");
     assert_eq!((e.line, e.field.as_str()), (3, "success.0.0"), "{e}");
     assert!(e.message.contains("no guarantee `nope`"), "{e}");
+    // A docking state that does not exist, and no state at all: criteria that could never be
+    // met are located errors (not a campaign of 0 % success).
+    for (criterion, words) in [
+        ("StateIn([\"LATCHD\"])", "unknown docking state \"LATCHD\""),
+        ("StateIn([])", "names no state"),
+    ] {
+        std::fs::write(
+            &f,
+            text.replace("GuaranteeHeld(\"clearance_5cm\")", criterion),
+        )
+        .unwrap();
+        let e = rpod::trials::load(&f).err().expect("refused");
+        assert_eq!((e.line, e.field.as_str()), (3, "success.0.0"), "{e}");
+        assert!(e.message.contains(words), "{e}");
+    }
+    // A docking criterion over a scene without a docking mechanism.
+    let free = std::fs::canonicalize("scenes/free_drift.ron").unwrap();
+    std::fs::write(
+        &f,
+        text.replace(&scene.display().to_string(), &free.display().to_string())
+            .replace(
+                "GuaranteeHeld(\"clearance_5cm\"), MinClearance(0.01)",
+                "Latched",
+            ),
+    )
+    .unwrap();
+    let e = rpod::trials::load(&f).err().expect("refused");
+    assert_eq!(e.field, "success.0.0", "{e}");
+    assert!(
+        e.message.contains("needs the base scene's `docking`"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -656,6 +723,14 @@ fn val_requirements_campaign_reports_each_requirement() {
         }
         let req = &s["requirements"][i];
         assert_eq!(req["guarantee"], *name);
+        // The cone and the line of sight have rate bounds (judged on intervals); the gate and
+        // passive safety are judged at the samples.
+        let want = if i == 0 || i == 3 {
+            "interval"
+        } else {
+            "samples only"
+        };
+        assert_eq!(req["judged"], want, "{req}");
         assert_eq!(req["held"], held, "{req}");
         assert_eq!(req["trials"], 2);
         let lb = req["probability_lower_bound"].as_f64().unwrap();

@@ -319,3 +319,97 @@ fn val_sequencer_and_registry_errors_are_located() {
     );
     assert!(e.line > 0 && e.col > 0, "{e}");
 }
+
+/// A user law that commands both a force and a torque (declares `ForceAndTorque`, the default).
+#[derive(Debug, Clone, serde::Deserialize)]
+struct PushTwistParams {
+    /// Force along world x, N.
+    force_n: f64,
+    /// Torque about world z, N·m.
+    torque_nm: f64,
+}
+
+struct PushTwist(PushTwistParams);
+
+impl rpod::control::registry::LawParams for PushTwistParams {
+    fn build(
+        &self,
+        _ctx: &mut rpod::control::registry::LawContext,
+    ) -> Result<Box<dyn rpod::control::interface::Controller>, rpod::control::registry::BuildError>
+    {
+        Ok(Box::new(PushTwist(self.clone())))
+    }
+}
+
+impl rpod::control::interface::Controller for PushTwist {
+    fn command(
+        &mut self,
+        _obs: &rpod::control::interface::Observation,
+    ) -> rpod::control::interface::Command {
+        rpod::control::interface::Command::in_frame(
+            rpod::control::interface::Frame::World,
+            Vector3::new(self.0.force_n, 0.0, 0.0),
+            Vector3::new(0.0, 0.0, self.0.torque_nm),
+        )
+    }
+}
+
+/// A law declaring both force and torque in a Sequencer's translation slot: its force is
+/// flown and its torque is not, and one `sequencer_dropped` event says so. References (free
+/// space, no gravity): the momentum closed form v(t) = F t / m for the force, and conservation
+/// of angular momentum (the body stays at rest in rotation: ω = 0 exactly, no torque reaches
+/// it) for the dropped torque.
+#[test]
+fn val_sequencer_drops_the_unused_part_of_a_law_and_says_so() {
+    // Registration is process-wide; a second registration of the name (another test thread
+    // of this binary does not register it) would be an error, so only this test registers.
+    rpod::control::registry::register_law::<PushTwistParams>("PushTwistSeqTest")
+        .expect("a new name");
+    let (f, m) = (2.0, 100.0);
+    let text = format!(
+        r#"Scene(name: "drop", dt_s: 0.01, duration_s: 10.0, environment: FreeSpace,
+        bodies: [(name: "sc", role: Chaser, mass_kg: {m}, inertia_kg_m2: (xx: 10.0, yy: 20.0, zz: 30.0),
+                  initial: (pos_m: (0.0, 0.0, 0.0)),
+                  parts: [Bus(name: "bus", shape: Sphere(radius_m: 0.5))])],
+        controllers: [Sequencer(body: "sc", period_s: 0.1,
+            params: (phases: [
+                (name: "a", translation: Some(PushTwistSeqTest((force_n: {f}, torque_nm: 5.0))),
+                 exits: [(when: InPhaseFor(1.0), to: "b")]),
+                (name: "b", translation: Some(PushTwistSeqTest((force_n: {f}, torque_nm: 5.0)))),
+            ]))],
+    )"#
+    );
+    let loaded = load_scene_str(&text, "drop.ron", &[]).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = Simulation::new(&loaded).unwrap();
+    sim.step(300);
+    let b = sim.body("sc").unwrap();
+    let t = 3.0;
+    let v_want = f * t / m;
+    println!(
+        "dropped torque: v = {:.6} m/s (closed form {v_want:.6}), |ω| = {:e} rad/s",
+        b.vel_m_s.x,
+        b.omega_rad_s.norm()
+    );
+    // f32 rapier integrates the force: 1e-5 relative is its single-precision accumulation.
+    assert!(
+        (b.vel_m_s.x - v_want).abs() < 1e-5 * v_want,
+        "{}",
+        b.vel_m_s.x
+    );
+    assert_eq!(
+        b.omega_rad_s.norm(),
+        0.0,
+        "a dropped torque must not turn the body"
+    );
+    let dropped: Vec<_> = sim
+        .events()
+        .into_iter()
+        .filter(|e| e.kind == "sequencer_dropped")
+        .collect();
+    // One per phase and slot: phase a, then phase b.
+    assert_eq!(dropped.len(), 2, "{dropped:?}");
+    assert_eq!(dropped[0].data["phase"], "a");
+    assert_eq!(dropped[1].data["phase"], "b");
+    assert_eq!(dropped[0].data["slot"], "translation");
+    assert_eq!(dropped[0].t_s, 0.0);
+}

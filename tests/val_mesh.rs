@@ -503,7 +503,7 @@ fn regress_bad_mesh_input_gives_located_errors() {
     check(
         r#"Mesh(path: "nan.obj")"#,
         field,
-        &["component `a`", "vertex 2", "not finite"],
+        &["component \"a\"", "vertex 2", "not finite"],
     );
     std::fs::write(
         d.join("flat.obj"),
@@ -524,7 +524,22 @@ fn regress_bad_mesh_input_gives_located_errors() {
     check(
         r#"Mesh(path: "cube.obj", nodes: ["dish"])"#,
         field,
-        &["no component", "`dish`", "`c`"],
+        &["no component", "\"dish\"", "\"c\""],
+    );
+    // Two components become two colliders named after them: a name that breaks the one name
+    // rule (a comma, a quote, a space) is refused with the file and the component.
+    std::fs::write(
+        d.join("names.obj"),
+        boxes_obj(&[
+            ([0.0; 3], [1.0; 3], "ok"),
+            ([2.0, 0.0, 0.0], [3.0, 1.0, 1.0], "a,b \"c"),
+        ]),
+    )
+    .unwrap();
+    check(
+        r#"Mesh(path: "names.obj")"#,
+        field,
+        &["names.obj", "component \"a,b \\\"c\"", "a name is 1 to 64"],
     );
     std::fs::write(
         d.join("nobuf.gltf"),

@@ -4,6 +4,7 @@
 pub use actuator::{Actuator, ActuatorSpec};
 
 pub mod actuator;
+pub mod plume_load;
 pub mod pwpf;
 pub mod rcs;
 pub mod thrusters;

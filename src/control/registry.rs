@@ -302,6 +302,25 @@ impl LawContext<'_, '_> {
 pub trait LawParams: LawParamsClone + AsAny + fmt::Debug + Send + Sync {
     /// The controller, from its validated parameters.
     fn build(&self, ctx: &mut LawContext) -> Result<Box<dyn Controller>, BuildError>;
+    /// What the law's command carries. A `Sequencer` refuses a law in a slot it cannot fill
+    /// (a torque-only law as a phase's `translation`, a force-only law as its `attitude`);
+    /// for a law that declares both (the default), the part its slot does not use is dropped
+    /// and a `sequencer_dropped` event says so the first time it is non-zero in a phase.
+    fn commands(&self) -> Commands {
+        Commands::ForceAndTorque
+    }
+}
+
+/// What a law's [`Command`](crate::control::interface::Command) carries (see
+/// [`LawParams::commands`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Commands {
+    /// A force only (its torque is always zero).
+    Force,
+    /// A torque only (its force is always zero).
+    Torque,
+    /// Either or both (or valve states).
+    ForceAndTorque,
 }
 
 /// Cloning boxed parameters (implemented for every `LawParams + Clone`).

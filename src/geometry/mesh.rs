@@ -217,7 +217,7 @@ pub fn load_mesh_file(
                 let m = &mut merged[k];
                 let base = m.vertices_m.len() as u64;
                 if base + c.vertices_m.len() as u64 > u64::from(u32::MAX) {
-                    return Err(format!("{file}: component `{}`: too many vertices", c.name));
+                    return Err(format!("{file}: component {:?}: too many vertices", c.name));
                 }
                 m.vertices_m.extend(c.vertices_m);
                 m.triangles
@@ -232,7 +232,7 @@ pub fn load_mesh_file(
     let available = || {
         merged
             .iter()
-            .map(|c| format!("`{}`", c.name))
+            .map(|c| format!("{:?}", c.name))
             .collect::<Vec<_>>()
             .join(", ")
     };
@@ -245,7 +245,7 @@ pub fn load_mesh_file(
                 Some(c) => out.push(c.clone()),
                 None => {
                     return Err(format!(
-                        "{file}: no component (glTF node with a mesh, OBJ object) named `{n}`; \
+                        "{file}: no component (glTF node with a mesh, OBJ object) named {n:?}; \
                          the file has {}",
                         available()
                     ));
@@ -257,6 +257,19 @@ pub fn load_mesh_file(
     if selected.is_empty() {
         return Err(format!("{file}: the file holds no triangles"));
     }
+    // Several components become colliders named after them (contacts.csv, events, summaries):
+    // the one name rule of every scene name applies to a name from a file as well.
+    if selected.len() > 1 {
+        for c in &selected {
+            if let Some(p) = crate::scene::validate::name_problem(&c.name) {
+                return Err(format!(
+                    "{file}: component {:?} (glTF node, OBJ object) names a part: {p}; rename it \
+                     in the file, or select one component with `nodes` (then the part's name is used)",
+                    c.name
+                ));
+            }
+        }
+    }
     let total: u64 = selected.iter().map(|c| c.triangles.len() as u64).sum();
     if total > u64::from(max_triangles) {
         return Err(format!(
@@ -267,7 +280,7 @@ pub fn load_mesh_file(
         for v in &mut c.vertices_m {
             *v *= scale;
         }
-        check_component(c).map_err(|e| format!("{file}: component `{}`: {e}", c.name))?;
+        check_component(c).map_err(|e| format!("{file}: component {:?}: {e}", c.name))?;
         c.recentre();
     }
     Ok(MeshFile {

@@ -178,6 +178,11 @@ fn builtin() -> Vec<(&'static str, ParamsFn)> {
         "LineOfSight",
         de_params::<super::requirements::LineOfSightParams>,
     ));
+    #[cfg(feature = "sim")]
+    kinds.push((
+        "PlumeKeepOff",
+        de_params::<crate::sim::plume::PlumeKeepOffParams>,
+    ));
     kinds
 }
 

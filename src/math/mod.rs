@@ -5,5 +5,6 @@
 pub mod mrp;
 pub mod ode;
 pub mod polygon;
+pub mod rigid;
 pub mod rng;
 pub mod stats;

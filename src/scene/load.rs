@@ -170,8 +170,9 @@ pub fn read_text(path: &Path, what: &str) -> Result<String, SceneError> {
     use std::io::Read;
     let file = path.display().to_string();
     // A FIFO, socket or device is refused before anything is read (no hang, no endless read).
+    // (The error is reported after the file's name: the path is not repeated in the message.)
     let f = crate::report::fsio::open_regular(path, what)
-        .map_err(|e| whole_file_error(&file, e.to_string()))?;
+        .map_err(|e| whole_file_error(&file, e.to_string().replacen(&format!(" {file}"), "", 1)))?;
     let mut bytes = Vec::new();
     f.take(MAX_FILE_BYTES as u64 + 1)
         .read_to_end(&mut bytes)

@@ -99,6 +99,28 @@ pub fn name_problem(name: &str) -> Option<String> {
     None
 }
 
+/// Checks a name composed by a law or a user of scene names (`capture.p.e`): up to 4 names of
+/// the one name rule ([`name_problem`]) joined by `.`; `None` when it is fine. A `.` separates
+/// CSV column prefixes, so a composed name stays unambiguous in `trajectory.csv`.
+pub fn composed_name_problem(name: &str) -> Option<String> {
+    let parts: Vec<&str> = name.split('.').collect();
+    if parts.len() > 4 {
+        return Some(format!(
+            "a composed name is at most 4 names joined by `.`, got {} in {name:?}",
+            parts.len()
+        ));
+    }
+    parts.iter().find_map(|p| {
+        name_problem(p).map(|m| {
+            if parts.len() > 1 {
+                format!("in the composed name {name:?}: {m}")
+            } else {
+                m
+            }
+        })
+    })
+}
+
 fn check_name(path: String, name: &str) -> Check {
     match name_problem(name) {
         Some(m) => Err((path, m)),

@@ -617,24 +617,7 @@ impl Simulation {
                 "guarantees must be added before the first step and before recording starts".into(),
             );
         }
-        if let Some(p) = crate::scene::validate::name_problem(g.name()) {
-            return Err(format!("guarantee name: {p}"));
-        }
-        if self.guarantees().status.iter().any(|s| s.name == g.name()) {
-            return Err(format!("a guarantee named `{}` already exists", g.name()));
-        }
-        let unit = g.unit();
-        if unit.is_empty()
-            || unit.len() > 16
-            || !unit
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || "_/".contains(c))
-        {
-            return Err(format!(
-                "guarantee `{}`: unit {unit:?} must be 1 to 16 of A-Z a-z 0-9 _ /",
-                g.name()
-            ));
-        }
+        self.guarantees().admissible(g.as_ref())?;
         let w = self.app.world_mut();
         let n = w.resource::<Roster>().names.len();
         // The pairs it reads are tracked from now on (and measured again at t = 0).
@@ -661,6 +644,7 @@ impl Simulation {
         let t = w.resource::<Clock>().t_s();
         let m = {
             let mon = w.resource::<MonitorState>();
+            let jets = super::jets_view(w.get_resource::<super::controllers::ControllerHost>());
             let view = crate::guarantee::MonitorView {
                 t_s: t,
                 bodies: &mon.bodies,
@@ -672,6 +656,7 @@ impl Simulation {
                         vel_eci_m_s: v,
                     }
                 }),
+                jets: &jets,
             };
             g.margin_bracket(&view)
         };

@@ -940,6 +940,8 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
     {
         let mut g = world.resource_mut::<Guarantees>();
         for gu in law.guarantees() {
+            g.admissible(gu.as_ref())
+                .map_err(|e| format!("controller `{kind}`: {e}"))?;
             g.register(gu);
         }
     }

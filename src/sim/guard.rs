@@ -29,7 +29,10 @@
 //! how the physics step itself is written.
 
 use super::output::Diagnostics;
-use super::{BodyState, Clock, Guarantees, MonitorState, Roster, SimBody, SimStep, Stage, Wrench};
+use super::{
+    BodyState, Clock, EventLog, Guarantees, MonitorState, Roster, SimBody, SimStep, Stage, Wrench,
+};
+use crate::scene::validate::{MAX_ORBIT_RADIUS_M, MAX_RATE_DEG_S, MAX_SPEED_M_S};
 use bevy::ecs::schedule::SystemSet;
 use bevy::prelude::*;
 use std::fmt;
@@ -55,14 +58,32 @@ pub struct GuardTrip {
     pub quantity: String,
     /// The value found.
     pub value: f64,
+    /// The largest magnitude allowed for the quantity (the guard's [`GUARD_LIMIT`], a state's
+    /// scene limit, or the run's event limit).
+    pub limit: f64,
 }
 
 impl fmt::Display for GuardTrip {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let what = if self.value.is_finite() {
-            "overflowing"
-        } else {
+        if self.check == "events" {
+            return write!(
+                f,
+                "too many events at t = {} s (step {}): {} = {} (a run may raise at most {} \
+                 events and {} MiB of them: see docs/limits.md)",
+                self.t_s,
+                self.step,
+                self.quantity,
+                self.value,
+                MAX_EVENTS_PER_RUN,
+                MAX_EVENT_BYTES_PER_RUN >> 20
+            );
+        }
+        let what = if !self.value.is_finite() {
             "non-finite"
+        } else if self.limit < GUARD_LIMIT {
+            "out-of-range"
+        } else {
+            "overflowing"
         };
         write!(
             f,
@@ -72,11 +93,20 @@ impl fmt::Display for GuardTrip {
         if let Some(b) = &self.body {
             write!(f, "body `{b}` ")?;
         }
-        write!(
-            f,
-            "{} = {} (the guard allows finite values up to {GUARD_LIMIT:e} in magnitude)",
-            self.quantity, self.value
-        )
+        if self.limit < GUARD_LIMIT {
+            write!(
+                f,
+                "{} = {} (beyond the scene limit of {:e} in magnitude that every input of this \
+                 unit is held to)",
+                self.quantity, self.value, self.limit
+            )
+        } else {
+            write!(
+                f,
+                "{} = {} (the guard allows finite values up to {GUARD_LIMIT:e} in magnitude)",
+                self.quantity, self.value
+            )
+        }
     }
 }
 
@@ -103,8 +133,19 @@ fn clear(g: Res<Guard>) -> bool {
 }
 
 fn bad(v: f64) -> bool {
-    !(v.is_finite() && v.abs() <= GUARD_LIMIT)
+    beyond(v, GUARD_LIMIT)
 }
+
+fn beyond(v: f64, limit: f64) -> bool {
+    !(v.is_finite() && v.abs() <= limit)
+}
+
+/// Most events one run may raise (every kind counted).
+pub const MAX_EVENTS_PER_RUN: u64 = 1_000_000;
+
+/// Most bytes of event data (`events.jsonl`, and the run's event history in memory) one run may
+/// raise.
+pub const MAX_EVENT_BYTES_PER_RUN: u64 = 256 << 20;
 
 /// Adds the guard to an app whose `SimStep` schedule exists.
 pub fn install(app: &mut App) {
@@ -142,16 +183,32 @@ pub fn install(app: &mut App) {
     );
 }
 
-/// The first bad component of a named vector quantity.
-fn first_bad(quantity: &str, v: &nalgebra::Vector3<f64>) -> Option<(String, f64)> {
+/// The first bad component of a named vector quantity (beyond the guard's limit).
+fn first_bad(quantity: &str, v: &nalgebra::Vector3<f64>) -> Option<(String, f64, f64)> {
+    first_beyond(quantity, v, GUARD_LIMIT)
+}
+
+/// The first component of a named vector quantity beyond `limit` (or not finite).
+fn first_beyond(
+    quantity: &str,
+    v: &nalgebra::Vector3<f64>,
+    limit: f64,
+) -> Option<(String, f64, f64)> {
     ["x", "y", "z"]
         .iter()
         .zip(v.iter())
-        .find(|(_, x)| bad(**x))
-        .map(|(c, x)| (format!("{quantity}.{c}"), *x))
+        .find(|(_, x)| beyond(**x, limit))
+        .map(|(c, x)| (format!("{quantity}.{c}"), *x, limit))
 }
 
-fn trip(g: &mut Guard, clock: &Clock, check: &'static str, body: Option<&str>, q: (String, f64)) {
+/// Records the first trip: (quantity, value, limit).
+fn trip(
+    g: &mut Guard,
+    clock: &Clock,
+    check: &'static str,
+    body: Option<&str>,
+    q: (String, f64, f64),
+) {
     if g.trip.is_none() {
         g.trip = Some(GuardTrip {
             t_s: clock.t_s(),
@@ -160,6 +217,7 @@ fn trip(g: &mut Guard, clock: &Clock, check: &'static str, body: Option<&str>, q
             body: body.map(str::to_string),
             quantity: q.0,
             value: q.1,
+            limit: q.2,
         });
     }
 }
@@ -205,11 +263,15 @@ fn check_states(
         ]
         .into_iter()
         .find(|(_, v)| !v.is_finite())
-        .map(|(n, v)| (format!("attitude.{n}"), v));
-        let found = first_bad("pos_m", &s.pos_m)
-            .or_else(|| first_bad("vel_m_s", &s.vel_m_s))
+        .map(|(n, v)| (format!("attitude.{n}"), v, GUARD_LIMIT));
+        // The same limits as every scene input of the unit (`…_m`, `…_m_s`, `…_rad_s`): a
+        // state beyond them is outside what rpod was asked to simulate (a law flown to a
+        // multiple of the speed of light, a spin no structure survives).
+        let rate_limit_rad_s = MAX_RATE_DEG_S.to_radians();
+        let found = first_beyond("pos_m", &s.pos_m, MAX_ORBIT_RADIUS_M)
+            .or_else(|| first_beyond("vel_m_s", &s.vel_m_s, MAX_SPEED_M_S))
             .or(att)
-            .or_else(|| first_bad("omega_rad_s", &s.omega_rad_s));
+            .or_else(|| first_beyond("omega_rad_s", &s.omega_rad_s, rate_limit_rad_s));
         if let Some(q) = found {
             trip(&mut g, &clock, "state", Some(&b.name), q);
             return;
@@ -223,6 +285,7 @@ fn check_outputs(
     mon: Res<MonitorState>,
     gs: Res<Guarantees>,
     diag: Res<Diagnostics>,
+    log: Res<EventLog>,
     mut g: ResMut<Guard>,
 ) {
     for p in &mon.pairs {
@@ -234,6 +297,7 @@ fn check_outputs(
                     roster.names.get(p.b).map_or("?", String::as_str)
                 ),
                 p.distance_m,
+                GUARD_LIMIT,
             );
             trip(&mut g, &clock, "output", None, q);
             return;
@@ -244,6 +308,7 @@ fn check_outputs(
             let q = (
                 format!("guarantee.{}.margin_{}", s.name, s.unit),
                 s.last_margin,
+                GUARD_LIMIT,
             );
             trip(&mut g, &clock, "output", None, q);
             return;
@@ -251,8 +316,15 @@ fn check_outputs(
     }
     for (n, v) in diag.names.iter().zip(&diag.values) {
         if v.is_infinite() {
-            trip(&mut g, &clock, "output", None, (n.clone(), *v));
+            trip(&mut g, &clock, "output", None, (n.clone(), *v, GUARD_LIMIT));
             return;
         }
+    }
+    if log.count > MAX_EVENTS_PER_RUN {
+        let q = ("events raised".to_string(), log.count as f64, 0.0);
+        trip(&mut g, &clock, "events", None, q);
+    } else if log.bytes > MAX_EVENT_BYTES_PER_RUN {
+        let q = ("event bytes raised".to_string(), log.bytes as f64, 0.0);
+        trip(&mut g, &clock, "events", None, q);
     }
 }

@@ -284,7 +284,35 @@ pub struct Guarantees {
 }
 
 impl Guarantees {
-    /// Registers a guarantee.
+    /// Whether a guarantee from outside the scene's list (a law's, a user's) may join: its
+    /// name follows the one name rule of every scene name (or joins up to 4 such names with
+    /// `.`, as a law composes `capture.p.e` from body names) and is not taken (it becomes two
+    /// `trajectory.csv` columns and a key of `summary.json`), its unit is 1 to 16 of
+    /// A-Z a-z 0-9 _ /.
+    pub fn admissible(&self, g: &dyn Guarantee) -> Result<(), String> {
+        if let Some(p) = crate::scene::validate::composed_name_problem(g.name()) {
+            return Err(format!("guarantee name: {p}"));
+        }
+        if self.status.iter().any(|s| s.name == g.name()) {
+            return Err(format!("a guarantee named `{}` already exists", g.name()));
+        }
+        let unit = g.unit();
+        if unit.is_empty()
+            || unit.len() > 16
+            || !unit
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "_/".contains(c))
+        {
+            return Err(format!(
+                "guarantee `{}`: unit {unit:?} must be 1 to 16 of A-Z a-z 0-9 _ /",
+                g.name()
+            ));
+        }
+        Ok(())
+    }
+
+    /// Registers a guarantee (checked by [`Guarantees::admissible`] where it does not come
+    /// from the validated scene).
     pub fn register(&mut self, g: Box<dyn Guarantee>) {
         self.status.push(GuaranteeStatus::new(g.name(), g.unit()));
         self.list.push(g);
@@ -311,20 +339,42 @@ pub struct EventLog {
     pub pending: Vec<Event>,
     /// Total raised.
     pub count: u64,
+    /// Bytes of event data raised (JSON), for the run's limit
+    /// ([`guard::MAX_EVENT_BYTES_PER_RUN`]).
+    pub bytes: u64,
 }
+
+/// Most bytes of JSON one event's data may hold; a larger one (a law's huge diagnostic, a
+/// condition written out in full) is kept as its first [`EVENT_HEAD_CHARS`] characters with
+/// `truncated_bytes`, so one event cannot flood `events.jsonl`.
+pub const MAX_EVENT_DATA_BYTES: usize = 16 << 10;
+
+/// Characters kept of an event's data beyond [`MAX_EVENT_DATA_BYTES`].
+pub const EVENT_HEAD_CHARS: usize = 1024;
 
 impl EventLog {
     /// Raises an event.
     pub fn push(&mut self, t_s: f64, kind: &str, data: serde_json::Value) {
-        let data = match data {
+        let mut data = match data {
             serde_json::Value::Object(m) => m,
             _ => serde_json::Map::new(),
         };
-        self.pending.push(Event {
-            t_s,
-            kind: kind.to_string(),
-            data,
-        });
+        let len = serde_json::to_string(&data).map_or(0, |j| j.len());
+        if len > MAX_EVENT_DATA_BYTES {
+            let head: String = serde_json::to_string(&data)
+                .unwrap_or_default()
+                .chars()
+                .take(EVENT_HEAD_CHARS)
+                .collect();
+            data = serde_json::Map::new();
+            data.insert("truncated_bytes".into(), len.into());
+            data.insert("head".into(), head.into());
+        }
+        self.bytes += len.min(MAX_EVENT_DATA_BYTES) as u64 + kind.len() as u64 + 24;
+        // A kind is a short word (`contact_start`); a law's may be anything: at most 64
+        // characters are kept.
+        let kind: String = kind.chars().take(64).collect();
+        self.pending.push(Event { t_s, kind, data });
         self.count += 1;
     }
 }
@@ -403,35 +453,7 @@ fn advance_orbit(mut orbit: Option<ResMut<OrbitEnv>>, clock: Res<Clock>) {
     }
 }
 
-/// One RK4 step of Euler's equations J ω̇_b = τ_b − ω_b × J ω_b with quaternion kinematics
-/// q̇ = ½ q ⊗ (0, ω_b), in f64; the torque is held constant in the world frame over the step.
-/// Returns the new attitude (body → world) and world-frame angular velocity.
-pub fn rotate_rk4(
-    att: &UnitQuaternion<f64>,
-    omega_world: &Vector3<f64>,
-    torque_world: &Vector3<f64>,
-    j: &Matrix3<f64>,
-    j_inv: &Matrix3<f64>,
-    dt: f64,
-) -> (UnitQuaternion<f64>, Vector3<f64>) {
-    use nalgebra::Quaternion;
-    let f = |q: &Quaternion<f64>, w: &Vector3<f64>| {
-        let qn = UnitQuaternion::from_quaternion(*q);
-        let tau_b = qn.inverse() * torque_world;
-        let wd = j_inv * (tau_b - w.cross(&(j * w)));
-        let qd = q * Quaternion::from_imag(*w) * 0.5;
-        (qd, wd)
-    };
-    let q0 = att.into_inner();
-    let w0 = att.inverse() * omega_world;
-    let (k1q, k1w) = f(&q0, &w0);
-    let (k2q, k2w) = f(&(q0 + k1q * (dt / 2.0)), &(w0 + k1w * (dt / 2.0)));
-    let (k3q, k3w) = f(&(q0 + k2q * (dt / 2.0)), &(w0 + k2w * (dt / 2.0)));
-    let (k4q, k4w) = f(&(q0 + k3q * dt), &(w0 + k3w * dt));
-    let q1 = UnitQuaternion::from_quaternion(q0 + (k1q + k2q * 2.0 + k3q * 2.0 + k4q) * (dt / 6.0));
-    let w1 = w0 + (k1w + k2w * 2.0 + k3w * 2.0 + k4w) * (dt / 6.0);
-    (q1, q1 * w1)
-}
+pub use crate::math::rigid::rotate_rk4;
 
 /// rapier is stepped while the axis-aligned boxes of two bodies' colliders can be within this
 /// of each other during the step, m: rapier's broad phase pairs colliders whose boxes, grown by
@@ -1012,10 +1034,12 @@ fn check_guarantees(
     geo: Res<monitor::MonitorGeometry>,
     mut scratch: Local<monitor::DistanceScratch>,
     orbit: Option<Res<OrbitEnv>>,
+    host: Option<Res<controllers::ControllerHost>>,
 ) {
     use crate::geometry::bounds::{Bracket, Crossing, first_below, interval_lower_bound, minimize};
     use crate::guarantee::{IntervalFinding, Reads, ReferenceView};
     let t = clock.t_s();
+    let jets = jets_view(host.as_deref());
     let orbit = orbit.as_deref();
     let reference_at = |back_s: f64| {
         orbit.map(|o| {
@@ -1033,6 +1057,7 @@ fn check_guarantees(
         bodies: &mon.bodies,
         pairs: &mon.pairs,
         reference: reference_at(0.0),
+        jets: &jets,
     };
     let frame_motion = FrameMotion {
         motion: &motion,
@@ -1057,18 +1082,17 @@ fn check_guarantees(
         let st = &mut g.status[k];
         let Some(rate) = rate else {
             let m = m1.value;
-            match st.update(t, m) {
-                Some(true) => log.push(
-                    t,
-                    "guarantee_violated",
-                    serde_json::json!({"name": st.name, "margin": m, "unit": st.unit}),
-                ),
-                Some(false) => log.push(
-                    t,
-                    "guarantee_restored",
-                    serde_json::json!({"name": st.name, "margin": m, "unit": st.unit}),
-                ),
-                None => {}
+            if let Some(violated) = st.update(t, m) {
+                let kind = if violated {
+                    "guarantee_violated"
+                } else {
+                    "guarantee_restored"
+                };
+                let mut e = serde_json::json!({"name": st.name, "margin": m, "unit": st.unit});
+                if let Some(d) = inv.detail(&view) {
+                    e["detail"] = d;
+                }
+                log.push(t, kind, e);
             }
             g.last[k] = m1;
             continue;
@@ -1077,9 +1101,13 @@ fn check_guarantees(
         let t0 = t - dt;
         let m0 = g.last[k];
         let reads = inv.reads();
-        let mut eval = |tau: f64| -> Bracket {
+        // The bodies (and the pairs the guarantee reads) at τ into the step.
+        let mut fill = |tau: f64,
+                        bodies_at: &mut Vec<BodyView>,
+                        pairs_at: &mut Vec<PairDistance>,
+                        count: &mut monitor::QueryCount| {
             if bodies_at.len() != mon.bodies.len() {
-                bodies_at = mon.bodies.clone();
+                *bodies_at = mon.bodies.clone();
             }
             for (v, p) in bodies_at.iter_mut().zip(&motion.paths) {
                 let s = p.state_at(tau);
@@ -1099,7 +1127,7 @@ fn check_guarantees(
                     let p = &mon.pairs[*k];
                     (p.part_a, p.part_b)
                 });
-                let h = monitor::pair_at(&geo, &motion, i, j, tau, warm, &mut scratch, &mut count);
+                let h = monitor::pair_at(&geo, &motion, i, j, tau, warm, &mut scratch, count);
                 pairs_at.push(PairDistance {
                     a: i,
                     b: j,
@@ -1111,14 +1139,22 @@ fn check_guarantees(
                     t_s: t0 + tau,
                 });
             }
+        };
+        let mut eval = |tau: f64| -> Bracket {
+            fill(tau, &mut bodies_at, &mut pairs_at, &mut count);
             let v = MonitorView {
                 t_s: t0 + tau,
                 bodies: &bodies_at,
                 pairs: &pairs_at,
                 reference: reference_at(tau - dt),
+                jets: &jets,
             };
             inv.margin_bracket(&v)
         };
+        // A margin reading step inputs starts the step from its value under this step's
+        // inputs (the sample at t₀ was taken under the previous step's).
+        let was_ok = g.last[k].value >= 0.0;
+        let m0 = if inv.step_inputs() { eval(0.0) } else { m0 };
         let w = st.worst_margin;
         let abs_tol = inv.tolerance();
         let thr = |b: f64| {
@@ -1139,6 +1175,16 @@ fn check_guarantees(
             unresolved: false,
             evals: 0,
         };
+        if inv.step_inputs() && m0.value < finding.min_value {
+            // Only a margin re-evaluated at t₀ under this step's inputs can be below both the
+            // sample at t₁ and what the search finds: it holds just after t₀.
+            finding.min_value = m0.value;
+            finding.min_t_s = t0;
+            finding.inside = true;
+        }
+        // A floor the step's inputs give (see `Guarantee::step_floor`).
+        let floor = inv.step_floor(&view).unwrap_or(f64::NEG_INFINITY);
+        finding.lower = finding.lower.max(floor);
         if finding.lower < thr(m1.value) {
             let r = minimize(
                 dt,
@@ -1155,11 +1201,15 @@ fn check_guarantees(
                 finding.min_t_s = t0 + r.t;
                 finding.inside = true;
             }
-            finding.lower = r.lower;
+            finding.lower = r.lower.max(floor);
             finding.evals += r.evals;
         }
         let t_tol = dt * EVENT_TIME_TOL;
         let went_negative = finding.min_value < 0.0 || m1.value < 0.0;
+        if was_ok && m0.value < 0.0 {
+            // Violated from the step's start (the step's inputs changed there).
+            finding.first_violation_s = Some((t0, t0));
+        }
         if m0.value >= 0.0 && went_negative {
             let c = first_below(dt, m0, m1, rate, 0.0, t_tol, MAX_CROSSING_EVALS, &mut eval);
             finding.first_violation_s = match c {
@@ -1186,17 +1236,56 @@ fn check_guarantees(
             } else {
                 "guarantee_restored"
             };
-            log.push(
-                c.t_s,
-                kind,
-                serde_json::json!({"name": st.name, "margin": c.margin, "unit": st.unit,
-                    "found": if c.inside { "interval" } else { "sample" },
-                    "t_tol_s": c.t_tol_s, "t_step_s": t}),
+            let mut e = serde_json::json!({"name": st.name, "margin": c.margin, "unit": st.unit,
+                "found": if c.inside { "interval" } else { "sample" },
+                "t_tol_s": c.t_tol_s, "t_step_s": t});
+            // The detail where the new state is known to hold: the end of the time bracket.
+            // (Its queries are not counted: the counts report the judgement's cost.)
+            let tau = (c.t_s + c.t_tol_s - t0).clamp(0.0, dt);
+            fill(
+                tau,
+                &mut bodies_at,
+                &mut pairs_at,
+                &mut monitor::QueryCount::default(),
             );
+            let v = MonitorView {
+                t_s: t0 + tau,
+                bodies: &bodies_at,
+                pairs: &pairs_at,
+                reference: reference_at(tau - dt),
+                jets: &jets,
+            };
+            if let Some(d) = inv.detail(&v) {
+                e["detail"] = d;
+            }
+            log.push(c.t_s, kind, e);
         }
         g.last[k] = m1;
     }
     g.interval_queries += count.exact;
+}
+
+/// Every `Rcs` actuator's jets and their firing flags over the current step, for
+/// [`MonitorView::jets`] (a slot whose command frame was missing fires nothing).
+pub(crate) fn jets_view(
+    host: Option<&controllers::ControllerHost>,
+) -> Vec<crate::guarantee::JetsView<'_>> {
+    let Some(host) = host else {
+        return Vec::new();
+    };
+    host.slots
+        .iter()
+        .filter_map(|s| match &s.actuator.spec {
+            crate::actuation::actuator::ActuatorSpec::Rcs { jets, .. } => {
+                Some(crate::guarantee::JetsView {
+                    body: s.body,
+                    jets,
+                    firing: s.report.valves.as_deref().unwrap_or(&[]),
+                })
+            }
+            _ => None,
+        })
+        .collect()
 }
 
 /// Adds the pipeline to an app: the `SimStep` schedule with its chained stages and the systems

@@ -30,7 +30,7 @@
 use crate::control::interface::{
     ActuationReport, Command, Controller, DiagnosticsAt, Frame, Observation, port_axes,
 };
-use crate::control::registry::{BuildError, LawContext, LawParams};
+use crate::control::registry::{BuildError, Commands, LawContext, LawParams};
 use crate::orbit::lvlh::{LocalFrame, LocalFrameKind};
 use crate::scene::AttitudeSpec;
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
@@ -80,6 +80,10 @@ pub struct AttitudeParams {
 }
 
 impl LawParams for AttitudeParams {
+    fn commands(&self) -> Commands {
+        Commands::Torque
+    }
+
     fn build(&self, ctx: &mut LawContext) -> Result<Box<dyn Controller>, BuildError> {
         ctx.no_sensor(
             "Attitude",

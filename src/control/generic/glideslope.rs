@@ -36,7 +36,7 @@ use super::{TranslationFeedback, TranslationGains, target_mean_motion, unique_pr
 use crate::control::interface::{
     ActuationReport, Command, Controller, DiagnosticsAt, Frame, Observation,
 };
-use crate::control::registry::{BuildError, LawContext, LawParams};
+use crate::control::registry::{BuildError, Commands, LawContext, LawParams};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -146,6 +146,10 @@ pub struct GlideslopeParams {
 }
 
 impl LawParams for GlideslopeParams {
+    fn commands(&self) -> Commands {
+        Commands::Force
+    }
+
     fn build(&self, ctx: &mut LawContext) -> Result<Box<dyn Controller>, BuildError> {
         if !(self.to_range_m.is_finite() && (0.0..1e9).contains(&self.to_range_m)) {
             return Err(BuildError::at(

@@ -29,7 +29,7 @@ use super::{TranslationFeedback, TranslationGains, target_mean_motion, unique_pr
 use crate::control::interface::{
     ActuationReport, Command, Controller, DiagnosticsAt, Frame, MeasuredFrame, Observation,
 };
-use crate::control::registry::{BuildError, LawContext, LawParams};
+use crate::control::registry::{BuildError, Commands, LawContext, LawParams};
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -219,6 +219,10 @@ pub fn point_state(obs: &Observation, point: ControlPoint, sensed: bool) -> Opti
 }
 
 impl LawParams for HillPdParams {
+    fn commands(&self) -> Commands {
+        Commands::Force
+    }
+
     fn build(&self, ctx: &mut LawContext) -> Result<Box<dyn Controller>, BuildError> {
         let finite = |v: &[f64; 3]| v.iter().all(|x| x.is_finite() && x.abs() < 1e9);
         if !finite(&self.hold_m) {

@@ -27,13 +27,17 @@
 //! # Checked when the scene loads (located errors)
 //! Phase names unique and non-empty; every exit names an existing phase; only the last phase
 //! may have no exits (any other could never be left); every phase but the first is the target
-//! of some exit (else it could never be entered); numbers finite; `MarginBelow` names a
+//! of some exit (else it could never be entered); numbers finite; no condition that can never
+//! hold or always holds where a choice was meant (`Any([])`, `All([])`, `DockingState([])`, a
+//! range ≤ 0 m below or < 0 m above, a negative time or one beyond the scene's duration,
+//! `Settled` with a bound ≤ 0); `MarginBelow` names a
 //! guarantee of the scene; `DockingState` names states of a scene with a docking mechanism.
 
 use crate::control::interface::{
     ActuationReport, Command, Controller, ControllerEvent, DiagnosticsAt, Observation,
 };
-use crate::control::registry::{BuildError, LawContext, LawParams, LawParamsSpec};
+use crate::control::registry::{BuildError, Commands, LawContext, LawParams, LawParamsSpec};
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 /// When a phase is left.
@@ -146,6 +150,10 @@ fn check_condition(
     if depth > 16 {
         return Err(BuildError::at(field, "conditions nest more than 16 deep"));
     }
+    // A condition that can never hold (or always holds where a choice was meant) is a scene
+    // error: the phase would never be left, or the condition says nothing.
+    let never = |why: String| -> Result<(), BuildError> { Err(BuildError::at(field, why)) };
+    let duration_s = ctx.build.scene.duration_s;
     match c {
         Condition::RangeBelow(v) | Condition::RangeAbove(v) => {
             num(*v, "the range (m)")?;
@@ -154,6 +162,19 @@ fn check_condition(
                     format!("controllers.{}.target", ctx.build.index),
                     "range conditions need the entry's `target`",
                 ));
+            }
+            match c {
+                Condition::RangeBelow(_) if *v <= 0.0 => {
+                    return never(format!(
+                        "a range is ≥ 0 m, so `RangeBelow({v})` can never hold"
+                    ));
+                }
+                Condition::RangeAbove(_) if *v < 0.0 => {
+                    return never(format!(
+                        "a range is ≥ 0 m, so `RangeAbove({v})` always holds (use `InPhaseFor(0.0)` to leave at once)"
+                    ));
+                }
+                _ => {}
             }
         }
         Condition::PortRangeBelow(v) => {
@@ -164,8 +185,25 @@ fn check_condition(
                     "`PortRangeBelow` needs the entry's ports (or a docking mechanism between the two bodies)",
                 ));
             }
+            if *v <= 0.0 {
+                return never(format!(
+                    "a range is ≥ 0 m, so `PortRangeBelow({v})` can never hold"
+                ));
+            }
         }
-        Condition::InPhaseFor(v) | Condition::TimeAbove(v) => num(*v, "the time (s)")?,
+        Condition::InPhaseFor(v) | Condition::TimeAbove(v) => {
+            num(*v, "the time (s)")?;
+            if *v < 0.0 {
+                return never(format!(
+                    "a time is ≥ 0 s, so a negative time ({v} s) always holds (use `InPhaseFor(0.0)` to leave at once)"
+                ));
+            }
+            if *v > duration_s {
+                return never(format!(
+                    "{v} s is beyond the scene's duration ({duration_s} s): the condition can never hold"
+                ));
+            }
+        }
         Condition::MarginBelow(name, v) => {
             num(*v, "the margin")?;
             if !ctx.build.scene.guarantees.iter().any(|g| g.name() == name) {
@@ -182,6 +220,9 @@ fn check_condition(
                     "`DockingState` needs the scene's `docking` mechanism",
                 ));
             }
+            if states.is_empty() {
+                return never("`DockingState([])` names no state: it can never hold".into());
+            }
             if let Some(s) = states.iter().find(|s| !DOCK_STATES.contains(&s.as_str())) {
                 return Err(BuildError::at(
                     field,
@@ -195,8 +236,20 @@ fn check_condition(
         Condition::Settled { pos_m, vel_m_s } => {
             num(*pos_m, "pos_m")?;
             num(*vel_m_s, "vel_m_s")?;
+            if *pos_m <= 0.0 || *vel_m_s <= 0.0 {
+                return never(format!(
+                    "an error's norm is ≥ 0, so `Settled` below pos_m = {pos_m} m, vel_m_s = {vel_m_s} m/s can never hold: both must be > 0"
+                ));
+            }
         }
         Condition::All(v) | Condition::Any(v) => {
+            if v.is_empty() {
+                return never(if matches!(c, Condition::Any(_)) {
+                    "`Any([])` combines no condition: it can never hold".into()
+                } else {
+                    "`All([])` combines no condition: it always holds (use `InPhaseFor(0.0)` to leave at once)".into()
+                });
+            }
             for (i, c) in v.iter().enumerate() {
                 check_condition(c, &format!("{field}.0.{i}"), ctx, depth + 1)?;
             }
@@ -221,17 +274,10 @@ impl LawParams for SequencerParams {
         entered[0] = true;
         for (i, p) in self.phases.iter().enumerate() {
             let f = format!("phases.{i}");
-            if p.name.is_empty()
-                || p.name.len() > 64
-                || !p
-                    .name
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '_')
-            {
-                return Err(BuildError::at(
-                    format!("{f}.name"),
-                    "a phase name is 1–64 letters, digits or `_`",
-                ));
+            // The one name rule of every scene name (phase names become column names and
+            // event fields).
+            if let Some(problem) = crate::scene::validate::name_problem(&p.name) {
+                return Err(BuildError::at(format!("{f}.name"), problem));
             }
             if names[..i].contains(&p.name.as_str()) {
                 return Err(BuildError::at(
@@ -296,6 +342,27 @@ impl LawParams for SequencerParams {
         let prefix = super::unique_prefix(ctx, "seq");
         let mut phases = Vec::with_capacity(self.phases.len());
         for (i, p) in self.phases.iter().enumerate() {
+            for (spec, field, refused, carries) in [
+                (
+                    &p.translation,
+                    "translation",
+                    Commands::Torque,
+                    "a torque only",
+                ),
+                (&p.attitude, "attitude", Commands::Force, "a force only"),
+            ] {
+                if let Some(s) = spec.as_ref().filter(|s| s.params.commands() == refused) {
+                    return Err(BuildError::at(
+                        format!("phases.{i}.{field}"),
+                        format!(
+                            "`{}` commands {carries}: as the phase's `{field}` law nothing of its \
+                             command would be used (translation laws give the force, attitude laws \
+                             the torque)",
+                            s.kind
+                        ),
+                    ));
+                }
+            }
             let build = |ctx: &mut LawContext, spec: &Option<LawParamsSpec>, field: &str| {
                 spec.as_ref()
                     .map(|s| {
@@ -320,6 +387,7 @@ impl LawParams for SequencerParams {
                 exits: p.exits.clone(),
                 release_docking: p.release_docking,
                 cols: (0, 0, 0),
+                dropped: (false, false),
             });
         }
         // Column layout: [phase index] then each phase's translation and attitude columns.
@@ -350,6 +418,8 @@ struct RunningPhase {
     release_docking: bool,
     /// (first column, translation columns, attitude columns).
     cols: (usize, usize, usize),
+    /// Whether the translation (.0) / attitude (.1) law's unused part was reported dropped.
+    dropped: (bool, bool),
 }
 
 /// The running `Sequencer`.
@@ -419,7 +489,11 @@ impl Controller for Sequencer {
                 .expect("checked when built");
             self.active = to;
             self.entered_s = Some(obs.t_s);
-            let reason = format!("{:?}", e.when);
+            // The condition as written, at most 256 characters (a condition may be large).
+            let mut reason = format!("{:?}", e.when);
+            if reason.chars().count() > 256 {
+                reason = reason.chars().take(255).chain(['…']).collect();
+            }
             self.events.push(ControllerEvent {
                 kind: "phase".into(),
                 data: serde_json::json!({"sequencer": self.prefix, "from": from,
@@ -435,15 +509,32 @@ impl Controller for Sequencer {
         }
         let ph = &mut self.phases[self.active];
         let mut cmd = Command::zero();
-        if let Some((_, law)) = ph.translation.as_mut() {
+        let mut dropped = Vec::new();
+        if let Some((kind, law)) = ph.translation.as_mut() {
             let c = law.command(obs);
             cmd.force_n = c.force_n;
             cmd.force_frame = c.force_frame;
+            if !ph.dropped.0 && (c.torque_nm != Vector3::zeros() || c.valves.is_some()) {
+                ph.dropped.0 = true;
+                dropped.push(("translation", kind.clone(), "torque_nm and valves"));
+            }
         }
-        if let Some((_, law)) = ph.attitude.as_mut() {
+        if let Some((kind, law)) = ph.attitude.as_mut() {
             let c = law.command(obs);
             cmd.torque_nm = c.torque_nm;
             cmd.torque_frame = c.torque_frame;
+            if !ph.dropped.1 && (c.force_n != Vector3::zeros() || c.valves.is_some()) {
+                ph.dropped.1 = true;
+                dropped.push(("attitude", kind.clone(), "force_n and valves"));
+            }
+        }
+        for (slot, law, what) in dropped {
+            self.events.push(ControllerEvent {
+                kind: "sequencer_dropped".into(),
+                data: serde_json::json!({"sequencer": self.prefix, "phase": ph.name,
+                    "slot": slot, "law": law, "dropped": what,
+                    "why": "a phase's translation law gives only the force, its attitude law only the torque"}),
+            });
         }
         cmd
     }
