@@ -369,6 +369,23 @@ fn trials(cmd: TrialsCmd) -> ExitCode {
                     ci[1].as_f64().unwrap_or(f64::NAN),
                     v["valid_trials"]
                 );
+                out!("success: {}", v["success_statement"].as_str().unwrap_or(""));
+                if let Some(n) = v["zero_failure_runs_needed"].as_u64() {
+                    out!(
+                        "required probability {} at confidence {}: {n} failure-free runs needed; shown by these trials: {}",
+                        v["required_probability"],
+                        v["confidence"],
+                        v["success_requirement_shown"]
+                    );
+                }
+                for r in v["requirements"].as_array().into_iter().flatten() {
+                    out!(
+                        "requirement {} ({}): {}",
+                        r["guarantee"].as_str().unwrap_or(""),
+                        r["judged"].as_str().unwrap_or(""),
+                        r["statement"].as_str().unwrap_or("")
+                    );
+                }
             }
             out!(
                 "wrote {}/{{trials.csv, summary.json, capture_envelope.png, capture_envelope.svg}}",

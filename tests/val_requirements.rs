@@ -276,6 +276,31 @@ fn val_passive_safety_violated_when_the_drift_window_reaches_the_closest_approac
     );
 }
 
+/// `active_from_range_m`: the same fly-by as above, required only from 40 m out. The chaser
+/// starts at range √(20² + 30²) = 36.06 m: nothing is required, the margin is 40 − 36.06 m;
+/// with the threshold at 30 m the closed-form margin of the fly-by applies again.
+#[test]
+fn val_passive_safety_applies_only_from_its_range() {
+    let n = (MU_EARTH_M3_S2 / 7.0e6_f64.powi(3)).sqrt();
+    let (x0, y0, r) = (20.0, 30.0, 5.0);
+    let margin = |from: f64| {
+        let sim = sim_of(&orbit_scene(
+            (x0, y0, 0.0, -1.5 * n * x0),
+            &format!(
+                r#"PassiveSafety(name: "ps", body: "chaser", around: "target", radius_m: Some({r}),
+                 horizon_s: 2000.0, grid_s: 5.0, active_from_range_m: Some({from}))"#
+            ),
+            1.0,
+            false,
+        ));
+        sim.guarantees().status[0].last_margin
+    };
+    assert!((margin(40.0) - (40.0 - (x0 * x0 + y0 * y0).sqrt())).abs() < 1e-9);
+    let m = margin(30.0);
+    let tol = drift_tolerance(x0, y0, n, 2000.0, 5.0);
+    assert!(m <= x0 - r && m >= x0 - r - tol, "{m}");
+}
+
 #[test]
 fn passive_safety_with_j2_is_a_located_error() {
     let e = load_scene_str(
