@@ -2,12 +2,15 @@
 //! the same run — the bare rapier step of the same bodies and colliders, and one bare parry
 //! distance query per body pair (the least any exact full-geometry monitor must do) — and the
 //! swarm table: N tumbling winged spacecraft in orbit ([`swarm_scene`]), pipeline against bare
-//! rapier, and the exact queries per step, for N = 2 … 256.
+//! rapier, and the exact queries per step, for N = 2 … 256; and the cliffs ([`run_cliffs`]):
+//! the cases that used to run 5–50× slower than their plain scene, as ratios to it measured in
+//! the same run.
 
 use crate::scene::{LoadedScene, SceneError, load_scene_file, load_scene_str};
 use crate::sim::{Physics, Simulation};
 use std::fmt::Write;
 use std::path::Path;
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// One scene measured: wall seconds for `steps` steps of each.
@@ -255,5 +258,130 @@ pub fn run_swarm(sizes: &[usize], steps: u64) -> Result<String, SceneError> {
             a.0, b.0
         );
     }
+    Ok(r)
+}
+
+/// Steps/s of the whole pipeline over `steps` steps after `skip_steps` untimed ones, and the
+/// docking state at the end of the window.
+pub fn window_rate(
+    loaded: &LoadedScene,
+    skip_steps: u64,
+    steps: u64,
+) -> Result<(f64, Option<&'static str>), SceneError> {
+    let mut sim = Simulation::new(loaded)?;
+    sim.step(skip_steps);
+    let t0 = Instant::now();
+    sim.step(steps);
+    let wall_s = t0.elapsed().as_secs_f64();
+    Ok((steps as f64 / wall_s, sim.docking_state()))
+}
+
+/// Steps/s of bare rapier on the scene's world (the floor of the rows of [`run_cliffs`]).
+fn rapier_rate(loaded: &LoadedScene, steps: u64) -> Result<f64, SceneError> {
+    let fresh = Simulation::new(loaded)?;
+    let mut world = {
+        let mut app = fresh.app;
+        app.world_mut()
+            .remove_resource::<Physics>()
+            .expect("physics")
+            .world
+    };
+    let t0 = Instant::now();
+    for _ in 0..steps {
+        world.step();
+    }
+    Ok(steps as f64 / t0.elapsed().as_secs_f64())
+}
+
+/// The attitude law of the cliff cases, as a `--set controllers=…` value: quaternion feedback
+/// on the chaser (1 N·m per axis) toward `mode`.
+fn chaser_attitude_law(mode: &str) -> String {
+    format!(
+        "controllers=[Attitude(body: \"chaser\", target: \"target\", period_s: 0.1, \
+         actuator: Saturated(max_force_n: (0.0, 0.0, 0.0), max_torque_nm: (1.0, 1.0, 1.0)), \
+         params: (mode: {mode}, natural_frequency_rad_s: 0.3, damping_ratio: 0.9))]"
+    )
+}
+
+/// The cliffs of issue 29, each a ratio of steps/s to its plain case measured in the same run,
+/// with bare rapier on the plain scene's world as the floor, as a Markdown table:
+///
+/// * spin: `docking_aligned` with the chaser spinning at 100 rad/s about its docking axis, the
+///   first 3 s (the cone 0.50–0.44 m above the seat) and 1 s from 15 s (0.20–0.18 m), against
+///   the same window without spin (goal ≥ 0.2);
+/// * a law through the latch: `docking_aligned` with an `Attitude` law on the chaser holding
+///   yaw 183° (3° off the port axis: it latches at 24.8 s and the law then pushes on the
+///   stack), 20 s from t = 26 s, against the same window latched without a law (goal ≥ 0.5);
+/// * a law in contact: the same with `AlignPort` (the latch is refused at 24.4 s, relative
+///   rate 0.83°/s, the cone rebounds and reseats under the law), same window, against the
+///   latched plain case;
+/// * `free_drift` against bare rapier on its world (goal: 5× Basilisk, see
+///   `benches/basilisk_free_drift.py`).
+///
+/// `scenes` is the folder holding `docking_aligned.ron` and `free_drift.ron`.
+pub fn run_cliffs(scenes: &Path, steps: u64) -> Result<String, SceneError> {
+    let aligned = scenes.join("docking_aligned.ron");
+    let load = |p: &PathBuf, sets: &[String]| load_scene_file(p, sets);
+    let plain = load(&aligned, &[])?;
+    let spin = load(
+        &aligned,
+        &["bodies.chaser.initial.rate_body_deg_s=(5729.5779513, 0.0, 0.0)".to_string()],
+    )?;
+    let law_latched = load(
+        &aligned,
+        &[chaser_attitude_law(
+            "Inertial(attitude: EulerZyxDeg(yaw: 183.0, pitch: 0.0, roll: 0.0))",
+        )],
+    )?;
+    let law_contact = load(&aligned, &[chaser_attitude_law("AlignPort")])?;
+    let mut r = String::new();
+    let _ = writeln!(
+        r,
+        "| case | window | steps/s | plain steps/s | ratio | goal | docking state | bare rapier steps/s |"
+    );
+    let _ = writeln!(r, "|---|---|---|---|---|---|---|---|");
+    let floor = rapier_rate(&plain, 2000)?;
+    let state = |s: Option<&str>| s.unwrap_or("-").to_string();
+    // Spin: the first 3 s, and 1 s from 15 s (the cone 0.20–0.18 m above the seat).
+    for (skip, n, label) in [(10, 300, "0.1–3.1 s"), (1500, 100, "15–16 s")] {
+        let (p, ps) = window_rate(&plain, skip, n)?;
+        let (x, xs) = window_rate(&spin, skip, n)?;
+        let _ = writeln!(
+            r,
+            "| spin 100 rad/s about the docking axis | {label} | {x:.0} | {p:.0} | {:.3} | ≥ 0.2 | {} / {} | {floor:.0} |",
+            x / p,
+            state(xs),
+            state(ps)
+        );
+    }
+    // A law through the latch, and in contact.
+    let (p, ps) = window_rate(&plain, 2600, 2000)?;
+    let (x, xs) = window_rate(&law_latched, 2600, 2000)?;
+    let _ = writeln!(
+        r,
+        "| Attitude law (yaw 183°) through the latch | 26–46 s | {x:.0} | {p:.0} | {:.3} | ≥ 0.5 | {} / {} | {floor:.0} |",
+        x / p,
+        state(xs),
+        state(ps)
+    );
+    let (x, xs) = window_rate(&law_contact, 2600, 2000)?;
+    let _ = writeln!(
+        r,
+        "| AlignPort law in contact (latch refused at 24.4 s) | 26–46 s | {x:.0} | {p:.0} | {:.3} | – | {} / {} | {floor:.0} |",
+        x / p,
+        state(xs),
+        state(ps)
+    );
+    // free_drift against its floor.
+    let fd = load_scene_file(&scenes.join("free_drift.ron"), &[])?;
+    let m = measure(&fd, steps.max(1000))?;
+    let _ = writeln!(
+        r,
+        "| free_drift (pipeline vs bare rapier) | {} steps | {:.0} | – | {:.3} of bare rapier | 5× Basilisk | – | {:.0} |",
+        m.steps,
+        m.steps as f64 / m.pipeline_s,
+        m.rapier_s / m.pipeline_s,
+        m.steps as f64 / m.rapier_s
+    );
     Ok(r)
 }

@@ -216,6 +216,14 @@ pub trait Guarantee: Send + Sync {
     fn tolerance(&self) -> f64 {
         1e-6
     }
+    /// A value the margin can never go below, whatever the motion (default −∞: none). A
+    /// margin built on a distance has one (a distance is never negative): a lower bound
+    /// below it is raised to it, and once the worst margin is within the refinement
+    /// tolerance of it the interval search has nothing left to prove (no refinement while two
+    /// bodies stay in contact, latched or not).
+    fn margin_floor(&self) -> f64 {
+        f64::NEG_INFINITY
+    }
     /// What a `guarantee_violated` / `guarantee_restored` event names besides the margin
     /// (e.g. the jet and the part of a plume keep-off), from the view where the change was
     /// found; added to the event as `detail` (default: nothing).
@@ -272,6 +280,10 @@ impl Guarantee for MinDistance {
     /// The full-geometry distance changes at most at |v_a − v_b| + Ω_a R_a + Ω_b R_b.
     fn rate_bound(&self, m: &dyn MotionBounds) -> Option<f64> {
         Some(m.distance_rate_bound(self.a, self.b))
+    }
+    /// The distance is never negative: the margin is at least −`min_m`.
+    fn margin_floor(&self) -> f64 {
+        -self.min_m
     }
     fn reads(&self) -> Reads {
         Reads::Pairs(vec![(self.a.min(self.b), self.a.max(self.b))])

@@ -120,6 +120,11 @@ enum Cmd {
         /// Instead of the scene: the swarm table for these body counts (e.g. 2,4,8,…,256).
         #[arg(long, value_delimiter = ',')]
         swarm: Vec<usize>,
+        /// Instead of the scene: the cliffs (a spinning chaser, an attitude law through the
+        /// latch and in contact, free_drift against bare rapier), each as a ratio to its plain
+        /// case in the same run; SCENE's folder must hold docking_aligned.ron and free_drift.ron.
+        #[arg(long)]
+        cliffs: bool,
     },
     /// Write an N-body swarm scene (tumbling winged spacecraft on a 20 m grid in orbit).
     Swarm {
@@ -364,6 +369,23 @@ fn trials(cmd: TrialsCmd) -> ExitCode {
                     ci[1].as_f64().unwrap_or(f64::NAN),
                     v["valid_trials"]
                 );
+                out!("success: {}", v["success_statement"].as_str().unwrap_or(""));
+                if let Some(n) = v["zero_failure_runs_needed"].as_u64() {
+                    out!(
+                        "required probability {} at confidence {}: {n} failure-free runs needed; shown by these trials: {}",
+                        v["required_probability"],
+                        v["confidence"],
+                        v["success_requirement_shown"]
+                    );
+                }
+                for r in v["requirements"].as_array().into_iter().flatten() {
+                    out!(
+                        "requirement {} ({}): {}",
+                        r["guarantee"].as_str().unwrap_or(""),
+                        r["judged"].as_str().unwrap_or(""),
+                        r["statement"].as_str().unwrap_or("")
+                    );
+                }
             }
             out!(
                 "wrote {}/{{trials.csv, summary.json, capture_envelope.png, capture_envelope.svg}}",
@@ -487,6 +509,24 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
             match rpod::bench::run_swarm(&swarm, steps) {
+                Ok(report) => {
+                    out!("{report}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            }
+        }
+        Cmd::Bench {
+            scene,
+            steps,
+            cliffs: true,
+            ..
+        } => {
+            let folder = scene.parent().unwrap_or(std::path::Path::new("."));
+            match rpod::bench::run_cliffs(folder, steps) {
                 Ok(report) => {
                     out!("{report}");
                     ExitCode::SUCCESS

@@ -44,6 +44,19 @@ pub struct TrialsSpec {
     /// The envelope plot (`capture_envelope.png`): `plot: (color_by: "peak_axial_load_n")`.
     #[serde(default)]
     pub plot: EnvelopePlot,
+    /// One-sided confidence of the summary's probability statements ("met with probability ≥
+    /// p at confidence c"), in (0, 1) (default 0.9).
+    #[serde(default = "default_confidence")]
+    pub confidence: f64,
+    /// The probability a programme requires of the success criterion and of each guarantee,
+    /// in (0, 1), e.g. 0.9973: the summary then gives the failure-free runs needed to show it
+    /// at `confidence` and whether these trials show it.
+    #[serde(default)]
+    pub required_probability: Option<f64>,
+}
+
+fn default_confidence() -> f64 {
+    0.9
 }
 
 /// How the envelope plot is drawn.
@@ -368,6 +381,23 @@ impl TrialsSpec {
         if self.parameters.is_empty() {
             return Err(err("parameters", "name at least one parameter".into()));
         }
+        if !(self.confidence > 0.0 && self.confidence < 1.0) {
+            return Err(err(
+                "confidence",
+                format!(
+                    "a one-sided confidence is a number in (0, 1), e.g. 0.9, got {}",
+                    self.confidence
+                ),
+            ));
+        }
+        if let Some(p) = self.required_probability
+            && !(p > 0.0 && p < 1.0)
+        {
+            return Err(err(
+                "required_probability",
+                format!("a required probability is a number in (0, 1), e.g. 0.9973, got {p}"),
+            ));
+        }
         if self.parameters.len() > MAX_PARAMETERS {
             return Err(err(
                 "parameters",
@@ -549,8 +579,11 @@ pub struct Campaign {
     pub scene_path: PathBuf,
     /// The fingerprint.
     pub fingerprint: Fingerprint,
-    /// The base scene's guarantees (name, unit), in scene order: two `trials.csv` columns each.
+    /// The base scene's guarantees (name, unit), in scene order: three `trials.csv` columns
+    /// each.
     pub guarantees: Vec<(String, String)>,
+    /// How each guarantee is judged (`interval` or `samples only`), same order.
+    pub guarantee_judged: Vec<String>,
 }
 
 /// Reads and checks a trials file; the base scene and every parameter path are checked by
@@ -585,6 +618,7 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
         scene_path,
         fingerprint,
         guarantees: Vec::new(),
+        guarantee_judged: Vec::new(),
     };
     // Checked now rather than in every worker, the same way whatever the order of the grid
     // values or the seed: every grid value (each with the other parameters at their
@@ -634,6 +668,16 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
         .status
         .iter()
         .map(|g| (g.name.clone(), g.unit.clone()))
+        .collect();
+    // How each guarantee is judged is decided by the monitor on its first step (interval
+    // with a rate bound, samples only without): one step of trial 0 tells.
+    let mut sim = sim;
+    sim.step(1);
+    c.guarantee_judged = sim
+        .guarantees()
+        .status
+        .iter()
+        .map(|g| g.judged.to_string())
         .collect();
     if let Some(col) = &c.spec.plot.color_by {
         let cols = header(&c);
@@ -685,7 +729,15 @@ fn overrides_of(spec: &TrialsSpec, values: &[f64]) -> Vec<String> {
     spec.parameters
         .iter()
         .zip(values)
-        .map(|(p, v)| format!("{}={v:?}", p.path()))
+        .map(|(p, &v)| {
+            // A whole number is written without a fraction, so that it also sets an integer
+            // field (a sensor's `seed`); RON reads it into a float field all the same.
+            if v.fract() == 0.0 && v.abs() < 9.0e15 {
+                format!("{}={}", p.path(), v as i64)
+            } else {
+                format!("{}={v:?}", p.path())
+            }
+        })
         .collect()
 }
 
@@ -718,9 +770,9 @@ pub struct TrialResult {
     pub min_clearance_m: Option<f64>,
     /// First collision, s.
     pub first_collision_s: Option<f64>,
-    /// Per guarantee of the campaign (same order): worst margin (in its unit) and first
-    /// violation time, s.
-    pub guarantees: Vec<(Option<f64>, Option<f64>)>,
+    /// Per guarantee of the campaign (same order): worst margin (in its unit), first
+    /// violation time, s, and the verdict (`held`, `violated`, `unresolved`).
+    pub guarantees: Vec<(Option<f64>, Option<f64>, Option<&'static str>)>,
     /// Steps simulated.
     pub steps: u64,
     /// Why (the docking state's reason, the scene error, the guard's trip).
@@ -747,7 +799,7 @@ impl TrialResult {
             max_misalignment_deg: None,
             min_clearance_m: None,
             first_collision_s: None,
-            guarantees: vec![(None, None); c.guarantees.len()],
+            guarantees: vec![(None, None, None); c.guarantees.len()],
             steps,
             reason,
         }
@@ -810,10 +862,11 @@ pub fn run_trial(c: &Campaign, k: usize, keep: Option<&Path>) -> TrialResult {
             status
                 .iter()
                 .find(|g| &g.name == n)
-                .map_or((None, None), |g| {
+                .map_or((None, None, None), |g| {
                     (
                         g.worst_margin.is_finite().then_some(g.worst_margin),
                         g.first_violation_s,
+                        Some(g.verdict),
                     )
                 })
         })
@@ -864,8 +917,9 @@ const RESULT_COLS: [&str; 9] = [
 ];
 
 /// The CSV header cells for a campaign: `index`, one column per parameter path, the results,
-/// per guarantee `guarantee.NAME.worst_margin_UNIT` and `guarantee.NAME.first_violation_s`
-/// (empty: never violated), `steps`, `reason`, `campaign_id`.
+/// per guarantee `guarantee.NAME.worst_margin_UNIT`, `guarantee.NAME.first_violation_s`
+/// (empty: never violated) and `guarantee.NAME.verdict` (`held`, `violated`, `unresolved`;
+/// empty when the trial did not run), `steps`, `reason`, `campaign_id`.
 pub fn header(c: &Campaign) -> Vec<String> {
     let mut cols = vec!["index".to_string()];
     cols.extend(c.spec.parameters.iter().map(|p| p.path().to_string()));
@@ -873,6 +927,7 @@ pub fn header(c: &Campaign) -> Vec<String> {
     for (n, u) in &c.guarantees {
         cols.push(format!("guarantee.{n}.worst_margin_{u}"));
         cols.push(format!("guarantee.{n}.first_violation_s"));
+        cols.push(format!("guarantee.{n}.verdict"));
     }
     cols.extend(["steps", "reason", "campaign_id"].map(String::from));
     cols
@@ -892,9 +947,10 @@ pub fn row(r: &TrialResult, campaign_id: &str) -> Vec<String> {
     cells.push(opt(r.max_misalignment_deg));
     cells.push(opt(r.min_clearance_m));
     cells.push(opt(r.first_collision_s));
-    for (w, f) in &r.guarantees {
+    for (w, f, v) in &r.guarantees {
         cells.push(opt(*w));
         cells.push(opt(*f));
+        cells.push(v.unwrap_or("").to_string());
     }
     cells.push(r.steps.to_string());
     cells.push(
@@ -1127,13 +1183,23 @@ pub fn read_checked(
             let cell = &cells[j];
             let ok = if header[j] == "steps" {
                 cell.parse::<u64>().is_ok()
+            } else if header[j].ends_with(".verdict") {
+                matches!(cell.as_str(), "" | "held" | "violated" | "unresolved")
             } else {
                 cell.is_empty() || cell.parse::<f64>().is_ok_and(f64::is_finite)
             };
             if !ok {
                 return Err(at(
                     lineno,
-                    format!("`{}` is {cell:?}, not a number", header[j]),
+                    format!(
+                        "`{}` is {cell:?}, not {}",
+                        header[j],
+                        if header[j].ends_with(".verdict") {
+                            "a verdict (held, violated, unresolved or empty)"
+                        } else {
+                            "a number"
+                        }
+                    ),
                 ));
             }
         }
@@ -1312,6 +1378,36 @@ pub fn wilson(s: usize, n: usize) -> (f64, f64, f64) {
     (p, (centre - half).max(0.0), (centre + half).min(1.0))
 }
 
+/// "Met with probability ≥ p at confidence c" for `s` successes in `n` trials: the observed
+/// proportion, the one-sided exact (Clopper–Pearson) lower bound p at confidence `conf`
+/// ([`crate::math::stats::clopper_pearson_lower`]), the sentence, and with a `required`
+/// probability whether the bound reaches it.
+pub fn probability_statement(
+    s: usize,
+    n: usize,
+    conf: f64,
+    required: Option<f64>,
+) -> serde_json::Value {
+    let lb = crate::math::stats::clopper_pearson_lower(s, n, conf);
+    // Rounded down, so the sentence never claims more than the bound.
+    let shown = (lb * 1e4).floor() / 1e4;
+    let mut j = serde_json::json!({
+        "successes": s,
+        "trials": n,
+        "probability": if n > 0 { serde_json::json!(s as f64 / n as f64) } else { serde_json::Value::Null },
+        "probability_lower_bound": lb,
+        "confidence": conf,
+        "statement": format!(
+            "met with probability ≥ {shown:.4} at confidence {conf} ({s} of {n} trials; one-sided Clopper–Pearson)"
+        ),
+    });
+    if let Some(p) = required {
+        j["required_probability"] = serde_json::json!(p);
+        j["requirement_shown"] = serde_json::json!(n > 0 && lb >= p);
+    }
+    j
+}
+
 /// Index ranges `a-b` (or `a`) of a sorted list, comma-separated, at most `max` ranges shown.
 pub fn ranges(idx: &[usize], max: usize) -> String {
     let mut out: Vec<String> = Vec::new();
@@ -1380,6 +1476,50 @@ pub fn write_summary(
         "parameters": c.spec.parameters.iter().map(|p| p.path()).collect::<Vec<_>>(),
         "provenance": crate::report::build_provenance(),
     });
+    let conf = c.spec.confidence;
+    let req = c.spec.required_probability;
+    summary["confidence"] = serde_json::json!(conf);
+    let st = probability_statement(s, valid.len(), conf, req);
+    summary["success_probability_lower_bound"] = st["probability_lower_bound"].clone();
+    summary["success_statement"] = st["statement"].clone();
+    if let Some(p) = req {
+        summary["required_probability"] = serde_json::json!(p);
+        summary["zero_failure_runs_needed"] =
+            serde_json::json!(crate::math::stats::zero_failure_runs(p, conf));
+        summary["success_requirement_shown"] = st["requirement_shown"].clone();
+    }
+    let header = header(c);
+    let requirements: Vec<serde_json::Value> = c
+        .guarantees
+        .iter()
+        .enumerate()
+        .map(|(i, (name, unit))| {
+            let col = header
+                .iter()
+                .position(|h| *h == format!("guarantee.{name}.verdict"));
+            let verdicts: Vec<&str> = valid
+                .iter()
+                .map(|r| col.and_then(|j| r.cells.get(j)).map_or("", String::as_str))
+                .collect();
+            let count = |v: &str| verdicts.iter().filter(|x| **x == v).count();
+            let held = count("held");
+            let mut j = probability_statement(held, valid.len(), conf, req);
+            j["guarantee"] = serde_json::json!(name);
+            j["unit"] = serde_json::json!(unit);
+            j["judged"] = serde_json::json!(c.guarantee_judged.get(i));
+            j["held"] = serde_json::json!(held);
+            j["violated"] = serde_json::json!(count("violated"));
+            j["unresolved"] = serde_json::json!(count("unresolved"));
+            j["no_verdict"] = serde_json::json!(count(""));
+            j
+        })
+        .collect();
+    summary["requirements"] = serde_json::json!(requirements);
+    summary["requirements_counting"] = serde_json::json!(
+        "per guarantee over the valid trials: a success is a `held` verdict; `violated`, \
+         `unresolved` (not proven to hold) and a trial without a verdict (NUMERIC_FAILURE) \
+         count against it"
+    );
     if c.spec.success.is_docking() {
         summary["capture_probability"] = p_json;
         summary["capture_probability_95ci_wilson"] = serde_json::json!([lo, hi]);

@@ -417,7 +417,8 @@ fn val_success_criteria_match_the_recorded_columns() {
     let text = format!(
         r#"Trials(name: "criteria", scene: "{}", duration_s: 30.0, count: 4,
     parameters: [Grid(path: "bodies.chaser.initial.pos_m.1", values: [0.0, 0.05, 0.4, 0.9])],
-    success: All([GuaranteeHeld("clearance_5cm"), MinClearance(0.01)]))"#,
+    success: All([GuaranteeHeld("clearance_5cm"), MinClearance(0.01)]),
+    confidence: 0.9, required_probability: 0.9973)"#,
         scene.display()
     );
     std::fs::write(&f, &text).unwrap();
@@ -436,15 +437,18 @@ fn val_success_criteria_match_the_recorded_columns() {
             .position(|c| c == n)
             .unwrap_or_else(|| panic!("{n}: {h:?}"))
     };
-    let mut successes = 0;
+    let (mut successes, mut held) = (0, 0);
     for r in rdr.records().map(|r| r.unwrap()) {
         let worst: f64 = r[col("guarantee.clearance_5cm.worst_margin_m")]
             .parse()
             .unwrap();
         let first = &r[col("guarantee.clearance_5cm.first_violation_s")];
         let clearance: f64 = r[col("min_clearance_non_docking_m")].parse().unwrap();
-        // Held ⇔ never violated ⇔ worst margin ≥ 0.
+        // Held ⇔ never violated ⇔ worst margin ≥ 0; the verdict says the same.
         assert_eq!(first.is_empty(), worst >= 0.0, "{r:?}");
+        let verdict = &r[col("guarantee.clearance_5cm.verdict")];
+        assert_eq!(verdict == "held", first.is_empty(), "{r:?}");
+        held += usize::from(verdict == "held");
         let expect = first.is_empty() && clearance >= 0.01;
         assert_eq!(
             &r[col("success")],
@@ -471,6 +475,27 @@ fn val_success_criteria_match_the_recorded_columns() {
     );
     assert_eq!(s["successes"], successes);
     assert!(s.get("capture_probability").is_none(), "{s}");
+    // The programme's statements: the one-sided Clopper–Pearson lower bound at 90 % (closed
+    // form with no failure, (1 − c)^(1/n); 0 with no success), the zero-failure run count
+    // ⌈ln(0.1)/ln(0.9973)⌉ = 852, and per requirement the held count from the verdicts.
+    let lb = s["success_probability_lower_bound"].as_f64().unwrap();
+    match successes {
+        0 => assert_eq!(lb, 0.0),
+        4 => assert!((lb - 0.1f64.powf(0.25)).abs() < 1e-15),
+        _ => assert!(lb > 0.0 && lb < successes as f64 / 4.0, "{lb}"),
+    }
+    assert!(
+        s["success_statement"]
+            .as_str()
+            .unwrap()
+            .starts_with("met with probability ≥ ")
+    );
+    assert_eq!(s["zero_failure_runs_needed"], 852);
+    assert_eq!(s["success_requirement_shown"], false);
+    let req = &s["requirements"][0];
+    assert_eq!(req["guarantee"], "clearance_5cm");
+    assert_eq!(req["held"], held);
+    assert_eq!(req["trials"], 4);
     assert_eq!(s["provenance"]["rpod_version"], env!("CARGO_PKG_VERSION"));
     // An unknown guarantee is a located error.
     std::fs::write(
@@ -631,4 +656,89 @@ fn regress_envelope_plot_colours_by_a_column_and_draws_small_multiples() {
         "{e}"
     );
     let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The requirements campaign's per-requirement output, on 2 short trials of
+/// `scenes/requirements_approach.ron` (60 s: the hold 100 m out, where the passive-safety,
+/// line-of-sight and closing-speed requirements are active): every guarantee of the scene has
+/// its verdict column; each row's verdict is the one the trial's own `summary.json` gives
+/// (`--keep-runs`); `summary.json`'s per-requirement counts are the column's counts and its
+/// lower bound is the Clopper–Pearson one (with no failure the closed form (1 − c)^(1/n)).
+#[test]
+fn val_requirements_campaign_reports_each_requirement() {
+    let d = tmp("requirements");
+    let scene = std::fs::canonicalize("scenes/requirements_approach.ron").unwrap();
+    let f = d.join("r.ron");
+    // The bundled campaign's dispersions, shortened.
+    let bundled = read(Path::new("scenes/trials/requirements_campaign.ron"));
+    let text = bundled
+        .replace(
+            "\"../requirements_approach.ron\"",
+            &format!("{:?}", scene.display().to_string()),
+        )
+        .replace("duration_s: 2300.0", "duration_s: 60.0")
+        .replace("count: 20", "count: 2");
+    assert_ne!(text, bundled);
+    std::fs::write(&f, &text).unwrap();
+    let out = d.join("out");
+    trials(&[
+        f.to_str().unwrap(),
+        "--keep-runs",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let csv_text = read(&out.join("trials.csv"));
+    let mut rdr = csv::Reader::from_reader(csv_text.as_bytes());
+    let h = rdr.headers().unwrap().clone();
+    let col = |n: &str| {
+        h.iter()
+            .position(|c| c == n)
+            .unwrap_or_else(|| panic!("{n}: {h:?}"))
+    };
+    let names = [
+        "kos_30m_corridor_20deg",
+        "closing_speed_gates",
+        "passive_safety_2p5m",
+        "docking_target_in_view",
+    ];
+    let rows: Vec<csv::StringRecord> = rdr.records().map(|r| r.unwrap()).collect();
+    assert_eq!(rows.len(), 2);
+    let s: serde_json::Value = serde_json::from_str(&read(&out.join("summary.json"))).unwrap();
+    for (i, name) in names.iter().enumerate() {
+        let mut held = 0;
+        for r in &rows {
+            let verdict = &r[col(&format!("guarantee.{name}.verdict"))];
+            let k: usize = r[col("index")].parse().unwrap();
+            let run: serde_json::Value =
+                serde_json::from_str(&read(&out.join(format!("runs/{k:06}/summary.json"))))
+                    .unwrap();
+            let g = run["guarantees"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|g| g["name"] == *name)
+                .unwrap_or_else(|| panic!("{name} in {run}"));
+            assert_eq!(g["verdict"], *verdict, "trial {k} {name}");
+            held += usize::from(verdict == "held");
+        }
+        let req = &s["requirements"][i];
+        assert_eq!(req["guarantee"], *name);
+        // The cone and the line of sight have rate bounds (judged on intervals); the gate and
+        // passive safety are judged at the samples.
+        let want = if i == 0 || i == 3 {
+            "interval"
+        } else {
+            "samples only"
+        };
+        assert_eq!(req["judged"], want, "{req}");
+        assert_eq!(req["held"], held, "{req}");
+        assert_eq!(req["trials"], 2);
+        let lb = req["probability_lower_bound"].as_f64().unwrap();
+        match held {
+            0 => assert_eq!(lb, 0.0),
+            2 => assert!((lb - 0.1f64.sqrt()).abs() < 1e-15, "{lb}"),
+            _ => assert!(lb > 0.0 && lb < 0.5, "{lb}"),
+        }
+    }
+    assert_eq!(s["zero_failure_runs_needed"], 852);
 }

@@ -132,6 +132,28 @@ fn val_closing_speed_gate_crossed_at_a_known_time() {
     assert!((f(&g["worst_margin"]) + 0.5).abs() < 1e-12, "{g}");
 }
 
+/// Beyond the outermost gate no gate applies: the margin is the scene's speed limit less the
+/// closing speed (finite: the run is not stopped by the guard, as an infinite margin did),
+/// then the gate's once inside it. Same straight line as above, from 20.005 m with one gate
+/// at 10 m: margin 10⁵ − 1 m/s until t = 10.01 s, then 0.5 − 1 = −0.5 m/s.
+#[test]
+fn val_closing_speed_gate_beyond_the_outermost_gate_is_finite() {
+    let (_, s) = run(free_scene(
+        &[
+            body("target", BALL, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), ""),
+            body("chaser", BALL, (20.005, 0.0, 0.0), (-1.0, 0.0, 0.0), ""),
+        ],
+        r#"ClosingSpeedGate(name: "gates", body: "chaser", around: "target",
+              gates: [(10.0, 0.5)])"#,
+        12.0,
+    ));
+    let g = guarantee(&s, "gates");
+    assert_eq!(g["verdict"], "violated");
+    assert!((f(&g["first_violation_s"]) - 10.01).abs() < 1e-9, "{g}");
+    assert!((f(&g["worst_margin"]) + 0.5).abs() < 1e-12, "{g}");
+    assert!(f(&g["last_margin"]).is_finite(), "{g}");
+}
+
 #[test]
 fn gates_out_of_order_and_bad_values_are_located_errors() {
     for (gates, field) in [
@@ -252,6 +274,31 @@ fn val_passive_safety_violated_when_the_drift_window_reaches_the_closest_approac
         "{t} vs {t_c} (−{})",
         tol / rate
     );
+}
+
+/// `active_from_range_m`: the same fly-by as above, required only from 40 m out. The chaser
+/// starts at range √(20² + 30²) = 36.06 m: nothing is required, the margin is 40 − 36.06 m;
+/// with the threshold at 30 m the closed-form margin of the fly-by applies again.
+#[test]
+fn val_passive_safety_applies_only_from_its_range() {
+    let n = (MU_EARTH_M3_S2 / 7.0e6_f64.powi(3)).sqrt();
+    let (x0, y0, r) = (20.0, 30.0, 5.0);
+    let margin = |from: f64| {
+        let sim = sim_of(&orbit_scene(
+            (x0, y0, 0.0, -1.5 * n * x0),
+            &format!(
+                r#"PassiveSafety(name: "ps", body: "chaser", around: "target", radius_m: Some({r}),
+                 horizon_s: 2000.0, grid_s: 5.0, active_from_range_m: Some({from}))"#
+            ),
+            1.0,
+            false,
+        ));
+        sim.guarantees().status[0].last_margin
+    };
+    assert!((margin(40.0) - (40.0 - (x0 * x0 + y0 * y0).sqrt())).abs() < 1e-9);
+    let m = margin(30.0);
+    let tol = drift_tolerance(x0, y0, n, 2000.0, 5.0);
+    assert!(m <= x0 - r && m >= x0 - r - tol, "{m}");
 }
 
 #[test]

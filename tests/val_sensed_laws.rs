@@ -83,8 +83,10 @@ fn a_sensor_a_law_cannot_use_is_a_located_error() {
     assert_eq!(e.field, "controllers.0.sensor", "{e}");
     assert!(e.message.contains("`Attitude` cannot use a sensor"), "{e}");
     assert!(e.line > 0);
+    // A port law reads a `Port` measurement, or a `Hill` one carried to the port by the true
+    // lever arms (a navigation filter's estimate); a `TargetBody` one it cannot use.
     let e = error(&hill_pd(
-        "sensor: Some((frame: Hill, period_s: 0.1)),",
+        "sensor: Some((frame: TargetBody, period_s: 0.1)),",
         "Port",
     ));
     println!("{e}");

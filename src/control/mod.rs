@@ -12,6 +12,7 @@ pub mod generic;
 pub mod geng2015;
 pub mod guo2016;
 pub mod interface;
+pub mod navfilter;
 pub mod registry;
 pub mod sensor;
 pub mod xu2015;

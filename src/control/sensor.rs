@@ -23,6 +23,7 @@
 //!   attitude components). A seed gives the same numbers on every run.
 
 use crate::control::interface::{MeasuredFrame, Measurement};
+use crate::control::navfilter::NavFilterSpec;
 use crate::math::rng::GaussianNoise;
 use nalgebra::{UnitQuaternion, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
@@ -69,6 +70,11 @@ pub struct SensorSpec {
     /// Measure only (x, y, yaw) in the frame's x–y plane (air-bearing tables).
     #[serde(default)]
     pub planar: bool,
+    /// A navigation filter the measurements feed; the law then flies on its estimate instead
+    /// of the raw measurement ([`crate::control::navfilter`]; needs `frame: Hill`, a 3-D
+    /// sensor with position noise, and the `Differenced` velocity without its low-pass).
+    #[serde(default)]
+    pub filter: Option<NavFilterSpec>,
 }
 
 /// Largest accepted sensor period, latency or filter constant, s (about 31.7 years): beyond,
@@ -109,6 +115,28 @@ impl SensorSpec {
                     f,
                     format!("must be a standard deviation ≥ 0 (below 1e6), got {v}"),
                 );
+            }
+        }
+        if let Some(f) = &self.filter {
+            f.validate()
+                .map_err(|(g, m)| (format!("filter.0.{g}"), m))?;
+            let why = if self.frame != MeasuredFrame::Hill {
+                Some(
+                    "the filter runs on the CW model in the target's Hill frame: give the sensor `frame: Hill`",
+                )
+            } else if self.planar {
+                Some("the filter estimates the 3-D relative state: a planar sensor cannot feed it")
+            } else if self.position_noise_m <= 0.0 {
+                Some("the filter weighs measurements by their noise: give `position_noise_m` > 0")
+            } else if self.velocity != VelocitySource::Differenced || self.velocity_filter_s > 0.0 {
+                Some(
+                    "with a filter the velocity is the filter's estimate: leave `velocity` Differenced and `velocity_filter_s` 0 (they would be ignored)",
+                )
+            } else {
+                None
+            };
+            if let Some(m) = why {
+                return bad("filter", m.to_string());
             }
         }
         Ok(())
@@ -372,6 +400,7 @@ mod tests {
             velocity_filter_s: 0.0,
             seed: 1,
             planar,
+            filter: None,
         }
     }
 

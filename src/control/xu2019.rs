@@ -1208,6 +1208,7 @@ impl VisionSpec {
             velocity_filter_s: self.velocity_filter_s,
             seed: self.seed,
             planar: true,
+            filter: None,
         }
     }
 }

@@ -175,7 +175,9 @@ impl Guarantee for KeepOutEllipsoid {
 /// most the tightest limit among the gates whose range applies (|r| ≤ within_m). Gates are
 /// listed outermost first (within_m strictly decreasing).
 ///
-/// Margin (m/s): limit − closing speed; +∞ beyond the outermost gate (no limit applies).
+/// Margin (m/s): limit − closing speed; beyond the outermost gate the limit is
+/// [`MAX_SPEED_M_S`](crate::scene::validate::MAX_SPEED_M_S) (no gate applies; the margin stays
+/// finite, as every output must).
 /// Judged at the samples only ("samples only" in the outputs): the closing speed changes with
 /// the relative acceleration (thrust included), which the monitor's motion bounds do not
 /// bound, and the limit steps at each gate's range.
@@ -317,9 +319,11 @@ impl Guarantee for ClosingSpeedGate {
         let (pa, va) = point_state(&v.bodies[self.around], &self.off_around);
         let (r, rd) = (pb - pa, vb - va);
         let range = r.norm();
-        let Some(limit) = self.limit_m_s(range) else {
-            return f64::INFINITY;
-        };
+        // Beyond the outermost gate no gate applies: the limit is the scene's limit on any
+        // speed (the guard stops a run past it), so the margin stays finite and ≥ 0 there.
+        let limit = self
+            .limit_m_s(range)
+            .unwrap_or(crate::scene::validate::MAX_SPEED_M_S);
         // At zero range the direction is undefined: the closing speed is at most |ṙ|.
         let closing = if range > 0.0 {
             -r.dot(&rd) / range
@@ -333,7 +337,8 @@ impl Guarantee for ClosingSpeedGate {
     }
 }
 
-/// `PassiveSafety(name, body, around, radius_m | semi_axes_m, horizon_s, grid_s)`: if the
+/// `PassiveSafety(name, body, around, radius_m | semi_axes_m, horizon_s, grid_s,
+/// active_from_range_m)`: if the
 /// thrusters failed now, the thrust-free drift of both bodies from their current states would
 /// keep `body`'s centre of mass outside the keep-out zone about `around`'s — a sphere of
 /// `radius_m`, or an ellipsoid of `semi_axes_m` in the Hill frame — for `horizon_s`.
@@ -374,6 +379,13 @@ pub struct PassiveSafetyParams {
     pub horizon_s: f64,
     /// Grid spacing of the drift evaluation, s (at most; the grid divides the horizon evenly).
     pub grid_s: f64,
+    /// The requirement applies only while `body`'s centre of mass is at least this far from
+    /// `around`'s, m (default: always): hold points and the approach to them, not a final
+    /// approach that is not passively safe by design. The margin is then max(drift margin,
+    /// r − range): ≥ 0 exactly when the range is below r or the drift is safe (positive below
+    /// r, continuous across it, as `ApproachCone`'s outside its band).
+    #[serde(default)]
+    pub active_from_range_m: Option<f64>,
 }
 
 /// Most grid points of a passive-safety drift.
@@ -420,6 +432,9 @@ impl GuaranteeParams for PassiveSafetyParams {
         }
         finite_positive("horizon_s", self.horizon_s, "seconds")?;
         finite_positive("grid_s", self.grid_s, "seconds")?;
+        if let Some(r) = self.active_from_range_m {
+            finite_positive("active_from_range_m", r, "metres")?;
+        }
         if self.grid_s > self.horizon_s || self.horizon_s / self.grid_s > MAX_DRIFT_GRID_POINTS {
             return Err(BuildError::at(
                 "grid_s",
@@ -450,6 +465,7 @@ impl GuaranteeParams for PassiveSafetyParams {
                 (None, None) => return Err(BuildError::at("radius_m", "missing")),
             },
             horizon_s: self.horizon_s,
+            active_from_range_m: self.active_from_range_m,
             dtau_s: dtau,
             n_rad_s: n,
             r0_m: r0,
@@ -490,6 +506,8 @@ pub struct PassiveSafety {
     pub zone: Zone,
     /// Horizon, s.
     pub horizon_s: f64,
+    /// Applies only at centre-of-mass ranges from this up, m.
+    pub active_from_range_m: Option<f64>,
     /// Grid spacing, s.
     pub dtau_s: f64,
     /// Mean motion of the reference, rad/s.
@@ -595,7 +613,20 @@ impl Guarantee for PassiveSafety {
             SVector::<f64, 6>::from_column_slice(&[p.x, p.y, p.z, d.x, d.y, d.z])
         };
         let (xb, xa) = (state(self.body), state(self.around));
-        self.drift(&(xb - xa), [&xb, &xa]).margin_m
+        let rel = xb - xa;
+        match self.active_from_range_m {
+            None => self.drift(&rel, [&xb, &xa]).margin_m,
+            Some(r) => {
+                // Held where the range is below r, or where the drift is safe: the margin is
+                // the larger of the two (continuous, ≥ 0 exactly when the requirement holds).
+                let below = r - Vector3::new(rel[0], rel[1], rel[2]).norm();
+                if below > 0.0 {
+                    below
+                } else {
+                    self.drift(&rel, [&xb, &xa]).margin_m.max(below)
+                }
+            }
+        }
     }
     fn reads(&self) -> Reads {
         Reads::Bodies

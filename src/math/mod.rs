@@ -7,3 +7,4 @@ pub mod ode;
 pub mod polygon;
 pub mod rigid;
 pub mod rng;
+pub mod stats;

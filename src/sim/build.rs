@@ -567,6 +567,14 @@ impl Simulation {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// The current value of a `trajectory.csv` diagnostics column (a controller's, a
+    /// mechanism's or a navigation filter's, e.g. `nav.chaser.sigma_x_m`), None if there is no
+    /// such column.
+    pub fn diagnostic(&self, name: &str) -> Option<f64> {
+        let d = self.app.world().resource::<super::output::Diagnostics>();
+        d.names.iter().position(|n| n == name).map(|i| d.values[i])
+    }
+
     /// The controller host: every controller's slot (law, held command, sensor, actuator) and
     /// the scenario's disturbances.
     pub fn controllers(&self) -> &super::controllers::ControllerHost {

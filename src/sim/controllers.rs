@@ -30,6 +30,7 @@ use crate::control::interface::{
     GuaranteeObs, MeasuredFrame, Measurement, Needs, Observation, PortsObs, RelativeObs, port_pose,
     ports_obs, relative_obs,
 };
+use crate::control::navfilter::CwKalman;
 use crate::control::registry::{BuildContext, BuildError, Disturbance, DisturbanceContext, Slot};
 use crate::control::sensor::{Sensor, SensorTruth};
 use crate::environment::EnvObs;
@@ -66,8 +67,10 @@ pub struct HostedSlot {
     pub report: ActuationReport,
     /// Calls so far.
     pub calls: u64,
-    /// The latest delivered measurement.
+    /// The latest delivered measurement (with a navigation filter: its estimate).
     pub measured: Option<Measurement>,
+    /// The sensor's navigation filter, when it has one.
+    pub nav: Option<NavSlot>,
     /// What the law reads.
     pub needs: Needs,
     /// The relative state and ports of the current truth (what `needs` asks for).
@@ -81,6 +84,41 @@ pub struct HostedSlot {
     /// A command frame was missing (reported once).
     frame_warned: bool,
 }
+
+/// A slot's navigation filter ([`crate::control::navfilter`]) and its columns.
+pub struct NavSlot {
+    /// The filter.
+    pub filter: CwKalman,
+    /// First of its [`NAV_COLUMNS`] columns.
+    first_col: usize,
+    /// Hill-from-world rotation at the start of the current step (for the applied force).
+    hill_from_world: UnitQuaternion<f64>,
+}
+
+/// The navigation filter's `trajectory.csv` columns, after `nav.BODY.` (Hill frame; the
+/// estimate at the start of the step, after that step's delivery): the estimate, the square
+/// roots of its covariance's diagonal, its error (estimate − truth) and the latest raw
+/// measurement's error against the current truth.
+pub const NAV_COLUMNS: [&str; 18] = [
+    "est_x_m",
+    "est_y_m",
+    "est_z_m",
+    "est_vx_m_s",
+    "est_vy_m_s",
+    "est_vz_m_s",
+    "sigma_x_m",
+    "sigma_y_m",
+    "sigma_z_m",
+    "sigma_vx_m_s",
+    "sigma_vy_m_s",
+    "sigma_vz_m_s",
+    "err_x_m",
+    "err_y_m",
+    "err_z_m",
+    "raw_err_x_m",
+    "raw_err_y_m",
+    "raw_err_z_m",
+];
 
 /// Every controller of the simulation and the scenario's disturbances.
 #[derive(Resource, Default)]
@@ -489,6 +527,7 @@ pub fn host_sense(
     states: Query<&BodyState>,
     refs: EnvRefs,
     mut host: ResMut<ControllerHost>,
+    mut diag: ResMut<Diagnostics>,
 ) {
     if host.slots.is_empty() && host.disturbances.is_empty() {
         return;
@@ -515,9 +554,80 @@ pub fn host_sense(
         let truth = sensor_truth(frame, &host.slots[k], &host.info, &host.truth, &env);
         let slot = &mut host.slots[k];
         if let (Some(truth), Some(sensor)) = (truth, slot.sensor.as_mut()) {
-            slot.measured = sensor.step(t, clock.dt_s, &truth);
+            let raw = sensor.step(t, clock.dt_s, &truth);
+            match slot.nav.as_mut() {
+                None => slot.measured = raw,
+                Some(nav) => {
+                    let own = &host.truth[slot.body];
+                    let mass = host.info[slot.body].mass_kg;
+                    slot.measured =
+                        nav_step(nav, raw, &truth, own, mass, &slot.report, &clock, &mut diag);
+                }
+            }
         }
     }
+}
+
+/// One step of a slot's navigation filter: the prediction over the previous step with the
+/// force its actuator applied, the update with a fresh delivery, the columns; returns what the
+/// law reads (the estimate as a `Hill` measurement; before the first delivery, nothing).
+#[allow(clippy::too_many_arguments)]
+fn nav_step(
+    nav: &mut NavSlot,
+    raw: Option<Measurement>,
+    truth: &SensorTruth,
+    own: &BodyObs,
+    mass_kg: f64,
+    report: &ActuationReport,
+    clock: &Clock,
+    diag: &mut Diagnostics,
+) -> Option<Measurement> {
+    let step = clock.step;
+    if step > 0 {
+        let a = nav.hill_from_world * (report.force_world_n / mass_kg);
+        nav.filter.propagate(step - 1, a);
+    }
+    // The Hill sensor's truth carries the body's attitude in the Hill frame: q·own.att.
+    nav.hill_from_world = truth.att * own.att.inverse();
+    if let Some(m) = raw.filter(|m| m.fresh) {
+        let exposure = (m.t_s / clock.dt_s - 1e-9).ceil().max(0.0) as u64;
+        nav.filter.update(exposure.min(step), step, m.pos_m);
+    }
+    let out = &mut diag.values[nav.first_col..nav.first_col + NAV_COLUMNS.len()];
+    let est = nav.filter.estimate();
+    match est {
+        Some((_, x, p)) => {
+            for i in 0..6 {
+                out[i] = x[i];
+                out[6 + i] = p[(i, i)].max(0.0).sqrt();
+            }
+            for i in 0..3 {
+                out[12 + i] = x[i] - truth.pos_m[i];
+            }
+        }
+        None => out[..15].fill(f64::NAN),
+    }
+    match raw {
+        Some(m) => {
+            for i in 0..3 {
+                out[15 + i] = m.pos_m[i] - truth.pos_m[i];
+            }
+        }
+        None => out[15..].fill(f64::NAN),
+    }
+    let (_, x, _) = est?;
+    let m = raw?;
+    Some(Measurement {
+        t_s: clock.t_s(),
+        delivered_s: clock.t_s(),
+        fresh: m.fresh,
+        frame: MeasuredFrame::Hill,
+        pos_m: x.fixed_rows::<3>(0).into_owned(),
+        vel_m_s: x.fixed_rows::<3>(3).into_owned(),
+        att: m.att,
+        omega_rad_s: m.omega_rad_s,
+        yaw_rad: None,
+    })
 }
 
 /// Control: each law at its period; the command is held.
@@ -784,10 +894,17 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
         };
         (law.columns(), port_frames)
     };
-    let cols = {
+    let nav_names: Vec<String> = match sensor.as_ref().and_then(|s| s.filter.as_ref()) {
+        Some(_) => {
+            let b = &world.resource::<ControllerHost>().info[body].name;
+            NAV_COLUMNS.iter().map(|c| format!("nav.{b}.{c}")).collect()
+        }
+        None => Vec::new(),
+    };
+    let column_of = |world: &mut World, names: &[String]| -> Result<Vec<usize>, String> {
         let mut diag = world.resource_mut::<Diagnostics>();
         let mut cols = Vec::with_capacity(names.len());
-        for n in &names {
+        for n in names {
             if diag.contains(n) {
                 return Err(format!(
                     "controller `{kind}`: column `{n}` is already written by another controller or mechanism"
@@ -795,7 +912,30 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
             }
             cols.push(diag.column(n));
         }
-        cols
+        Ok(cols)
+    };
+    let cols = column_of(world, &names)?;
+    let nav = match sensor
+        .as_ref()
+        .and_then(|s| s.filter.as_ref().map(|f| (s, f)))
+    {
+        Some((s, f)) => {
+            let n = env_of_world(world)
+                .reference()
+                .map(|(r, v)| crate::control::generic::mean_motion_rad_s(&r, &v))
+                .filter(|n| *n > 0.0)
+                .ok_or_else(|| {
+                    format!("controller `{kind}`: the sensor's filter runs on the CW model and needs an orbit environment (a bound reference orbit)")
+                })?;
+            let dt = world.resource::<Clock>().dt_s;
+            let first_col = column_of(world, &nav_names)?.first().copied().unwrap_or(0);
+            Some(NavSlot {
+                filter: CwKalman::new(f, n, dt, s.position_noise_m),
+                first_col,
+                hill_from_world: UnitQuaternion::identity(),
+            })
+        }
+        None => None,
     };
     {
         let mut g = world.resource_mut::<Guarantees>();
@@ -820,6 +960,7 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
         report: ActuationReport::default(),
         calls: 0,
         measured: None,
+        nav,
         needs,
         derived: (None, None),
         first_col: cols.first().copied().unwrap_or(0),

@@ -532,6 +532,9 @@ impl guarantee_bounds::MotionBounds for motion::StepMotion {
     fn separation_bound(&self, i: usize, j: usize) -> f64 {
         motion::StepMotion::separation_bound(self, i, j)
     }
+    fn distance_rate_bound(&self, i: usize, j: usize) -> f64 {
+        motion::StepMotion::distance_rate_bound(self, i, j)
+    }
 }
 
 /// The step's motion bounds with the bound on the Hill frame's rate (orbit scenes).
@@ -558,6 +561,9 @@ impl guarantee_bounds::MotionBounds for FrameMotion<'_> {
     }
     fn separation_bound(&self, i: usize, j: usize) -> f64 {
         self.motion.separation_bound(i, j)
+    }
+    fn distance_rate_bound(&self, i: usize, j: usize) -> f64 {
+        self.motion.distance_rate_bound(i, j)
     }
     fn hill_rate_bound_rad_s(&self) -> Option<f64> {
         self.hill_rate_rad_s
@@ -1159,19 +1165,23 @@ fn check_guarantees(
         let m0 = if inv.step_inputs() { eval(0.0) } else { m0 };
         let w = st.worst_margin;
         let abs_tol = inv.tolerance();
+        let floor = inv.margin_floor();
         let thr = |b: f64| {
             let x = w.min(b);
-            if x >= 0.0 {
+            let t = if x >= 0.0 {
                 (x - abs_tol.max(POSITIVE_MARGIN_REL_TOL * x)).max(0.0)
             } else {
                 x - abs_tol.max(NEGATIVE_MARGIN_REL_TOL * x.abs())
-            }
+            };
+            // The margin never goes below its floor: every sub-interval clears a threshold at
+            // or under it, whatever its rate bound says.
+            if t <= floor { f64::NEG_INFINITY } else { t }
         };
         let mut finding = IntervalFinding {
             min_value: m1.value,
             min_t_s: t,
             inside: false,
-            lower: interval_lower_bound(m0.lower, m1.lower, rate, dt),
+            lower: interval_lower_bound(m0.lower, m1.lower, rate, dt).max(floor),
             first_violation_s: None,
             restored_s: None,
             unresolved: false,
@@ -1185,7 +1195,7 @@ fn check_guarantees(
             finding.inside = true;
         }
         // A floor the step's inputs give (see `Guarantee::step_floor`).
-        let floor = inv.step_floor(&view).unwrap_or(f64::NEG_INFINITY);
+        let floor = floor.max(inv.step_floor(&view).unwrap_or(f64::NEG_INFINITY));
         finding.lower = finding.lower.max(floor);
         if finding.lower < thr(m1.value) {
             let r = minimize(

@@ -419,7 +419,9 @@ pub fn closest_parts(
     }
     candidates.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
     for (c, &(lb, a, b)) in candidates.iter().enumerate() {
-        if lb >= best {
+        // No distance is below zero: once a touching pair is found, the rest cannot win (and
+        // a later zero would not replace it either).
+        if lb >= best || best <= 0.0 {
             count.pruned += (candidates.len() - c) as u64;
             break;
         }
@@ -430,7 +432,8 @@ pub fn closest_parts(
             (best, ba, bb) = (d, a, b);
         }
     }
-    if !certify || !best.is_finite() {
+    if !certify || !best.is_finite() || best <= 0.0 {
+        // (At zero the certified lower bound is zero: 0 ≤ lower ≤ best.)
         return PartPairHit {
             d: Bracket::exact(best),
             a: ba,
@@ -697,11 +700,15 @@ pub fn distances(
                 value: prev.distance_m,
                 lower: prev.lower_m,
             };
+            // A distance is never negative: a threshold at or under zero (the pair has touched
+            // already) is cleared by every sub-interval, whatever the rate bound (no refinement
+            // while two bodies stay in contact, latched or not).
             let thr = |b: f64| {
                 let w = w.min(b);
-                w - min_distance_tolerance_m(w)
+                let t = w - min_distance_tolerance_m(w);
+                if t <= 0.0 { f64::NEG_INFINITY } else { t }
             };
-            if interval_lower_bound(d0.lower, hit.d.lower, rate, dt) < thr(hit.d.value) {
+            if interval_lower_bound(d0.lower, hit.d.lower, rate, dt).max(0.0) < thr(hit.d.value) {
                 let mut at = (hit.a, hit.b);
                 let mut parts_at = Vec::new();
                 let r = minimize(dt, d0, hit.d, rate, thr, MAX_MIN_EVALS, dt * 1e-9, |tau| {
@@ -724,7 +731,7 @@ pub fn distances(
                         inside: r.t > 0.0,
                     };
                 }
-                mon.min_lower_m = mon.min_lower_m.min(r.lower);
+                mon.min_lower_m = mon.min_lower_m.min(r.lower.max(0.0));
             }
         }
         if !mon.min_per_pair[k].distance_m.is_finite() || best.distance_m < w {

@@ -10,7 +10,7 @@
 //! ```
 //!
 //! With the entry's `sensor`, it flies on the measured relative state as `HillPd` does
-//! ([`super::hill::point_state`]: `axis: TargetPort` reads a `Port` measurement, the other
+//! ([`super::hill::point_state`]: `axis: TargetPort` reads a `Port` or `Hill` measurement, the other
 //! axes a `Hill`, `TargetBody` or `World` one).
 //!
 //! # The reference

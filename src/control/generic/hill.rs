@@ -19,8 +19,10 @@
 //! # Sensor
 //! With the entry's `sensor`, the law flies on its latest measurement ([`point_state`]) instead
 //! of the truth of the relative position and velocity: `point: CentreOfMass` reads a `Hill`,
-//! `TargetBody` or `World` measurement, `point: Port` a `Port` one (another frame is a located
-//! error); attitudes and lever arms stay the truth. Before the first delivery it commands
+//! `TargetBody` or `World` measurement, `point: Port` a `Port` or a `Hill` one (the centre of
+//! mass carried to the port; another frame is a located error); attitudes and lever arms stay
+//! the truth. A sensor with a navigation filter ([`crate::control::navfilter`]) hands the law
+//! the filter's estimate as a `Hill` measurement. Before the first delivery it commands
 //! nothing.
 
 use super::{TranslationFeedback, TranslationGains, target_mean_motion, unique_prefix};
@@ -84,7 +86,9 @@ pub fn sensed(ctx: &LawContext, kind: &str, point: ControlPoint) -> Result<bool,
     };
     let ok = match point {
         ControlPoint::CentreOfMass => s.frame != MeasuredFrame::Port,
-        ControlPoint::Port => s.frame == MeasuredFrame::Port,
+        // A Hill measurement of the centre of mass (a navigation filter's estimate) is
+        // carried to the port by the true lever arms.
+        ControlPoint::Port => s.frame == MeasuredFrame::Port || s.frame == MeasuredFrame::Hill,
     };
     if !ok {
         return Err(BuildError::at_root(
@@ -97,7 +101,8 @@ pub fn sensed(ctx: &LawContext, kind: &str, point: ControlPoint) -> Result<bool,
                 },
                 match point {
                     ControlPoint::CentreOfMass => "`Hill`, `TargetBody` or `World`",
-                    ControlPoint::Port => "`Port`",
+                    ControlPoint::Port =>
+                        "`Port` (or `Hill`, carried to the port by the true lever arms)",
                 }
             ),
         ));
@@ -145,6 +150,14 @@ fn measured_world(
     };
     match point {
         ControlPoint::CentreOfMass => Some([com.0, com.1, com.0, com.1]),
+        ControlPoint::Port if m.frame == MeasuredFrame::Hill => {
+            // Ports from the centres of mass with the true lever arms.
+            let p = obs.ports?;
+            let own = obs.own();
+            let d = com.0 + (p.chaser.pos_m - own.pos_m) - (p.target.pos_m - t.pos_m);
+            let dv = com.1 + (p.chaser.vel_m_s - own.vel_m_s) - (p.target.vel_m_s - t.vel_m_s);
+            Some([d, dv, com.0, com.1])
+        }
         ControlPoint::Port => None,
     }
 }

@@ -29,7 +29,8 @@
 //! may have no exits (any other could never be left); every phase but the first is the target
 //! of some exit (else it could never be entered); numbers finite; no condition that can never
 //! hold or always holds where a choice was meant (`Any([])`, `All([])`, `DockingState([])`, a
-//! range ≤ 0 m below or < 0 m above, a negative time or one beyond the scene's duration,
+//! range ≤ 0 m below or < 0 m above, a negative time (a time beyond the scene's duration is
+//! allowed: a run may be shortened with `--set duration_s=…`),
 //! `Settled` with a bound ≤ 0); `MarginBelow` names a
 //! guarantee of the scene; `DockingState` names states of a scene with a docking mechanism.
 
@@ -153,7 +154,6 @@ fn check_condition(
     // A condition that can never hold (or always holds where a choice was meant) is a scene
     // error: the phase would never be left, or the condition says nothing.
     let never = |why: String| -> Result<(), BuildError> { Err(BuildError::at(field, why)) };
-    let duration_s = ctx.build.scene.duration_s;
     match c {
         Condition::RangeBelow(v) | Condition::RangeAbove(v) => {
             num(*v, "the range (m)")?;
@@ -196,11 +196,6 @@ fn check_condition(
             if *v < 0.0 {
                 return never(format!(
                     "a time is ≥ 0 s, so a negative time ({v} s) always holds (use `InPhaseFor(0.0)` to leave at once)"
-                ));
-            }
-            if *v > duration_s {
-                return never(format!(
-                    "{v} s is beyond the scene's duration ({duration_s} s): the condition can never hold"
                 ));
             }
         }
