@@ -586,6 +586,27 @@ pub struct Campaign {
     pub guarantee_judged: Vec<String>,
 }
 
+/// A located error in a trials file: the line and column of `path` in `text` (0, 0 when it
+/// cannot be found), the field `field`.
+fn located(
+    text: &str,
+    file: &str,
+    path: &str,
+    field: impl Into<String>,
+    message: impl Into<String>,
+) -> SceneError {
+    let (line, col) = crate::scene::load::locate(text, path)
+        .map(|(s, _)| crate::scene::load::line_col(text, s))
+        .unwrap_or((0, 0));
+    SceneError {
+        file: file.to_string(),
+        line,
+        col,
+        field: field.into(),
+        message: message.into(),
+    }
+}
+
 /// Reads and checks a trials file; the base scene and every parameter path are checked by
 /// building the representative trial ([`TrialsSpec::representative`]) and every grid value.
 pub fn load(path: &Path) -> Result<Campaign, SceneError> {
@@ -601,16 +622,13 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
     )
     .ok();
     let Some(scene_bytes) = scene_bytes else {
-        let (line, col) = crate::scene::load::locate(&text, "scene")
-            .map(|(s, _)| crate::scene::load::line_col(&text, s))
-            .unwrap_or((0, 0));
-        return Err(SceneError {
-            file,
-            line,
-            col,
-            field: "scene".into(),
-            message: format!("no scene file at {}", scene_path.display()),
-        });
+        return Err(located(
+            &text,
+            &file,
+            "scene",
+            "scene",
+            format!("no scene file at {}", scene_path.display()),
+        ));
     };
     let fingerprint = Fingerprint::new(&scene_bytes, text.as_bytes(), spec.seed);
     let mut c = Campaign {
@@ -636,30 +654,20 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
             vals[i] = *v;
             if let Err(e) = load_scene_file(&c.scene_path, &overrides_of(&c.spec, &vals)) {
                 let at = format!("parameters.{i}.values.{j}");
-                let (line, col) = crate::scene::load::locate(&text, &at)
-                    .map(|(s, _)| crate::scene::load::line_col(&text, s))
-                    .unwrap_or((0, 0));
-                return Err(SceneError {
-                    file,
-                    line,
-                    col,
-                    field: at,
-                    message: format!("grid value {v:?} makes an invalid scene: {e}"),
-                });
+                return Err(located(
+                    &text,
+                    &file,
+                    &at,
+                    at.clone(),
+                    format!("grid value {v:?} makes an invalid scene: {e}"),
+                ));
             }
         }
     }
     let loaded = load_scene_file(&c.scene_path, &overrides_of(&c.spec, &repr))?;
     if let Some(d) = c.spec.duration_s {
-        crate::scene::validate::check_steps("duration_s", d, loaded.scene.dt_s).map_err(
-            |(_, m)| SceneError {
-                file: file.clone(),
-                line: 0,
-                col: 0,
-                field: "duration_s".into(),
-                message: m,
-            },
-        )?;
+        crate::scene::validate::check_steps("duration_s", d, loaded.scene.dt_s)
+            .map_err(|(_, m)| located(&text, &file, "duration_s", "duration_s", m))?;
     }
     let has_docking = loaded.scene.docking.is_some();
     let sim = Simulation::new(&loaded)?;
@@ -686,15 +694,12 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
             .filter(|h| !matches!(h.as_str(), "index" | "reason" | "campaign_id"))
             .collect();
         if !allowed.contains(&col) {
-            let (line, col_no) = crate::scene::load::locate(&text, "plot.color_by")
-                .map(|(s, _)| crate::scene::load::line_col(&text, s))
-                .unwrap_or((0, 0));
-            return Err(SceneError {
-                file,
-                line,
-                col: col_no,
-                field: "plot.color_by".into(),
-                message: format!(
+            return Err(located(
+                &text,
+                &file,
+                "plot.color_by",
+                "plot.color_by",
+                format!(
                     "no trials.csv column {col:?} to colour by; one of: {}",
                     allowed
                         .iter()
@@ -702,20 +707,11 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
                         .collect::<Vec<_>>()
                         .join(", ")
                 ),
-            });
+            ));
         }
     }
     if let Err((p, m)) = c.spec.success.check("success", &c.guarantees, has_docking) {
-        let (line, col) = crate::scene::load::locate(&text, &p)
-            .map(|(s, _)| crate::scene::load::line_col(&text, s))
-            .unwrap_or((0, 0));
-        return Err(SceneError {
-            file,
-            line,
-            col,
-            field: p,
-            message: m,
-        });
+        return Err(located(&text, &file, &p, p.clone(), m));
     }
     Ok(c)
 }
