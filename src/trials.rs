@@ -351,18 +351,7 @@ impl TrialsSpec {
     }
 
     fn validate(&self, file: &str, text: &str) -> Result<(), SceneError> {
-        let err = |path: &str, msg: String| {
-            let (line, col) = crate::scene::load::locate(text, path)
-                .map(|(s, _)| crate::scene::load::line_col(text, s))
-                .unwrap_or((0, 0));
-            SceneError {
-                file: file.to_string(),
-                line,
-                col,
-                field: path.to_string(),
-                message: msg,
-            }
-        };
+        let err = |path: &str, msg: String| located(text, file, path, path, msg);
         if self.name.trim().is_empty()
             || self.name.chars().count() > 128
             || self.name.chars().any(char::is_control)
