@@ -16,6 +16,11 @@
 //!   from the same published bounds (`cw_drift_speed_bound`, `cw_error_bound_from_cw_max`).
 //!   Over the run, the window's closest approach √(x₀² + ((3/2) n x₀ (τ* − H − t))²) reaches R
 //!   at t_c; the first violation lies in [t_c − tol/Ḋ, t_c + dt] (Ḋ: its rate at R).
+//! * `PassiveSafety`, propagated (elliptic or J2 references): on an eccentric orbit against the
+//!   Kepler closed form (Battin's f and g functions) of both bodies; with J2 against an RK4
+//!   integration written in the test from Vallado's J2 acceleration; both sampled finely. The
+//!   margin must be at most the sampled closest approach less R and at least that less the
+//!   grid bound's own slack Δτ·V/2.
 //! * `LineOfSight`: a sensor at x = 0.2 m looking along +x at a point 9.4 m away; a box panel
 //!   (half-width 0.2 m in y) crossing the line at 1 m/s from y₀ = −1.205 m blocks it from
 //!   t = 1.005 s (margin = |y| − 0.2 m, the segment's signed distance to the panel), deepest
@@ -301,13 +306,304 @@ fn val_passive_safety_applies_only_from_its_range() {
     assert!(m <= x0 - r && m >= x0 - r - tol, "{m}");
 }
 
+/// Advances an absolute ECI state [r; v] (m, m/s) from time t by h s: (state, t, h).
+type Propagator<'a> = &'a dyn Fn(&[f64; 6], f64, f64) -> [f64; 6];
+
+/// Closest approach of two thrust-free orbits from absolute ECI states, sampled every `step`
+/// s over `horizon` s, with `next` advancing one state by one step (the test's own reference).
+fn sampled_min_distance(
+    mut b: [f64; 6],
+    mut a: [f64; 6],
+    horizon: f64,
+    step: f64,
+    next: Propagator,
+) -> f64 {
+    let d = |b: &[f64; 6], a: &[f64; 6]| {
+        ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt()
+    };
+    let n = (horizon / step).round() as usize;
+    let mut min = d(&b, &a);
+    for i in 0..n {
+        b = next(&b, i as f64 * step, step);
+        a = next(&a, i as f64 * step, step);
+        min = min.min(d(&b, &a));
+    }
+    min
+}
+
+/// An eccentric, inclined reference (a = 7500 km, e = 0.1, i = 30°) and a chaser 60 m away on
+/// a fly-by: the propagated drift's margin against the Kepler closed form (Battin's f and g
+/// functions, `kepler_propagate`) sampled every 0.05 s. Sound: margin ≤ d_min − R (to 1e-6 m,
+/// the closed form's rounding at 7500 km); tight: margin ≥ d_min − R − Δτ·(V + AΔτ/2)/2 − 1e-6,
+/// the grid bound's own slack with V the largest relative speed (A·Δτ ≪ V here, counted as 1 %
+/// of V).
 #[test]
-fn passive_safety_with_j2_is_a_located_error() {
+fn val_passive_safety_propagated_elliptic_against_kepler() {
+    use rpod::guarantee::ReferenceView;
+    use rpod::guarantee::requirements::{DriftSetup, Zone, propagate_drift};
+    use rpod::orbit::kepler::{ClassicalElements, kepler_propagate};
+    use rpod::orbit::lvlh::{LocalFrame, LocalFrameKind};
+    let el = ClassicalElements {
+        a_m: 7.5e6,
+        e: 0.1,
+        i_rad: 30f64.to_radians(),
+        raan_rad: 0.4,
+        argp_rad: 1.0,
+        true_anomaly_rad: 0.3,
+    };
+    let (r_ref, v_ref) = el.to_state(MU_EARTH_M3_S2);
+    let hill = LocalFrame::new(LocalFrameKind::Hill, &r_ref, &v_ref);
+    // Target at the reference; chaser 20 m above, 60 m ahead, drifting back at 0.04 m/s.
+    let (pc, vc) = hill.from_local(
+        &nalgebra::Vector3::new(20.0, 60.0, 3.0),
+        &nalgebra::Vector3::new(0.0, -0.04, 0.0),
+    );
+    let zero = nalgebra::Vector3::zeros();
+    let (radius, horizon, k) = (5.0, 3000.0, 300usize);
+    let found = propagate_drift(
+        &DriftSetup {
+            zone: Zone::Sphere(radius),
+            j2: false,
+            horizon_s: horizon,
+            intervals: k,
+        },
+        &ReferenceView {
+            pos_eci_m: r_ref,
+            vel_eci_m_s: v_ref,
+        },
+        (&pc, &vc),
+        (&zero, &zero),
+    );
+    let abs = |p: nalgebra::Vector3<f64>, v: nalgebra::Vector3<f64>| {
+        let (r, w) = (r_ref + p, v_ref + v);
+        [r.x, r.y, r.z, w.x, w.y, w.z]
+    };
+    let kepler = |x: &[f64; 6], _t: f64, h: f64| {
+        let (r, v) = kepler_propagate(
+            &nalgebra::Vector3::new(x[0], x[1], x[2]),
+            &nalgebra::Vector3::new(x[3], x[4], x[5]),
+            h,
+            MU_EARTH_M3_S2,
+        );
+        [r.x, r.y, r.z, v.x, v.y, v.z]
+    };
+    let d_min = sampled_min_distance(abs(pc, vc), abs(zero, zero), horizon, 0.05, &kepler);
+    let want = d_min - radius;
+    let slack = horizon / k as f64 * found.speed_bound_m_s * 1.01 / 2.0 + 1e-6;
+    println!(
+        "margin {} m, Kepler closest approach − R {want} m, slack {slack} m, error estimate {} m",
+        found.margin_m, found.cw_error_m
+    );
+    assert!(found.margin_m <= want + 1e-6, "unsound: {found:?}");
+    assert!(found.margin_m >= want - slack, "loose: {found:?}");
+    assert!(found.cw_error_m < 1e-4, "{found:?}");
+}
+
+/// With J2: the same fly-by on a LEO reference (a = 7000 km, e = 0.001, i = 51.6°) against an
+/// independent integration in this test (classic RK4 at 0.5 s of each body's absolute state
+/// under μ/r² plus J2 written out here, from Vallado 2013 eq. 8-30), sampled every 0.5 s.
+/// Bounds as above, with 1e-5 m for the RK4 reference's own error (its step halved changes
+/// d_min by less than 1e-7 m).
+#[test]
+fn val_passive_safety_propagated_j2_against_an_independent_integration() {
+    use rpod::guarantee::ReferenceView;
+    use rpod::guarantee::requirements::{DriftSetup, Zone, propagate_drift};
+    use rpod::orbit::kepler::ClassicalElements;
+    use rpod::orbit::lvlh::{LocalFrame, LocalFrameKind};
+    let el = ClassicalElements {
+        a_m: 7.0e6,
+        e: 0.001,
+        i_rad: 51.6f64.to_radians(),
+        raan_rad: 0.2,
+        argp_rad: 0.5,
+        true_anomaly_rad: 2.0,
+    };
+    let (r_ref, v_ref) = el.to_state(MU_EARTH_M3_S2);
+    let hill = LocalFrame::new(LocalFrameKind::Hill, &r_ref, &v_ref);
+    let (pc, vc) = hill.from_local(
+        &nalgebra::Vector3::new(-15.0, 50.0, -4.0),
+        &nalgebra::Vector3::new(0.0, -0.02, 0.004),
+    );
+    let zero = nalgebra::Vector3::zeros();
+    let (radius, horizon, k) = (4.0, 2500.0, 250usize);
+    let found = propagate_drift(
+        &DriftSetup {
+            zone: Zone::Sphere(radius),
+            j2: true,
+            horizon_s: horizon,
+            intervals: k,
+        },
+        &ReferenceView {
+            pos_eci_m: r_ref,
+            vel_eci_m_s: v_ref,
+        },
+        (&pc, &vc),
+        (&zero, &zero),
+    );
+    let abs = |p: nalgebra::Vector3<f64>, v: nalgebra::Vector3<f64>| {
+        let (r, w) = (r_ref + p, v_ref + v);
+        [r.x, r.y, r.z, w.x, w.y, w.z]
+    };
+    // Vallado (2013) eq. 8-30: the J2 acceleration, written independently of rpod's gravity.
+    let accel = |x: &[f64; 6]| {
+        let (mu, j2, re) = (3.986_004_418e14, 1.082_626_68e-3, 6_378_137.0);
+        let r = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
+        let c = 1.5 * j2 * mu * re * re / r.powi(5);
+        let zz = 5.0 * x[2] * x[2] / (r * r);
+        [
+            -mu * x[0] / r.powi(3) - c * x[0] * (1.0 - zz),
+            -mu * x[1] / r.powi(3) - c * x[1] * (1.0 - zz),
+            -mu * x[2] / r.powi(3) - c * x[2] * (3.0 - zz),
+        ]
+    };
+    let deriv = |x: &[f64; 6]| {
+        let a = accel(x);
+        [x[3], x[4], x[5], a[0], a[1], a[2]]
+    };
+    let rk4 = |x: &[f64; 6], _t: f64, h: f64| {
+        let add = |x: &[f64; 6], k: &[f64; 6], s: f64| {
+            let mut y = *x;
+            for i in 0..6 {
+                y[i] += s * k[i];
+            }
+            y
+        };
+        let k1 = deriv(x);
+        let k2 = deriv(&add(x, &k1, h / 2.0));
+        let k3 = deriv(&add(x, &k2, h / 2.0));
+        let k4 = deriv(&add(x, &k3, h));
+        let mut y = *x;
+        for i in 0..6 {
+            y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        }
+        y
+    };
+    let d_min = sampled_min_distance(abs(pc, vc), abs(zero, zero), horizon, 0.5, &rk4);
+    let d_min_half = sampled_min_distance(abs(pc, vc), abs(zero, zero), horizon, 0.25, &rk4);
+    println!("RK4 reference: d_min {d_min} m at 0.5 s, {d_min_half} m at 0.25 s");
+    assert!((d_min - d_min_half).abs() < 1e-4, "reference not converged");
+    let want = d_min.min(d_min_half) - radius;
+    let slack = horizon / k as f64 * found.speed_bound_m_s * 1.01 / 2.0 + 1e-5;
+    println!(
+        "margin {} m, reference closest approach − R {want} m, slack {slack} m, error estimate {} m",
+        found.margin_m, found.cw_error_m
+    );
+    assert!(found.margin_m <= want + 1e-5, "unsound: {found:?}");
+    assert!(found.margin_m >= want - slack, "loose: {found:?}");
+}
+
+/// A J2 scene is now propagated, not refused: the fly-by above with J2 on. The CW straight-line
+/// closest approach x₀ − R moves by at most the CW bound B (nonlinearity) plus the J2
+/// differential acceleration's effect over the horizon, ½·G_J2·ρ_max·H² with G_J2 the J2
+/// gradient bound at 7000 km ([`gravity_gradient_bound`] less its point-mass part).
+#[test]
+fn val_passive_safety_with_j2_in_a_scene() {
+    use rpod::guarantee::requirements::gravity_gradient_bound;
+    let n = (MU_EARTH_M3_S2 / 7.0e6_f64.powi(3)).sqrt();
+    let (x0, y0, r, h) = (20.0, 30.0, 5.0, 2000.0);
+    let sim = sim_of(&orbit_scene(
+        (x0, y0, 0.0, -1.5 * n * x0),
+        &format!(
+            r#"PassiveSafety(name: "ps", body: "chaser", around: "target", radius_m: Some({r}),
+                 horizon_s: {h}, grid_s: 5.0)"#
+        ),
+        1.0,
+        true,
+    ));
+    let g = &sim.guarantees().status[0];
+    let rho_max = (x0 * x0 + (y0 - 1.5 * n * x0 * h).powi(2)).sqrt();
+    let g_j2 = gravity_gradient_bound(7.0e6, true) - gravity_gradient_bound(7.0e6, false);
+    let j2_effect = 0.5 * g_j2 * rho_max * h * h;
+    let tol = drift_tolerance(x0, y0, n, h, 5.0) + j2_effect;
+    println!(
+        "J2: margin {} m, CW closed form {} m, tolerance {tol} m (J2 part {j2_effect} m)",
+        g.last_margin,
+        x0 - r
+    );
+    assert!(
+        (g.last_margin - (x0 - r)).abs() <= tol,
+        "{} vs {}",
+        g.last_margin,
+        x0 - r
+    );
+    assert_eq!(g.judged, "samples only");
+}
+
+/// `eval_period_s: Some(P)`: the drift is evaluated every P s over H + P, so the window of
+/// the violation test above reaches the closest approach up to P earlier: the first violation
+/// lies in [t_c − P − tol/Ḋ, t_c + dt].
+#[test]
+fn val_passive_safety_with_an_evaluation_period() {
+    let n = (MU_EARTH_M3_S2 / 7.0e6_f64.powi(3)).sqrt();
+    let (x0, y0) = (20.0, 30.0);
+    let c = 1.5 * n * x0;
+    let t_star = y0 / c;
+    let (h, grid, t_c, period) = (600.0, 5.0, 100.0, 10.0);
+    let r = (x0 * x0 + (c * (t_star - h - t_c)).powi(2)).sqrt();
+    let (_, s) = run(sim_of(&orbit_scene(
+        (x0, y0, 0.0, -c),
+        &format!(
+            r#"PassiveSafety(name: "ps", body: "chaser", around: "target", radius_m: Some({r}),
+                 horizon_s: {h}, grid_s: {grid}, eval_period_s: Some({period}))"#
+        ),
+        150.0,
+        false,
+    )));
+    let g = guarantee(&s, "ps");
+    let tol = drift_tolerance(x0, y0, n, h + period, grid);
+    let rate = c * (r * r - x0 * x0).sqrt() / r;
+    let t = f(&g["first_violation_s"]);
+    println!("R = {r} m, P = {period} s: first violation {t} s, t_c = {t_c} s");
+    assert!(
+        t <= t_c + 0.1 + 1e-9 && t >= t_c - period - tol / rate,
+        "{t} vs {t_c} (−{period} − {})",
+        tol / rate
+    );
+}
+
+#[test]
+fn passive_safety_bad_periods_and_grids_are_located_errors() {
+    for (extra, j2, field) in [
+        (
+            "eval_period_s: Some(-1.0)",
+            false,
+            "guarantees.ps.eval_period_s",
+        ),
+        (
+            "eval_period_s: Some(700.0)",
+            false,
+            "guarantees.ps.eval_period_s",
+        ),
+        (
+            "eval_period_s: Some(NaN)",
+            false,
+            "guarantees.ps.eval_period_s",
+        ),
+    ] {
+        let e = load_scene_str(
+            &orbit_scene(
+                (20.0, 30.0, 0.0, 0.0),
+                &format!(
+                    r#"PassiveSafety(name: "ps", body: "chaser", around: "target", radius_m: Some(5.0),
+                 horizon_s: 600.0, grid_s: 5.0, {extra})"#
+                ),
+                1.0,
+                j2,
+            ),
+            "ps",
+            &[],
+        )
+        .unwrap_err();
+        println!("{e}");
+        assert_eq!(e.field, field, "{e}");
+        assert!(e.line > 0, "{e}");
+    }
+    // A propagated drift's grid interval is limited (its interval bound).
     let e = load_scene_str(
         &orbit_scene(
             (20.0, 30.0, 0.0, 0.0),
             r#"PassiveSafety(name: "ps", body: "chaser", around: "target", radius_m: Some(5.0),
-                 horizon_s: 600.0, grid_s: 5.0)"#,
+                 horizon_s: 6000.0, grid_s: 100.0)"#,
             1.0,
             true,
         ),
@@ -316,12 +612,8 @@ fn passive_safety_with_j2_is_a_located_error() {
     )
     .unwrap_err();
     println!("{e}");
-    assert_eq!(e.field, "environment");
-    assert!(
-        e.message.contains("J2") && e.message.contains("not supported yet"),
-        "{e}"
-    );
-    assert!(e.line > 0);
+    assert_eq!(e.field, "guarantees.ps.grid_s", "{e}");
+    assert!(e.message.contains("90"), "{e}");
 }
 
 const PANEL: &str = r#"Bus(name: "panel", shape: Box(size_m: (2.0, 0.4, 2.0)))"#;

@@ -676,8 +676,11 @@ fn check_numbers(
             for (i, v) in items.iter().enumerate() {
                 // Paths as the other scene errors spell them: a named element by its name, a
                 // vector's component by its field alone.
-                // A newtype (`Some((…))`, `AirBearing((…))`) is transparent, as in [`locate`].
-                let newtype = items.len() == 1 && matches!(v.kind, NodeKind::Struct { .. });
+                // A newtype (`Some((…))`, `AirBearing((…))`) is transparent, as in [`locate`];
+                // a one-element list `[X(…)]` is not (its element keeps its label).
+                let list = text.as_bytes().get(node.start) == Some(&b'[');
+                let newtype =
+                    !list && items.len() == 1 && matches!(v.kind, NodeKind::Struct { .. });
                 if newtype || matches!(v.kind, NodeKind::Atom) {
                     check_numbers(text, v, key, path, bad);
                     continue;
