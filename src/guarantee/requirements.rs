@@ -366,8 +366,8 @@ impl Guarantee for ClosingSpeedGate {
 /// per grid interval). Margin: the same grid lower bound with the speed bound of each interval
 /// from its end speeds and a bound on the differential gravity inside it, less the step-doubling
 /// difference (an error *estimate*: the 2m-step solution's error is about 1/255 of it for an
-/// 8th-order method) — see [`propagate_drift`]. The ellipsoid's axes are the reference's Hill
-/// frame at each grid time.
+/// 8th-order method) — see [`propagate_drift`]. The ellipsoid's axes are `around`'s own Hill
+/// frame at each grid time (the reference's, to the angle |ρ_around|/r, in the CW model).
 ///
 /// Judged at the samples only: thrust changes the state, and so the drift, between samples.
 /// Every step by default; with `eval_period_s: Some(P)` the drift is evaluated every P seconds
@@ -717,7 +717,7 @@ pub const MAX_PROPAGATED_GRID_S: f64 = 90.0;
 /// What [`propagate_drift`] propagates.
 #[derive(Debug, Clone, Copy)]
 pub struct DriftSetup {
-    /// Keep-out zone about `around`, axes of the reference's Hill frame.
+    /// Keep-out zone about `around`, axes of `around`'s own Hill frame at each grid time.
     pub zone: Zone,
     /// J2 on (as the scene's `Orbit(j2: …)`).
     pub j2: bool,
@@ -750,9 +750,9 @@ pub fn gravity_gradient_bound(r_m: f64, j2: bool) -> f64 {
 }
 
 /// The thrust-free drift of `body` (world-frame position and velocity) from `around`, under the
-/// scene's own gravity: the reference (ECI) and both bodies (world frame: ECI axes, origin at
-/// the reference) propagated together, each body with the differential gravity the simulation
-/// applies ([`crate::orbit::gravity::differential_accel`]), by the 8th-order method in m
+/// scene's own gravity: `around`'s orbit (ECI) and `body`'s state relative to it propagated
+/// together, the relative one under the differential gravity the simulation applies
+/// ([`crate::orbit::gravity::differential_accel`], cancellation-free), by the 8th-order method in m
 /// sub-steps per grid interval (m from the reference orbit's sub-step rule,
 /// [`crate::orbit::integrate::MAX_SUBSTEP_ANOMALY_RAD`]) and again in 2m.
 ///
@@ -777,7 +777,7 @@ pub fn propagate_drift(
     use crate::orbit::constants::R_EARTH_M;
     use crate::orbit::gravity::{accel_earth, differential_accel};
     use crate::orbit::integrate::{ReferenceOrbit, rk8_step};
-    type S = SVector<f64, 18>;
+    type S = SVector<f64, 12>;
     let j2 = setup.j2;
     let k = setup.intervals.max(1);
     let dtau = setup.horizon_s / k as f64;
@@ -793,29 +793,25 @@ pub fn propagate_drift(
         return bad;
     }
     let m = (dtau / h_max).ceil().max(1.0) as usize;
+    // [R_a, V_a]: `around`'s ECI state; [p, v]: `body` from `around` (ECI axes).
     let mut y0 = S::zeros();
     for (off, v) in [
-        (0, &reference.pos_eci_m),
-        (3, &reference.vel_eci_m_s),
-        (6, body.0),
-        (9, body.1),
-        (12, around.0),
-        (15, around.1),
+        (0, reference.pos_eci_m + around.0),
+        (3, reference.vel_eci_m_s + around.1),
+        (6, body.0 - around.0),
+        (9, body.1 - around.1),
     ] {
-        y0.fixed_rows_mut::<3>(off).copy_from(v);
+        y0.fixed_rows_mut::<3>(off).copy_from(&v);
     }
     let mut f = |_t: f64, y: &S| -> S {
         let r = Vector3::new(y[0], y[1], y[2]);
+        let p = Vector3::new(y[6], y[7], y[8]);
         let mut d = S::zeros();
         d.fixed_rows_mut::<3>(0).copy_from(&y.fixed_rows::<3>(3));
         d.fixed_rows_mut::<3>(3).copy_from(&accel_earth(&r, j2));
-        for off in [6, 12] {
-            let rho = Vector3::new(y[off], y[off + 1], y[off + 2]);
-            d.fixed_rows_mut::<3>(off)
-                .copy_from(&y.fixed_rows::<3>(off + 3));
-            d.fixed_rows_mut::<3>(off + 3)
-                .copy_from(&differential_accel(&r, &rho, j2));
-        }
+        d.fixed_rows_mut::<3>(6).copy_from(&y.fixed_rows::<3>(9));
+        d.fixed_rows_mut::<3>(9)
+            .copy_from(&differential_accel(&r, &p, j2));
         d
     };
     // Grid states of both runs.
@@ -836,8 +832,8 @@ pub fn propagate_drift(
     let fine = run(2 * m);
     let rel = |y: &S| {
         (
-            Vector3::new(y[6] - y[12], y[7] - y[13], y[8] - y[14]),
-            Vector3::new(y[9] - y[15], y[10] - y[16], y[11] - y[17]),
+            Vector3::new(y[6], y[7], y[8]),
+            Vector3::new(y[9], y[10], y[11]),
         )
     };
     let mut err_doubling: f64 = 0.0;
@@ -859,21 +855,20 @@ pub fn propagate_drift(
         err_doubling = err_doubling.max((rel(yc).0 - p).norm());
         p_max = p_max.max(p.norm());
         v_max = v_max.max(v.norm());
-        let r_ref = Vector3::new(yf[0], yf[1], yf[2]);
+        let (r_a, v_a) = (
+            Vector3::new(yf[0], yf[1], yf[2]),
+            Vector3::new(yf[3], yf[4], yf[5]),
+        );
         let hill = super::ReferenceView {
-            pos_eci_m: r_ref,
-            vel_eci_m_s: Vector3::new(yf[3], yf[4], yf[5]),
+            pos_eci_m: r_a,
+            vel_eci_m_s: v_a,
         }
         .hill();
         let (p_hill, _) = hill.to_local(&p, &Vector3::zeros());
         let mk = setup.zone.margin(&p_hill);
         // Lowest radius of either body and fastest absolute speed at this grid point.
-        let r_lo = (r_ref + Vector3::new(yf[6], yf[7], yf[8]))
-            .norm()
-            .min((r_ref + Vector3::new(yf[12], yf[13], yf[14])).norm());
-        let v_hi = (Vector3::new(yf[3] + yf[9], yf[4] + yf[10], yf[5] + yf[11]))
-            .norm()
-            .max((Vector3::new(yf[3] + yf[15], yf[4] + yf[16], yf[5] + yf[17])).norm());
+        let r_lo = r_a.norm().min((r_a + p).norm());
+        let v_hi = v_a.norm().max((v_a + v).norm());
         grid_min = grid_min.min(mk);
         lower = lower.min(mk);
         if let Some(Grid {
