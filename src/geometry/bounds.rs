@@ -355,6 +355,46 @@ mod tests {
     }
 
     #[test]
+    fn minimize_by_lets_a_far_fast_piece_clear_on_its_own_bound() {
+        // f = min(f₁, f₂): f₁ = 10 + 50·sin(40t) (far, |f₁′| ≤ 2000), f₂ = 1 + 0.1·t (near,
+        // |f₂′| ≤ 0.1) on [0, 0.01]. With one rate (2000) the bound (2·1 − 20)/2 forces
+        // bisection; with per-piece rates f₂'s (1 + 1.001 − 0.001)/2 = 1 clears 1 − 1e-3 and
+        // f₁'s (10 + 10.1 − 20)/2 > 1 does too: no evaluation. The true minimum, 1 at t = 0,
+        // is inside [lower, value].
+        let f = |t: f64| [10.0 + 50.0 * (40.0 * t).sin(), 1.0 + 0.1 * t];
+        let rates = [2000.0, 0.1];
+        let thr = |b: f64| b - 1e-3;
+        let r = minimize_by(
+            0.01,
+            f(0.0),
+            f(0.01),
+            |s: &[f64; 2]| s[0].min(s[1]),
+            |a: &[f64; 2], b: &[f64; 2], w: f64| {
+                (0..2)
+                    .map(|k| interval_lower_bound(a[k], b[k], rates[k], w))
+                    .fold(f64::INFINITY, f64::min)
+            },
+            thr,
+            100,
+            1e-12,
+            f,
+        );
+        assert_eq!(r.evals, 0, "{r:?}");
+        assert!(r.lower <= 1.0 && r.value == 1.0, "{r:?}");
+        let one = minimize(
+            0.01,
+            Bracket::exact(1.0),
+            Bracket::exact(1.001),
+            2000.0,
+            thr,
+            100,
+            1e-12,
+            |t| Bracket::exact(f(t)[0].min(f(t)[1])),
+        );
+        assert!(one.evals > 0, "{one:?}");
+    }
+
+    #[test]
     fn first_below_brackets_the_crossing() {
         // sin t drops below −0.5 first at 7π/6.
         let want = 7.0 * std::f64::consts::PI / 6.0;
