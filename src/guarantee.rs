@@ -207,6 +207,15 @@ pub trait Guarantee: Send + Sync {
         let _ = motion;
         None
     }
+    /// The margin is the full-geometry distance between two bodies less a constant, exactly
+    /// as [`Guarantee::margin_bracket`] computes it: `Some((a, b, offset_m))` means
+    /// margin = d(a, b) − offset_m (and bracket lower = lower_m − offset_m). The monitor may
+    /// then judge it between samples with per-part-pair rate bounds instead of
+    /// [`Guarantee::rate_bound`] (`sim::monitor::search_parts`), so that a body turning fast
+    /// does not force refinement where its parts far from the other body are (default `None`).
+    fn distance_margin(&self) -> Option<(usize, usize, f64)> {
+        None
+    }
     /// What the margin reads (default: everything in the view).
     fn reads(&self) -> Reads {
         Reads::Everything
@@ -284,6 +293,10 @@ impl Guarantee for MinDistance {
     /// The distance is never negative: the margin is at least −`min_m`.
     fn margin_floor(&self) -> f64 {
         -self.min_m
+    }
+    /// margin = d(a, b) − `min_m`.
+    fn distance_margin(&self) -> Option<(usize, usize, f64)> {
+        Some((self.a, self.b, self.min_m))
     }
     fn reads(&self) -> Reads {
         Reads::Pairs(vec![(self.a.min(self.b), self.a.max(self.b))])

@@ -66,9 +66,9 @@ pub struct MinSearch {
 #[derive(Clone, Copy)]
 struct Piece {
     a: f64,
-    fa: Bracket,
+    fa: usize,
     b: f64,
-    fb: Bracket,
+    fb: usize,
     lb: f64,
 }
 
@@ -89,19 +89,51 @@ pub fn minimize(
     threshold: impl Fn(f64) -> f64,
     max_evals: u32,
     min_width: f64,
-    mut f: impl FnMut(f64) -> Bracket,
+    f: impl FnMut(f64) -> Bracket,
 ) -> MinSearch {
-    let (mut value, mut t) = if fb.value < fa.value {
-        (fb.value, h)
-    } else {
-        (fa.value, 0.0)
-    };
+    minimize_by(
+        h,
+        fa,
+        fb,
+        |x: &Bracket| x.value,
+        |x: &Bracket, y: &Bracket, w: f64| interval_lower_bound(x.lower, y.lower, rate, w),
+        threshold,
+        max_evals,
+        min_width,
+        f,
+    )
+}
+
+/// [`minimize`] over samples that carry more than one bracket: `value(s)` is f at a sample
+/// (the value found), and `bound(s_a, s_b, w)` a certified lower bound of f over a
+/// sub-interval of width `w` whose ends are sampled by `s_a` and `s_b`. With
+/// f = min over pieces k of f_k and |f_k′| ≤ L_k, min over k of
+/// (lower_k(a) + lower_k(b) − L_k·w)/2 is such a bound — a piece whose own bound clears the
+/// threshold then never forces a bisection. Same search, same stop rules; with Bracket samples
+/// and [`interval_lower_bound`] it is [`minimize`].
+#[allow(clippy::too_many_arguments)] // the interval, its ends, the bound, and the stop rules
+pub fn minimize_by<S>(
+    h: f64,
+    fa: S,
+    fb: S,
+    value_of: impl Fn(&S) -> f64,
+    bound: impl Fn(&S, &S, f64) -> f64,
+    threshold: impl Fn(f64) -> f64,
+    max_evals: u32,
+    min_width: f64,
+    mut f: impl FnMut(f64) -> S,
+) -> MinSearch {
+    let (va, vb) = (value_of(&fa), value_of(&fb));
+    let (mut value, mut t) = if vb < va { (vb, h) } else { (va, 0.0) };
+    let lb0 = bound(&fa, &fb, h);
+    // Every sample, once; pieces refer to them by index.
+    let mut samples = vec![fa, fb];
     let mut pieces = vec![Piece {
         a: 0.0,
-        fa,
+        fa: 0,
         b: h,
-        fb,
-        lb: interval_lower_bound(fa.lower, fb.lower, rate, h),
+        fb: 1,
+        lb: lb0,
     }];
     let mut evals = 0;
     let mut settled_lb = f64::INFINITY;
@@ -134,17 +166,20 @@ pub fn minimize(
         let m = 0.5 * (p.a + p.b);
         let fm = f(m);
         evals += 1;
-        if fm.value < value {
-            value = fm.value;
+        let vm = value_of(&fm);
+        if vm < value {
+            value = vm;
             t = m;
         }
-        for (a, fa, b, fb) in [(p.a, p.fa, m, fm), (m, fm, p.b, p.fb)] {
+        let im = samples.len();
+        samples.push(fm);
+        for (a, ia, b, ib) in [(p.a, p.fa, m, im), (m, im, p.b, p.fb)] {
             pieces.push(Piece {
                 a,
-                fa,
+                fa: ia,
                 b,
-                fb,
-                lb: interval_lower_bound(fa.lower, fb.lower, rate, b - a),
+                fb: ib,
+                lb: bound(&samples[ia], &samples[ib], b - a),
             });
         }
     }
@@ -317,6 +352,46 @@ mod tests {
         );
         assert_eq!(r.evals, 0);
         assert!(r.lower >= 5.0);
+    }
+
+    #[test]
+    fn minimize_by_lets_a_far_fast_piece_clear_on_its_own_bound() {
+        // f = min(f₁, f₂): f₁ = 10 + 50·sin(40t) (far, |f₁′| ≤ 2000), f₂ = 1 + 0.1·t (near,
+        // |f₂′| ≤ 0.1) on [0, 0.01]. With one rate (2000) the bound (2·1 − 20)/2 forces
+        // bisection; with per-piece rates f₂'s (1 + 1.001 − 0.001)/2 = 1 clears 1 − 1e-3 and
+        // f₁'s (10 + 10.1 − 20)/2 > 1 does too: no evaluation. The true minimum, 1 at t = 0,
+        // is inside [lower, value].
+        let f = |t: f64| [10.0 + 50.0 * (40.0 * t).sin(), 1.0 + 0.1 * t];
+        let rates = [2000.0, 0.1];
+        let thr = |b: f64| b - 1e-3;
+        let r = minimize_by(
+            0.01,
+            f(0.0),
+            f(0.01),
+            |s: &[f64; 2]| s[0].min(s[1]),
+            |a: &[f64; 2], b: &[f64; 2], w: f64| {
+                (0..2)
+                    .map(|k| interval_lower_bound(a[k], b[k], rates[k], w))
+                    .fold(f64::INFINITY, f64::min)
+            },
+            thr,
+            100,
+            1e-12,
+            f,
+        );
+        assert_eq!(r.evals, 0, "{r:?}");
+        assert!(r.lower <= 1.0 && r.value == 1.0, "{r:?}");
+        let one = minimize(
+            0.01,
+            Bracket::exact(1.0),
+            Bracket::exact(1.001),
+            2000.0,
+            thr,
+            100,
+            1e-12,
+            |t| Bracket::exact(f(t)[0].min(f(t)[1])),
+        );
+        assert!(one.evals > 0, "{one:?}");
     }
 
     #[test]

@@ -657,6 +657,11 @@ fn physics_step(
             .iter()
             .map(|e| motion::principal_moments(&q.get(*e).expect("body").0.inertia_kg_m2))
             .collect();
+        motion.axes_body = roster
+            .bodies
+            .iter()
+            .map(|e| motion::principal_axes(&q.get(*e).expect("body").0.inertia_kg_m2))
+            .collect();
         sync.stale = vec![true; n];
     }
     sc.start.clear();
@@ -1041,6 +1046,7 @@ fn check_guarantees(
     motion: Res<motion::StepMotion>,
     geo: Res<monitor::MonitorGeometry>,
     mut scratch: Local<monitor::DistanceScratch>,
+    mut part_scratch: Local<monitor::DistanceScratch>,
     orbit: Option<Res<OrbitEnv>>,
     host: Option<Res<controllers::ControllerHost>>,
 ) {
@@ -1079,6 +1085,8 @@ fn check_guarantees(
     let mut bodies_at: Vec<BodyView> = Vec::new();
     let mut pairs_at: Vec<PairDistance> = Vec::new();
     let mut count = monitor::QueryCount::default();
+    // The per-part searches' queries (counted with the others at the end).
+    let mut part_count = monitor::QueryCount::default();
     for k in 0..g.list.len() {
         let inv = &g.list[k];
         let m1 = inv.margin_bracket(&view);
@@ -1198,16 +1206,57 @@ fn check_guarantees(
         let floor = floor.max(inv.step_floor(&view).unwrap_or(f64::NEG_INFINITY));
         finding.lower = finding.lower.max(floor);
         if finding.lower < thr(m1.value) {
-            let r = minimize(
-                dt,
-                m0,
-                m1,
-                rate,
-                thr,
-                MAX_GUARANTEE_EVALS,
-                dt * 1e-9,
-                &mut eval,
-            );
+            // A margin that is a distance less a constant, with a body turning fast: the
+            // per-part-pair bounds (`monitor::search_parts`).
+            let per_part = inv.distance_margin().and_then(|(a, b, offset)| {
+                let (i, j) = (a.min(b), a.max(b));
+                let p = &mon.pairs[*mon.pair_index.get(&(i, j))?];
+                if p.t_s != t {
+                    return None;
+                }
+                let (pair_rate, body_rate) = monitor::pair_rate_gain(
+                    &geo,
+                    &motion,
+                    i,
+                    j,
+                    (p.part_a, p.part_b),
+                    &mut part_scratch,
+                );
+                (body_rate >= monitor::PER_PART_MIN_GAIN * pair_rate).then_some((
+                    i,
+                    j,
+                    offset,
+                    (p.part_a, p.part_b),
+                ))
+            });
+            let r = match per_part {
+                Some((i, j, offset, warm)) => {
+                    monitor::search_parts(
+                        &geo,
+                        &motion,
+                        i,
+                        j,
+                        (m0, m1),
+                        offset,
+                        thr,
+                        MAX_GUARANTEE_EVALS,
+                        Some(warm),
+                        &mut part_scratch,
+                        &mut part_count,
+                    )
+                    .0
+                }
+                None => minimize(
+                    dt,
+                    m0,
+                    m1,
+                    rate,
+                    thr,
+                    MAX_GUARANTEE_EVALS,
+                    dt * 1e-9,
+                    &mut eval,
+                ),
+            };
             if r.value < finding.min_value && r.t > 0.0 && r.t < dt {
                 finding.min_value = r.value;
                 finding.min_t_s = t0 + r.t;
@@ -1274,7 +1323,7 @@ fn check_guarantees(
         }
         g.last[k] = m1;
     }
-    g.interval_queries += count.exact;
+    g.interval_queries += count.exact + part_count.exact;
 }
 
 /// Every `Rcs` actuator's jets and their firing flags over the current step, for

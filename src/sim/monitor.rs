@@ -284,6 +284,177 @@ pub struct MonitorGeometry {
     /// Per body: radius about its centre of mass of a sphere holding the axis-aligned boxes of
     /// all its parts in any attitude (a part's box lies within √3 of its bounding radius), m.
     pub aabb_extent_m: Vec<f64>,
+    /// Per body, per collider: the part as its own rate bound sees it ([`PartPiece`]).
+    pub pieces: Vec<Vec<PartPiece>>,
+}
+
+/// Symmetry of a part about an axis of its own, for the rotation-aware rate bound.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Revolution {
+    /// No symmetry used (boxes, convex hulls — faceted cones included — and meshes).
+    None,
+    /// An exact solid of revolution about the axis through [`PartPiece::centre_body_m`] with
+    /// this unit direction, body frame (parry `Cylinder`, `Cone`, `Capsule`).
+    Axis(Vector3<f64>),
+    /// Symmetric about every axis through its centre (parry `Ball`).
+    Any,
+}
+
+/// A part as the per-part rate bound uses it ([`part_pair_rates`]): a point c on the part's
+/// symmetry axis (its centre; the collider origin for parts without symmetry), the radius of a
+/// sphere about c holding the part, and its symmetry.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PartPiece {
+    /// c, in the body frame (relative to the body origin, as `pose_body`), m.
+    pub centre_body_m: Vector3<f64>,
+    /// Radius about c of a sphere holding the part, m.
+    pub radius_m: f64,
+    /// Symmetry about an axis through c.
+    pub revolution: Revolution,
+}
+
+impl PartPiece {
+    /// The piece of a part with shape `shape` at `pose_body` (bounding radius `bound_radius_m`
+    /// about the collider origin). Only parry's exact round shapes get an axis: `Ball`,
+    /// `Cylinder` and `Cone` (local y, centred on the origin) and `Capsule` (its segment, c its
+    /// midpoint); their radii about c come from the shape itself, inflated by 1e-6 relative
+    /// for the f32 parameters.
+    pub fn of(shape: &dyn rp::Shape, pose_body: &Isometry3<f64>, bound_radius_m: f64) -> Self {
+        let y = pose_body.rotation * Vector3::y();
+        let origin = pose_body.translation.vector;
+        let grow = 1.0 + 1e-6;
+        if let Some(b) = shape.as_ball() {
+            return Self {
+                centre_body_m: origin,
+                radius_m: f64::from(b.radius) * grow,
+                revolution: Revolution::Any,
+            };
+        }
+        if let Some(c) = shape.as_cylinder() {
+            return Self {
+                centre_body_m: origin,
+                radius_m: f64::from(c.radius).hypot(f64::from(c.half_height)) * grow,
+                revolution: Revolution::Axis(y),
+            };
+        }
+        if let Some(c) = shape.as_cone() {
+            return Self {
+                centre_body_m: origin,
+                radius_m: f64::from(c.radius).hypot(f64::from(c.half_height)) * grow,
+                revolution: Revolution::Axis(y),
+            };
+        }
+        if let Some(c) = shape.as_capsule() {
+            let (a, b) = (conv::na(c.segment.a), conv::na(c.segment.b));
+            let half = (b - a).norm() * 0.5;
+            let mid = pose_body * nalgebra::Point3::from((a + b) * 0.5);
+            let revolution = if half > 0.0 {
+                Revolution::Axis(pose_body.rotation * ((b - a) / (2.0 * half)))
+            } else {
+                Revolution::Any
+            };
+            return Self {
+                centre_body_m: mid.coords,
+                radius_m: (half + f64::from(c.radius)) * grow,
+                revolution,
+            };
+        }
+        Self {
+            centre_body_m: origin,
+            radius_m: bound_radius_m,
+            revolution: Revolution::None,
+        }
+    }
+}
+
+/// One body's per-part rate terms over a step ([`part_terms`]).
+#[derive(Debug, Clone, Default)]
+pub struct PartTerms {
+    /// Per part: bound on |ω × (c − x_cm)|, the speed of its centre c from the body's rotation,
+    /// m/s.
+    pub centre_m_s: Vec<f64>,
+    /// Per part: bound on the rotation term |ω′|·r of [`part_pair_rates`], m/s.
+    pub turn_m_s: Vec<f64>,
+}
+
+/// Body i's per-part rate terms over the step (see [`part_pair_rates`]): with W_k the bounds on
+/// its body-frame angular velocity's components along its principal axes e_k over the step
+/// ([`StepMotion::omega_axes_bound`]) and Ω its angular-speed bound,
+/// |ω × (c − x_cm)| = |ω_b × r| ≤ min(Ω|r|, Σ_k W_k|e_k × r|) with r = c − x_cm in the body
+/// frame; and the rotation term ρ·min(Ω, Σ_k W_k|e_k × â|) for a part symmetric about the axis
+/// â (|ω_b − (ω_b·â)â| = |ω_b × â|), 0 for a ball, ρ·Ω otherwise (ρ: the radius about c).
+pub fn part_terms(geo: &MonitorGeometry, motion: &StepMotion, i: usize, out: &mut PartTerms) {
+    let om = motion.omega_bound(i);
+    let (axes, w) = motion.omega_axes_bound(i);
+    let spread = |x: &Vector3<f64>| {
+        (0..3)
+            .map(|k| w[k] * axes.column(k).cross(x).norm())
+            .sum::<f64>()
+    };
+    out.centre_m_s.clear();
+    out.turn_m_s.clear();
+    for piece in &geo.pieces[i] {
+        let r = piece.centre_body_m - geo.com_body_m[i];
+        out.centre_m_s.push((om * r.norm()).min(spread(&r)));
+        let rot = match piece.revolution {
+            Revolution::None => om,
+            Revolution::Axis(a) => om.min(spread(&a)),
+            Revolution::Any => 0.0,
+        };
+        out.turn_m_s.push(rot * piece.radius_m);
+    }
+}
+
+/// Per part pair (p of body i, q of body j; row-major, p · n_j + q), a bound on the rate of
+/// change of the distance between the two parts over the step, m/s:
+///
+/// ```text
+/// L_pq = min( L_ij ,  max|x′_i − x′_j| + |ω_i × (c_p − x_i)| + |ω_j × (c_q − x_j)|
+///                     + |ω′_i|·ρ_p + |ω′_j|·ρ_q )
+/// ```
+///
+/// with L_ij the bodies' bound ([`StepMotion::distance_rate_bound`], a bound on the speed of
+/// every point of one body relative to the other, so on every part pair's distance too), c the
+/// parts' centres and ρ their radii about them ([`PartPiece`]), and ω′ the part's own rotation:
+/// ω for a part without symmetry, ω − (ω·â)â for an exact solid of revolution about the axis
+/// â through c, nothing for a ball (terms bounded by [`part_terms`]).
+///
+/// Why: the distance between two sets that move rigidly, P(t) = φ_t(P₀) and Q(t) = ψ_t(Q₀),
+/// changes at most at sup |φ̇_t(x) − ψ̇_t(y)| over x ∈ P₀, y ∈ Q₀ (for t₁ < t₂ take the closest
+/// pair at t₁ and follow it: d(t₂) ≤ d(t₁) + ∫ |φ̇ − ψ̇|, and the same from t₂ back). A point of
+/// P moves at v(c) + ω × (x − c) with |x − c| ≤ ρ: hence the terms. For a solid of revolution
+/// about the axis through c with direction â, the motion that matters is the set's: the
+/// component (ω·â)â is a rotation of P about its own axis, which maps P onto itself — on P's
+/// boundary its velocity (ω·â)â × (x − c) is tangent to the surface (P's boundary is a surface
+/// of revolution about that axis: the rotation's velocity field is tangent to every circle about
+/// the axis, which lie in the surface), so it moves no boundary point along its normal. Formally,
+/// with A(t) the rotation solving Ȧ = [ω′(t)]×A, A(t₀) = R(t₀): A(t)â₀ and â(t) = R(t)â₀
+/// solve the same linear equation ẋ = ω′ × x (ω × â = ω′ × â), so they are equal; P(t) depends
+/// only on c(t) and â(t), so P(t) = c(t) + A(t)(P₀ − c₀) — a rigid motion of P whose points
+/// move at v(c) + ω′ × (x − c). A ball is symmetric about every axis through its centre: ω′ = 0.
+/// A faceted hull (a `ConvexHull` cone) is not a solid of revolution: its facets do move along
+/// their normals under a spin about its axis, so it keeps the full |ω|·ρ.
+pub fn part_pair_rates(
+    geo: &MonitorGeometry,
+    motion: &StepMotion,
+    i: usize,
+    j: usize,
+    terms: &mut [PartTerms; 2],
+    out: &mut Vec<f64>,
+) {
+    let body = motion.distance_rate_bound(i, j);
+    let rel = motion.rel_speed_bound(i, j);
+    let [ti, tj] = terms;
+    part_terms(geo, motion, i, ti);
+    part_terms(geo, motion, j, tj);
+    out.clear();
+    for p in 0..ti.centre_m_s.len() {
+        let a = ti.centre_m_s[p] + ti.turn_m_s[p];
+        for q in 0..tj.centre_m_s.len() {
+            let l = (rel + a + tj.centre_m_s[q] + tj.turn_m_s[q]) * (1.0 + 1e-9);
+            out.push(l.min(body));
+        }
+    }
 }
 
 impl MonitorGeometry {
@@ -314,6 +485,14 @@ impl MonitorGeometry {
                 .zip(&radii)
                 .map(|(p, r)| (p.translation.vector - com).norm() + 3f64.sqrt() * r)
                 .fold(0.0, f64::max);
+            g.pieces.push(
+                shapes
+                    .iter()
+                    .zip(&poses)
+                    .zip(&radii)
+                    .map(|((sh, p), r)| PartPiece::of(&**sh, p, *r))
+                    .collect(),
+            );
             g.aabb_extent_m.push(aabb_extent);
             g.has_docking.push(dock.iter().any(|d| *d));
             g.shapes.push(shapes);
@@ -390,7 +569,90 @@ pub fn closest_parts(
     evaluated: &mut Vec<(f64, usize, usize)>,
     count: &mut QueryCount,
 ) -> PartPairHit {
+    let mut none = None;
+    closest_parts_inner(
+        geo, i, pi, j, pj, keep, warm, certify, candidates, evaluated, count, &mut none,
+    )
+}
+
+/// [`closest_parts`], and with `lows` a certified lower bound of every part pair's distance
+/// (row-major, p · n_j + q; every pair, whatever `keep` says): the best pair's certified
+/// bracket, an evaluated pair's value less its GJK and f32 tolerances, a pruned pair's
+/// bounding-sphere gap |c_p − c_q| − r_p − r_q — each raised to the bodies' certified lower
+/// bound (no part pair is closer than the bodies). Every part pair is kept; the distance is
+/// certified. Used with [`part_pair_rates`].
+#[allow(clippy::too_many_arguments)]
+pub fn closest_parts_lows(
+    geo: &MonitorGeometry,
+    i: usize,
+    pi: &[(Isometry3<f64>, f64)],
+    j: usize,
+    pj: &[(Isometry3<f64>, f64)],
+    warm: Option<(usize, usize)>,
+    candidates: &mut Vec<(f64, usize, usize)>,
+    evaluated: &mut Vec<(f64, usize, usize)>,
+    count: &mut QueryCount,
+    l: &mut Vec<f64>,
+) -> PartPairHit {
+    let nj = pj.len();
+    let hit = closest_parts_inner(
+        geo,
+        i,
+        pi,
+        j,
+        pj,
+        &|_, _| true,
+        warm,
+        true,
+        candidates,
+        evaluated,
+        count,
+        &mut Some(&mut *l),
+    );
+    {
+        let scale = |a: usize, b: usize| {
+            (pi[a].0.translation.vector - pj[b].0.translation.vector).norm() + pi[a].1 + pj[b].1
+        };
+        for &(d, a, b) in evaluated.iter() {
+            let loose = d * (1.0 - GJK_REL_TOL) - F32_REL_TOL * scale(a, b);
+            let k = a * nj + b;
+            l[k] = l[k].max(loose);
+        }
+        if hit.d.value.is_finite() {
+            let k = hit.a * nj + hit.b;
+            l[k] = l[k].max(hit.d.lower);
+        }
+        for x in l.iter_mut() {
+            *x = x.max(hit.d.lower);
+        }
+    }
+    hit
+}
+
+#[allow(clippy::too_many_arguments)]
+fn closest_parts_inner(
+    geo: &MonitorGeometry,
+    i: usize,
+    pi: &[(Isometry3<f64>, f64)],
+    j: usize,
+    pj: &[(Isometry3<f64>, f64)],
+    keep: &dyn Fn(usize, usize) -> bool,
+    warm: Option<(usize, usize)>,
+    certify: bool,
+    candidates: &mut Vec<(f64, usize, usize)>,
+    evaluated: &mut Vec<(f64, usize, usize)>,
+    count: &mut QueryCount,
+    lows: &mut Option<&mut Vec<f64>>,
+) -> PartPairHit {
     let (si, sj) = (&geo.shapes[i], &geo.shapes[j]);
+    if let Some(l) = lows.as_deref_mut() {
+        l.clear();
+        for (pa, ra) in pi {
+            for (pb, rb) in pj {
+                l.push((pa.translation.vector - pb.translation.vector).norm() - ra - rb);
+            }
+        }
+    }
     let query = |a: usize, b: usize| shape_distance(&pi[a].0, &*si[a], &pj[b].0, &*sj[b]);
     let warm = warm.filter(|(a, b)| keep(*a, *b));
     evaluated.clear();
@@ -483,6 +745,144 @@ pub struct DistanceScratch {
     candidates: Vec<(f64, usize, usize)>,
     /// Part pairs evaluated for the current body pair.
     evaluated: Vec<(f64, usize, usize)>,
+    /// Per-part rate terms of two bodies ([`part_terms`]).
+    terms: [PartTerms; 2],
+    /// Per part pair rate bounds of the current body pair ([`part_pair_rates`]).
+    rates: Vec<f64>,
+}
+
+/// A sample of the per-part search ([`search_parts`]): the value (with its certified lower
+/// bound), every part pair's certified lower bound, and the closest part pair.
+struct PartSample {
+    d: Bracket,
+    lows: Vec<f64>,
+    parts: (usize, usize),
+}
+
+/// The rate bound of the per-part search is worth its bookkeeping when the bodies' bound is at
+/// least this many times the bound of the part pair closest at the step's end (a body turning
+/// fast about an axis near that pair); else the bodies' bound is used alone.
+pub const PER_PART_MIN_GAIN: f64 = 2.0;
+
+/// The per part pair rate bounds of bodies i and j over the step into `sc`
+/// ([`part_pair_rates`]); returns the bound of part pair (a, b) and the bodies' bound.
+pub fn pair_rate_gain(
+    geo: &MonitorGeometry,
+    motion: &StepMotion,
+    i: usize,
+    j: usize,
+    (a, b): (usize, usize),
+    sc: &mut DistanceScratch,
+) -> (f64, f64) {
+    part_pair_rates(geo, motion, i, j, &mut sc.terms, &mut sc.rates);
+    let nj = geo.shapes[j].len();
+    let body = motion.distance_rate_bound(i, j);
+    (sc.rates.get(a * nj + b).copied().unwrap_or(body), body)
+}
+
+/// Full-geometry distance of bodies i < j at τ on the step's paths with every part pair's
+/// certified lower bound ([`closest_parts_lows`]).
+#[allow(clippy::too_many_arguments)]
+pub fn pair_lows_at(
+    geo: &MonitorGeometry,
+    motion: &StepMotion,
+    i: usize,
+    j: usize,
+    tau: f64,
+    warm: Option<(usize, usize)>,
+    sc: &mut DistanceScratch,
+    count: &mut QueryCount,
+    lows: &mut Vec<f64>,
+) -> PartPairHit {
+    let (xi, qi) = motion.paths[i].pose_at(tau);
+    let (xj, qj) = motion.paths[j].pose_at(tau);
+    let [ti, tj] = &mut sc.tmp;
+    geo.part_poses(i, &xi, &qi, ti);
+    geo.part_poses(j, &xj, &qj, tj);
+    closest_parts_lows(
+        geo,
+        i,
+        ti,
+        j,
+        tj,
+        warm,
+        &mut sc.candidates,
+        &mut sc.evaluated,
+        count,
+        lows,
+    )
+}
+
+/// The minimum over the step of f = (distance of bodies i < j) − `offset` by branch and bound
+/// with per-part-pair bounds ([`crate::geometry::bounds::minimize_by`]): a sub-interval's bound
+/// is min over part pairs pq of (l_pq(a) + l_pq(b) − L_pq·w)/2 − offset, with l_pq the pairs'
+/// certified lower bounds at its ends ([`closest_parts_lows`]) and L_pq their rate bounds
+/// ([`part_pair_rates`], which `sc` must hold for this pair: [`pair_rate_gain`]). `f0`, `f1`:
+/// f at the step's ends (the samples' brackets, less the offset); the part pairs' bounds there
+/// are evaluated again on the paths (τ = 0 and dt). Returns the search and the closest part
+/// pair where its minimum was found, if that was inside the step.
+#[allow(clippy::too_many_arguments)]
+pub fn search_parts(
+    geo: &MonitorGeometry,
+    motion: &StepMotion,
+    i: usize,
+    j: usize,
+    (f0, f1): (Bracket, Bracket),
+    offset: f64,
+    threshold: impl Fn(f64) -> f64,
+    max_evals: u32,
+    warm: Option<(usize, usize)>,
+    sc: &mut DistanceScratch,
+    count: &mut QueryCount,
+) -> (crate::geometry::bounds::MinSearch, Option<(usize, usize)>) {
+    let dt = motion.dt_s;
+    let rates = std::mem::take(&mut sc.rates);
+    let mut at = warm;
+    let mut sample = |tau: f64, given: Option<Bracket>, at: &mut Option<(usize, usize)>| {
+        let mut lows = Vec::new();
+        let h = pair_lows_at(geo, motion, i, j, tau, *at, sc, count, &mut lows);
+        *at = Some((h.a, h.b));
+        let d = Bracket {
+            value: h.d.value - offset,
+            lower: h.d.lower - offset,
+        };
+        PartSample {
+            d: given.unwrap_or(d),
+            lows,
+            parts: (h.a, h.b),
+        }
+    };
+    let s0 = sample(0.0, Some(f0), &mut at);
+    let s1 = sample(dt, Some(f1), &mut at);
+    let mut found: Vec<(f64, (usize, usize))> = Vec::new();
+    let r = crate::geometry::bounds::minimize_by(
+        dt,
+        s0,
+        s1,
+        |s: &PartSample| s.d.value,
+        |a: &PartSample, b: &PartSample, w: f64| {
+            let per = a
+                .lows
+                .iter()
+                .zip(&b.lows)
+                .zip(&rates)
+                .map(|((la, lb), l)| interval_lower_bound(*la, *lb, *l, w))
+                .fold(f64::INFINITY, f64::min);
+            // Never above the ends' own certified bounds (a pair's bound is at least theirs).
+            (per - offset).min(a.d.lower).min(b.d.lower)
+        },
+        threshold,
+        max_evals,
+        dt * 1e-9,
+        |tau| {
+            let s = sample(tau, None, &mut at);
+            found.push((tau, s.parts));
+            s
+        },
+    );
+    sc.rates = rates;
+    let parts = found.iter().find(|p| p.0 == r.t).map(|p| p.1);
+    (r, parts)
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -709,20 +1109,41 @@ pub fn distances(
                 if t <= 0.0 { f64::NEG_INFINITY } else { t }
             };
             if interval_lower_bound(d0.lower, hit.d.lower, rate, dt).max(0.0) < thr(hit.d.value) {
-                let mut at = (hit.a, hit.b);
-                let mut parts_at = Vec::new();
-                let r = minimize(dt, d0, hit.d, rate, thr, MAX_MIN_EVALS, dt * 1e-9, |tau| {
-                    let h = pair_at(&geo, &motion, i, j, tau, Some(at), sc, &mut count);
-                    at = (h.a, h.b);
-                    parts_at.push((tau, h.a, h.b));
-                    h.d
-                });
-                mon.interval_evals += u64::from(r.evals);
-                if r.value < best.distance_m && r.t < dt {
-                    let (pa, pb) = parts_at
+                // A body turning fast: the per-part-pair bounds (`search_parts`).
+                let (pair_rate, body_rate) =
+                    pair_rate_gain(&geo, &motion, i, j, (hit.a, hit.b), sc);
+                let (r, (pa, pb)) = if body_rate >= PER_PART_MIN_GAIN * pair_rate {
+                    let (r, parts) = search_parts(
+                        &geo,
+                        &motion,
+                        i,
+                        j,
+                        (d0, hit.d),
+                        0.0,
+                        thr,
+                        MAX_MIN_EVALS,
+                        Some((hit.a, hit.b)),
+                        sc,
+                        &mut count,
+                    );
+                    (r, parts.unwrap_or((prev.part_a, prev.part_b)))
+                } else {
+                    let mut at = (hit.a, hit.b);
+                    let mut parts_at = Vec::new();
+                    let r = minimize(dt, d0, hit.d, rate, thr, MAX_MIN_EVALS, dt * 1e-9, |tau| {
+                        let h = pair_at(&geo, &motion, i, j, tau, Some(at), sc, &mut count);
+                        at = (h.a, h.b);
+                        parts_at.push((tau, h.a, h.b));
+                        h.d
+                    });
+                    let parts = parts_at
                         .iter()
                         .find(|p| p.0 == r.t)
                         .map_or((prev.part_a, prev.part_b), |p| (p.1, p.2));
+                    (r, parts)
+                };
+                mon.interval_evals += u64::from(r.evals);
+                if r.value < best.distance_m && r.t < dt {
                     best = super::PairMin {
                         distance_m: r.value,
                         part_a: pa,

@@ -282,6 +282,63 @@ impl BodyPath {
         [0.0, self.t_split, self.dt]
     }
 
+    /// Bounds W_k on |ω_b(τ)·e_k| over the step, rad/s: the body-frame angular velocity's
+    /// components along the principal axes e_k (unit columns of `axes`, moments `lam`), each at
+    /// most [`BodyPath::omega_max_rad_s`].
+    ///
+    /// * Free piece (Euler's equations under the held torque): u_k = (ω_b·e_k)² lies on the
+    ///   polytope of the module docs (Σλ_k²u_k, Σλ_k u_k within their slabs, u ≥ 0), so u_k is
+    ///   at most its largest value at a vertex ([`omega_components_euler`]); at least the
+    ///   components at the piece's ends; plus (`RK4_INFLATION` − 1)·Ω for RK4's departure from
+    ///   Euler's equations, as the angular-speed bound takes it. A torque-free spin about a
+    ///   principal axis gives zero for the other two: its polytope is that axis alone.
+    /// * Straight piece (slerp: a rotation about a fixed world axis n at a constant rate,
+    ///   ω_w = ω·n): ω_b(τ) = R(τ)ᵀω_w = R_sᵀω_w, constant, since the rotation about n leaves
+    ///   ω_w fixed; its components, inflated by 1e-9 relative for rounding.
+    pub fn omega_components(&self, axes: &Matrix3<f64>, lam: [f64; 3]) -> [f64; 3] {
+        let om = self.omega_max_rad_s;
+        let mut w = [0.0_f64; 3];
+        let comp = |wb: &Vector3<f64>, k: usize| wb.dot(&axes.column(k)).abs();
+        if let Some(f) = &self.free
+            && self.t_split > 0.0
+        {
+            let w0b = self.q0.inverse() * self.w0;
+            let jw = f.inertia * w0b;
+            let v = omega_components_euler(
+                lam,
+                jw.norm(),
+                w0b.dot(&jw),
+                f.torque_nm.norm(),
+                self.t_split,
+            );
+            let s = self.state_at(self.t_split);
+            let w1b = s.att.inverse() * s.omega_rad_s;
+            let slack = (RK4_INFLATION - 1.0) * om;
+            for (k, wk) in w.iter_mut().enumerate() {
+                *wk = v[k].max(comp(&w0b, k)).max(comp(&w1b, k)) + slack;
+            }
+        }
+        let rest = self.dt - self.t_split;
+        if rest > 0.0 {
+            let mut rot = (self.q1 * self.qs.inverse()).into_inner();
+            if rot.w < 0.0 {
+                rot = -rot;
+            }
+            let (v, c) = (rot.imag(), rot.w);
+            let sin_half = v.norm();
+            let omega_w = if sin_half > 0.0 {
+                v * (2.0 * sin_half.atan2(c) / sin_half / rest)
+            } else {
+                Vector3::zeros()
+            };
+            let wb = self.qs.inverse() * omega_w;
+            for (k, wk) in w.iter_mut().enumerate() {
+                *wk = wk.max(comp(&wb, k) * (1.0 + 1e-9));
+            }
+        }
+        w.map(|x| x.min(om))
+    }
+
     /// Largest distance of the centre of mass from `c` over the step, m (bound).
     pub fn reach_from(&self, c: &Vector3<f64>) -> f64 {
         (self.x0 - c).norm() + self.speed_max() * self.dt
@@ -304,6 +361,10 @@ pub struct StepMotion {
     pub extent_m: Vec<f64>,
     /// Per body: principal moments of inertia, kg·m².
     pub lambda_kg_m2: Vec<[f64; 3]>,
+    /// Per body: its principal axes (unit columns, body frame) and their moments, kg·m²
+    /// ([`principal_axes`]), for the per-axis rate bounds ([`StepMotion::omega_axes_bound`]);
+    /// empty: no per-axis bounds (every component bounded by the angular speed bound).
+    pub axes_body: Vec<(Matrix3<f64>, [f64; 3])>,
     /// Paths filled for the last step (false before the first step).
     pub ready: bool,
     /// Steps in which some body turned by more than [`UNDER_RESOLVED_TURN_RAD`].
@@ -372,6 +433,18 @@ impl StepMotion {
         }
     }
 
+    /// Bounds on the components of body i's angular velocity along its principal axes (body
+    /// frame) over the step, rad/s, with those axes: |ω_b(τ)·e_k| ≤ W_k for every τ on the
+    /// path ([`BodyPath::omega_components`]); without the axes, e_k the body axes and every
+    /// W_k the angular-speed bound Ω.
+    pub fn omega_axes_bound(&self, i: usize) -> (Matrix3<f64>, [f64; 3]) {
+        let p = &self.paths[i];
+        match self.axes_body.get(i) {
+            Some((axes, lam)) => (*axes, p.omega_components(axes, *lam)),
+            None => (Matrix3::identity(), [p.omega_max_rad_s; 3]),
+        }
+    }
+
     /// Bound on |x_i − x_j| over the step, m.
     pub fn separation_bound(&self, i: usize, j: usize) -> f64 {
         let (a, b) = (&self.paths[i], &self.paths[j]);
@@ -424,6 +497,20 @@ pub fn straight_rate_in_frame(a: &BodyPath, r_a: f64, b: &BodyPath) -> Option<f6
         .map(|dx| (dv - wb.cross(dx)).norm())
         .fold(0.0, f64::max);
     Some((lin + (wa - wb).norm() * r_a) * (1.0 + 1e-9))
+}
+
+/// Principal moments and axes of a symmetric 3×3 inertia matrix: (unit eigenvectors as the
+/// columns, body frame; the moments in the same order), kg·m².
+pub fn principal_axes(j: &Matrix3<f64>) -> (Matrix3<f64>, [f64; 3]) {
+    let e = j.symmetric_eigen();
+    let mut axes = e.eigenvectors;
+    for mut c in axes.column_iter_mut() {
+        let n = c.norm();
+        if n > 0.0 {
+            c /= n;
+        }
+    }
+    (axes, [e.eigenvalues.x, e.eigenvalues.y, e.eigenvalues.z])
 }
 
 /// Principal moments (eigenvalues) of a symmetric 3×3 inertia matrix.
@@ -488,6 +575,48 @@ pub fn omega_bound_euler(lam: [f64; 3], l0: f64, two_e0: f64, torque: f64, dt: f
         return om_crude;
     }
     best.sqrt().min(om_crude)
+}
+
+/// Bounds on each |ω_k| (principal-axis component) over a step of Euler's equations, rad/s,
+/// from the polytope of [`omega_bound_euler`] (u_k = ω_k² ≥ 0, Σλ_j²u_j ∈ [L_lo², L_hi²],
+/// Σλ_j u_j ∈ [2E_lo, 2E_hi]) by two certificates that need no vertex search. With λ_m the
+/// smallest moment, Σλ_j²u_j − λ_m·Σλ_j u_j = Σλ_j(λ_j − λ_m)u_j is a sum of non-negative terms,
+/// so λ_k(λ_k − λ_m)u_k ≤ L_hi² − λ_m·2E_lo; with λ_M the largest, likewise
+/// λ_k(λ_M − λ_k)u_k ≤ λ_M·2E_hi − L_lo². Each u_k is also at most min(L_hi²/λ_k², 2E_hi/λ_k).
+/// The numerators carry 4 ulps of their terms for rounding; every bound is at most that of
+/// [`omega_bound_euler`]. A torque-free spin about the axis of the smallest (largest) moment
+/// makes the first (second) numerator zero: the other two components stay zero.
+pub fn omega_components_euler(
+    lam: [f64; 3],
+    l0: f64,
+    two_e0: f64,
+    torque: f64,
+    dt: f64,
+) -> [f64; 3] {
+    let om = omega_bound_euler(lam, l0, two_e0, torque, dt);
+    let lmin = lam.iter().copied().fold(f64::INFINITY, f64::min);
+    let lmax = lam.iter().copied().fold(0.0, f64::max);
+    let om_crude = (l0 + torque * dt) / lmin;
+    let (l_lo, l_hi) = ((l0 - torque * dt).max(0.0), l0 + torque * dt);
+    let de = 2.0 * torque * om_crude * dt;
+    let (e_lo, e_hi) = ((two_e0 - de).max(0.0), two_e0 + de);
+    let (l2_lo, l2_hi) = (l_lo * l_lo, l_hi * l_hi);
+    let ulp4 = 4.0 * f64::EPSILON;
+    let n_small = (l2_hi - lmin * e_lo) + ulp4 * (l2_hi + lmin * e_lo);
+    let n_large = (lmax * e_hi - l2_lo) + ulp4 * (lmax * e_hi + l2_lo);
+    let mut w = [om; 3];
+    for (k, wk) in w.iter_mut().enumerate() {
+        let lk = lam[k];
+        let mut u = (l2_hi / (lk * lk)).min(e_hi / lk);
+        if lk - lmin > 0.0 {
+            u = u.min(n_small.max(0.0) / (lk * (lk - lmin)));
+        }
+        if lmax - lk > 0.0 {
+            u = u.min(n_large.max(0.0) / (lk * (lmax - lk)));
+        }
+        *wk = (u.max(0.0).sqrt() * (1.0 + ulp4)).min(om);
+    }
+    w
 }
 
 #[cfg(test)]
@@ -628,6 +757,51 @@ mod tests {
         assert!(rigid <= 0.4 * 0.4 * dt * xa0.norm(), "{rigid}");
         let world = 0.4 * (2.0 + 5.0) + (q * xa0 - xa0).norm() / dt;
         assert!(rigid < 1e-2 * world);
+    }
+
+    #[test]
+    fn euler_components_cover_a_tumble_and_stay_small_about_a_principal_spin() {
+        // Independent reference: Euler's equations integrated finely (RK4, 1e-5 s) over 1 s;
+        // the largest |ω_k| along each principal axis on the way stays within the per-axis
+        // bounds computed at the start for dt = 1 s. Two cases: an asymmetric body tumbling
+        // off-axis under a torque, and a 100 rad/s spin about its smallest-moment axis under
+        // a 1 N·m cross torque (the off-axis components must stay small, not of order Ω).
+        let j = Matrix3::from_diagonal(&Vector3::new(110.0, 140.0, 160.0));
+        let jinv = j.try_inverse().expect("invertible");
+        let lam = principal_moments(&j);
+        for (w0, tq) in [
+            (Vector3::new(0.3, 0.8, -0.5), Vector3::new(2.0, -1.0, 0.5)),
+            (Vector3::new(100.0, 0.0, 0.0), Vector3::new(0.0, 1.0, 0.0)),
+        ] {
+            let dt = if w0.norm() > 10.0 { 0.01 } else { 1.0 };
+            let bound =
+                omega_components_euler(lam, (j * w0).norm(), w0.dot(&(j * w0)), tq.norm(), dt);
+            let (mut q, mut w) = (UnitQuaternion::identity(), w0);
+            let mut peak = [0.0_f64; 3];
+            let steps = (dt / 1e-5).round() as usize;
+            for _ in 0..steps {
+                // Torque fixed in the world frame, as the path holds it.
+                let (q1, w1) = rotate_rk4(&q, &(q * w), &tq, &j, &jinv, 1e-5);
+                q = q1;
+                w = q.inverse() * w1;
+                for (k, p) in peak.iter_mut().enumerate() {
+                    *p = p.max(w[k].abs());
+                }
+            }
+            for k in 0..3 {
+                assert!(
+                    peak[k] <= bound[k],
+                    "axis {k}: peak {} > bound {}",
+                    peak[k],
+                    bound[k]
+                );
+            }
+            if w0.norm() > 10.0 {
+                // Off-axis: |L| and E change by at most |τ|·dt, 2|τ||ω|·dt, which bounds
+                // λ_k(λ_k − λ_m)ω_k² by about 2·λ_m·|τ|·|ω|·dt: ω_k ≲ 0.5 rad/s here.
+                assert!(bound[1] < 1.0 && bound[2] < 1.0, "{bound:?}");
+            }
+        }
     }
 
     #[test]
