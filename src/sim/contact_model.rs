@@ -1010,8 +1010,18 @@ impl CompliantContact {
         // velocities with its damping implicit over the second half-kick, which makes it the
         // force at the end of the sub-step and the next sub-step's first kick. For the damping
         // this is the trapezoidal rule (second order, A-stable).
+        let platform_on = st.link.platform.is_some();
         let mut geo = st.geometry(&sa, &sb);
         let mut f0 = st.forces(&geo, &sa, &sb);
+        if let Some(l) = &f0.legs {
+            // The legs at the start of the step too (the first step after the capture starts
+            // with the dampers' largest force).
+            let ps = &mut self.platform_step;
+            for leg in &l.legs {
+                ps.peak_leg_force_n = ps.peak_leg_force_n.max(leg.force_n.abs());
+                ps.peak_leg_stroke_m = ps.peak_leg_stroke_m.max(leg.stroke_m.abs());
+            }
+        }
         let mut link_imp_b = Vector3::zeros();
         for i in 0..n {
             kick_both((&da, &db), (&mut sa, &mut sb), &held, &f0, 0.5 * h);
@@ -1019,7 +1029,19 @@ impl CompliantContact {
             drift(&db, &mut sb, h);
             geo = st.geometry(&sa, &sb);
             st.tau_s = f64::from(i + 1) * h;
-            let f1 = st.forces(&geo, &sa, &sb);
+            let mut f1 = st.forces(&geo, &sa, &sb);
+            if platform_on {
+                // The platform's dampers need the end-of-sub-step velocities: one fixed-point
+                // iteration of the implicit half-kick (a trial half-kick with the force at the
+                // half-step velocities, then the force at the trial velocities), as
+                // `Platform::advance` does, keeps the damping second order. (The docking
+                // contact is off while the platform carries the chaser, so only the link's
+                // forces are evaluated twice.)
+                let (ta, tb) = (sa.clone(), sb.clone());
+                kick_both((&da, &db), (&mut sa, &mut sb), &held, &f1, 0.5 * h);
+                f1 = st.forces(&geo, &sa, &sb);
+                (sa, sb) = (ta, tb);
+            }
             kick_both((&da, &db), (&mut sa, &mut sb), &held, &f1, 0.5 * h);
             ang_a += (f0.torque.0 + f1.torque.0) * (0.5 * h);
             ang_b += (f0.torque.1 + f1.torque.1) * (0.5 * h);
