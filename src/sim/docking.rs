@@ -2,7 +2,10 @@
 //! or a compliant spring–damper, with a finite break force) that engages only within the
 //! capture rate limits, release with separation springs, and the state machine FREE →
 //! ATTRACTING → CONTACT → SOFT_CAPTURE → LATCHED → RELEASED, with REBOUND, JAMMED and MISSED.
-//! Every change is an event; `docs/mechanisms.md` describes the issue-28 additions.
+//! The soft-capture mechanism (`docking.mechanism: SoftCapture`) replaces the seat and latch by
+//! capture latches, the attenuation platform's legs, retraction and hooks: … → SOFT_CAPTURED →
+//! RETRACTED → HARD_DOCKED (→ RELEASED). Every change is an event; `docs/mechanisms.md`
+//! describes the issue-28 additions.
 //!
 //! Geometry and the magnet law are documented on [`crate::scene::DockingSpec`] and
 //! [`crate::scene::MagnetSpec`]. Contact is real: the cone and the slot's wall pieces are rapier
