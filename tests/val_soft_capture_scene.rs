@@ -33,6 +33,11 @@
 //!   chaser at its port, over every sub-step) and the peak leg force of `soft_capture.ron`
 //!   (shortened: 1 s of attenuation, retraction at 5 cm/s) at dt = 1 ms and 0.5 ms agree within
 //!   10 % (the criterion).
+//! - **Names**: the three new states are names the Sequencer's `DockingState([...])` and the
+//!   trials' `StateIn([...])` accept (the contract is the list itself), and the bundled
+//!   campaign `scenes/trials/initial_contact_envelope.ron` loads with the soft-capture columns.
+//! - **Release while soft captured** opens everything (platform and hooks removed, the
+//!   cone–slot contact live again): RELEASED.
 //! - **Bad input**: zero, negative and non-finite stiffness, damping, strokes, speeds; legs that
 //!   cannot reach the ring (also once retracted); a rigid or start-latched soft capture: located
 //!   errors naming the field, and `rpod check` exits 2.
@@ -379,4 +384,25 @@ fn val_release_while_soft_captured_opens_everything() {
         .world()
         .resource::<rpod::sim::contact_model::CompliantContact>();
     assert!(c.link.platform.is_none() && c.link.latch.is_none() && c.enabled);
+}
+
+#[test]
+fn soft_capture_states_are_accepted_by_the_sequencer_and_trials() {
+    use rpod::control::generic::sequencer::DOCK_STATES;
+    for s in [
+        DockState::SoftCaptured,
+        DockState::Retracted,
+        DockState::HardDocked,
+    ] {
+        assert!(DOCK_STATES.contains(&s.name()), "{}", s.name());
+    }
+    // The bundled campaign (StateIn(["HARD_DOCKED"]), coloured by a soft-capture column)
+    // loads, and its table has the soft-capture columns.
+    let c = rpod::trials::load("scenes/trials/initial_contact_envelope.ron".as_ref())
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(c.soft_capture);
+    let h = rpod::trials::header(&c);
+    for col in rpod::trials::SOFT_CAPTURE_COLS {
+        assert!(h.iter().any(|x| x == col), "{col}");
+    }
 }
