@@ -573,6 +573,9 @@ pub struct Campaign {
     pub guarantees: Vec<(String, String)>,
     /// How each guarantee is judged (`interval` or `samples only`), same order.
     pub guarantee_judged: Vec<String>,
+    /// The base scene's docking mechanism is a soft capture: `trials.csv` gains
+    /// [`SOFT_CAPTURE_COLS`].
+    pub soft_capture: bool,
 }
 
 /// A located error in a trials file: the line and column of `path` in `text` (0, 0 when it
@@ -626,6 +629,7 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
         fingerprint,
         guarantees: Vec::new(),
         guarantee_judged: Vec::new(),
+        soft_capture: false,
     };
     // Checked now rather than in every worker, the same way whatever the order of the grid
     // values or the seed: every grid value (each with the other parameters at their
@@ -659,6 +663,11 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
             .map_err(|(_, m)| located(&text, &file, "duration_s", "duration_s", m))?;
     }
     let has_docking = loaded.scene.docking.is_some();
+    c.soft_capture = loaded
+        .scene
+        .docking
+        .as_ref()
+        .is_some_and(|d| matches!(d.mechanism, crate::scene::Mechanism::SoftCapture(_)));
     let sim = Simulation::new(&loaded)?;
     c.guarantees = sim
         .guarantees()
@@ -758,6 +767,8 @@ pub struct TrialResult {
     /// Per guarantee of the campaign (same order): worst margin (in its unit), first
     /// violation time, s, and the verdict (`held`, `violated`, `unresolved`).
     pub guarantees: Vec<(Option<f64>, Option<f64>, Option<&'static str>)>,
+    /// A soft-capture campaign's [`SOFT_CAPTURE_COLS`] (`None` for other campaigns).
+    pub soft: Option<[Option<f64>; 6]>,
     /// Steps simulated.
     pub steps: u64,
     /// Why (the docking state's reason, the scene error, the guard's trip).
@@ -785,6 +796,7 @@ impl TrialResult {
             min_clearance_m: None,
             first_collision_s: None,
             guarantees: vec![(None, None, None); c.guarantees.len()],
+            soft: c.soft_capture.then_some([None; 6]),
             steps,
             reason,
         }
@@ -875,6 +887,21 @@ pub fn run_trial(c: &Campaign, k: usize, keep: Option<&Path>) -> TrialResult {
         min_clearance_m: min_clearance.is_finite().then_some(min_clearance),
         first_collision_s: cs.first_collision_s,
         guarantees,
+        soft: c.soft_capture.then(|| {
+            let r = dock
+                .as_ref()
+                .and_then(|d| d.soft.clone())
+                .unwrap_or_default();
+            [
+                r.peak_leg_stroke_t_s.map(|_| r.peak_leg_stroke_m),
+                r.peak_leg_force_t_s.map(|_| r.peak_leg_force_n),
+                r.peak_interface_force_t_s.map(|_| r.peak_interface_force_n),
+                r.peak_interface_moment_t_s
+                    .map(|_| r.peak_interface_moment_nm),
+                r.t_soft_captured_s,
+                r.t_hard_docked_s,
+            ]
+        }),
         steps: sim.steps(),
         reason: dock.map_or(String::new(), |d| d.reason),
     };
@@ -901,6 +928,18 @@ const RESULT_COLS: [&str; 9] = [
     "first_collision_s",
 ];
 
+/// The result columns a soft-capture campaign adds after [`RESULT_COLS`] (empty: never
+/// captured): peak |leg stroke| (m), peak |leg force| (N), peak interface force (N) and moment
+/// (N·m) on the chaser at its port, the capture and hard-dock times (s).
+pub const SOFT_CAPTURE_COLS: [&str; 6] = [
+    "peak_leg_stroke_m",
+    "peak_leg_force_n",
+    "peak_interface_force_n",
+    "peak_interface_moment_nm",
+    "t_soft_captured_s",
+    "t_hard_docked_s",
+];
+
 /// The CSV header cells for a campaign: `index`, one column per parameter path, the results,
 /// per guarantee `guarantee.NAME.worst_margin_UNIT`, `guarantee.NAME.first_violation_s`
 /// (empty: never violated) and `guarantee.NAME.verdict` (`held`, `violated`, `unresolved`;
@@ -909,6 +948,9 @@ pub fn header(c: &Campaign) -> Vec<String> {
     let mut cols = vec!["index".to_string()];
     cols.extend(c.spec.parameters.iter().map(|p| p.path().to_string()));
     cols.extend(RESULT_COLS.map(String::from));
+    if c.soft_capture {
+        cols.extend(SOFT_CAPTURE_COLS.map(String::from));
+    }
     for (n, u) in &c.guarantees {
         cols.push(format!("guarantee.{n}.worst_margin_{u}"));
         cols.push(format!("guarantee.{n}.first_violation_s"));
@@ -932,6 +974,9 @@ pub fn row(r: &TrialResult, campaign_id: &str) -> Vec<String> {
     cells.push(opt(r.max_misalignment_deg));
     cells.push(opt(r.min_clearance_m));
     cells.push(opt(r.first_collision_s));
+    for v in r.soft.iter().flatten() {
+        cells.push(opt(*v));
+    }
     for (w, f, v) in &r.guarantees {
         cells.push(opt(*w));
         cells.push(opt(*f));

@@ -140,6 +140,13 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "inside the Earth",
     ),
     (
+        // scenes/soft_capture.ron with a 0.60 m compression stroke on 0.395 m legs.
+        "soft_capture_leg_unreachable",
+        83,
+        "docking.mechanism.platform.leg 0",
+        "the leg cannot reach the ring",
+    ),
+    (
         "magnet_1e308",
         61,
         "docking.magnet.f0_n",

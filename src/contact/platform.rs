@@ -73,8 +73,8 @@ pub enum LegLayout {
     Legs(Vec<([f64; 3], [f64; 3])>),
 }
 
-/// The platform's design, in RON as in `tests/val_soft_capture.rs` (not yet read from a scene:
-/// the soft-capture mechanism type that will carry it is issue 28's next step).
+/// The platform's design, in RON as in `tests/val_soft_capture.rs`; a scene carries it in
+/// `docking.mechanism: SoftCapture((platform: (...), ...))` ([`crate::scene::SoftCaptureSpec`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlatformSpec {
@@ -499,6 +499,30 @@ impl Platform {
 
     /// The legs' loads with the base and the ring in the given states.
     pub fn loads(&self, base: &Base, ring: &RigidState) -> PlatformLoads {
+        self.loads_retracted(base, ring, 0.0)
+    }
+
+    /// Neutral length of leg `leg` with the platform retracted by `retraction_m` (the ring's
+    /// neutral pose `height_m − retraction_m` above P), m.
+    pub fn neutral_length_retracted_m(&self, leg: &Leg, retraction_m: f64) -> f64 {
+        if retraction_m == 0.0 {
+            leg.neutral_length_m
+        } else {
+            (leg.ring_r_m + Vector3::z() * (self.spec.height_m - retraction_m) - leg.base_p_m)
+                .norm()
+        }
+    }
+
+    /// The legs' loads with the platform retracted by `retraction_m` (m ≥ 0: the legs'
+    /// actuators have shortened every leg to the neutral length of a platform `retraction_m`
+    /// lower, [`Platform::neutral_length_retracted_m`]; strokes are measured from those
+    /// lengths, so the stroke limits and the spring act about the retracted pose).
+    pub fn loads_retracted(
+        &self,
+        base: &Base,
+        ring: &RigidState,
+        retraction_m: f64,
+    ) -> PlatformLoads {
         let mut out = PlatformLoads {
             legs: Vec::with_capacity(self.legs.len()),
             force_on_ring_n: Vector3::zeros(),
@@ -517,7 +541,7 @@ impl Platform {
             let u = if len > 0.0 { d / len } else { Vector3::z() };
             let vr = ring.vel_m_s + ring.omega_rad_s.cross(&(r - ring.pos_m));
             let sd = (vr - base.point_vel(&b)).dot(&u);
-            let s = len - leg.neutral_length_m;
+            let s = len - self.neutral_length_retracted_m(leg, retraction_m);
             let (f, pot) = self.leg_force(s, sd);
             let fv = u * f;
             out.force_on_ring_n += fv;

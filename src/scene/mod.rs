@@ -119,9 +119,14 @@ pub struct DockingSpec {
     pub seat_depth_m: f64,
     /// Radius of the slot's mouth, m (used to judge a miss).
     pub mouth_radius_m: f64,
-    /// The electromagnet.
+    /// The electromagnet (default: none, [`MagnetSpec::default`]).
+    #[serde(default)]
     pub magnet: MagnetSpec,
-    /// The latch.
+    /// The latch. With [`Mechanism::SoftCapture`] these are the capture latches: they engage
+    /// when the capture ring is within `axial_tolerance_m` of its seat (the capture range),
+    /// `lateral_tolerance_m` and `angle_tolerance_deg`, and the rates are within
+    /// `capture_rates`; `break_force_n` is the interface force beyond which they let go;
+    /// `dwell_s` and `joint` do not apply.
     pub latch: LatchSpec,
     /// When a run gives up.
     #[serde(default)]
@@ -139,8 +144,49 @@ pub struct DockingSpec {
     /// integrate them).
     #[serde(default)]
     pub separation: Option<SeparationSpec>,
+    /// Which mechanism: `ConeSlot` (the default: the latch holds the seated cone) or
+    /// `SoftCapture((...))`, a capture ring on an attenuation platform ([`SoftCaptureSpec`]).
+    #[serde(default)]
+    pub mechanism: Mechanism,
 }
 
+/// The docking mechanism type.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub enum Mechanism {
+    /// Probe cone, funnel slot, magnet and latch (`docs/mechanisms.md`).
+    #[default]
+    ConeSlot,
+    /// Soft capture: the capture latches hold the chaser's capture ring to the target's ring,
+    /// the chaser hangs on the attenuation platform's legs, the platform retracts, and the
+    /// structural hooks close (`SOFT_CAPTURED → RETRACTED → HARD_DOCKED`).
+    SoftCapture(Box<SoftCaptureSpec>),
+}
+
+/// A soft-capture mechanism on the chaser port (the platform frame P: origin the chaser port
+/// origin, +z its axis, +x the body +x turned by the shortest rotation from body +z onto the
+/// port axis; see [`crate::contact::platform`]). The guide petals are the `DockingCone` (on the
+/// chaser port) and the `DockingSlot` funnel (on the target port), ordinary docking parts in
+/// compliant contact; the capture conditions are `docking.latch`'s (see [`DockingSpec::latch`]).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SoftCaptureSpec {
+    /// The attenuation platform (capture ring on its legs).
+    pub platform: crate::contact::platform::PlatformSpec,
+    /// Time from the capture to the start of the retraction (the legs attenuate the motion), s.
+    pub attenuation_s: f64,
+    /// Retraction speed (the ring drawn toward the chaser port along the platform axis), m/s.
+    pub retraction_speed_m_s: f64,
+    /// Retraction at which the platform stops retracting (event `RETRACTED`), m.
+    pub retracted_stroke_m: f64,
+    /// The hooks close when, retracted, the chaser port is within this of the target port
+    /// axis, m …
+    pub hook_lateral_tolerance_m: f64,
+    /// … and its axis within this of −a_t, deg.
+    pub hook_angle_tolerance_deg: f64,
+    /// The structural hooks: a stiff spring–damper joint (as the compliant latch) closed where
+    /// the chaser is when they engage.
+    pub hooks: CompliantLatch,
+}
 /// Separation springs (all of them together, acting along the target port axis at the chaser
 /// port origin): the force falls linearly from `force_n` at full compression to `preload_n`
 /// at the end of the stroke, where they rest on their stops. Energy released:
@@ -158,7 +204,7 @@ pub struct SeparationSpec {
 
 /// Electromagnet: attractive force F(gap) = min(F0 / (1 + gap/g0)², F_max) on the chaser port,
 /// along −a_t (into the slot), with the equal and opposite reaction on the target at the same
-/// point.
+/// point. The default is no magnet (zero force, never switched on).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MagnetSpec {
@@ -173,6 +219,18 @@ pub struct MagnetSpec {
     /// Switched on from t = 0 (a command), whatever the gap.
     #[serde(default)]
     pub on_at_start: bool,
+}
+
+impl Default for MagnetSpec {
+    fn default() -> Self {
+        Self {
+            f0_n: 0.0,
+            g0_m: 1.0,
+            max_force_n: 0.0,
+            activation_distance_m: 0.0,
+            on_at_start: false,
+        }
+    }
 }
 
 /// Latch: engages (a rapier fixed joint) when the cone has stayed seated for `dwell_s`.

@@ -1133,6 +1133,9 @@ fn validate_docking(s: &Scene, d: &super::DockingSpec) -> Check {
             positive(&format!("docking.latch.joint.{f}"), v, unit)?;
         }
     }
+    if let super::Mechanism::SoftCapture(sc) = &d.mechanism {
+        validate_soft_capture(d, sc)?;
+    }
     positive("docking.miss.jam_time_s", d.miss.jam_time_s, "seconds")?;
     positive("docking.miss.jam_speed_m_s", d.miss.jam_speed_m_s, "m/s")?;
     positive(
@@ -1142,6 +1145,85 @@ fn validate_docking(s: &Scene, d: &super::DockingSpec) -> Check {
     )?;
     if let crate::contact::ContactModelSpec::Compliant(c) = &d.contact {
         crate::contact::validate(c).map_err(|(f, m)| (format!("docking.contact.{f}"), m))?;
+    }
+    Ok(())
+}
+
+/// The soft-capture mechanism's values (`docking.mechanism`): the platform through
+/// [`crate::contact::platform::Platform::new`] (its error names the field), also retracted by
+/// the retracted stroke (the legs must still reach the ring there); positive finite speeds,
+/// strokes, times, tolerances and hook coefficients.
+fn validate_soft_capture(d: &super::DockingSpec, sc: &super::SoftCaptureSpec) -> Check {
+    use crate::contact::platform::Platform;
+    const P: &str = "docking.mechanism";
+    if !matches!(d.contact, crate::contact::ContactModelSpec::Compliant(_)) {
+        return fail(
+            P,
+            "the soft-capture platform is integrated with the compliant contact's sub-steps: the \
+             docking contact must be Compliant",
+        );
+    }
+    if d.start_latched {
+        return fail(
+            "docking.start_latched",
+            "a soft-capture mechanism starts free (start_latched is the cone and slot's)",
+        );
+    }
+    if !matches!(d.latch.joint, super::LatchJoint::Rigid) {
+        return fail(
+            "docking.latch.joint",
+            "with SoftCapture the latch section describes the capture latches; the hooks' joint \
+             is docking.mechanism.hooks",
+        );
+    }
+    Platform::new(&sc.platform).map_err(|e| (format!("{P}.platform.{}", e.field), e.why))?;
+    positive(&format!("{P}.attenuation_s"), sc.attenuation_s, "seconds")?;
+    positive(
+        &format!("{P}.retraction_speed_m_s"),
+        sc.retraction_speed_m_s,
+        "m/s",
+    )?;
+    positive(
+        &format!("{P}.retracted_stroke_m"),
+        sc.retracted_stroke_m,
+        "metres",
+    )?;
+    if sc.retracted_stroke_m >= sc.platform.height_m {
+        return fail(
+            format!("{P}.retracted_stroke_m"),
+            format!(
+                "must be below the platform height {} m, got {}",
+                num(sc.platform.height_m),
+                num(sc.retracted_stroke_m)
+            ),
+        );
+    }
+    let mut retracted = sc.platform.clone();
+    retracted.height_m -= sc.retracted_stroke_m;
+    Platform::new(&retracted).map_err(|e| {
+        (
+            format!("{P}.retracted_stroke_m"),
+            format!("retracted by it, {}: {}", e.field, e.why),
+        )
+    })?;
+    positive(
+        &format!("{P}.hook_lateral_tolerance_m"),
+        sc.hook_lateral_tolerance_m,
+        "metres",
+    )?;
+    positive(
+        &format!("{P}.hook_angle_tolerance_deg"),
+        sc.hook_angle_tolerance_deg,
+        "degrees",
+    )?;
+    let j = &sc.hooks;
+    for (f, v, unit) in [
+        ("stiffness_n_m", j.stiffness_n_m, "N/m"),
+        ("damping_n_s_m", j.damping_n_s_m, "N·s/m"),
+        ("rot_stiffness_nm_rad", j.rot_stiffness_nm_rad, "N·m/rad"),
+        ("rot_damping_nm_s_rad", j.rot_damping_nm_s_rad, "N·m·s/rad"),
+    ] {
+        positive(&format!("{P}.hooks.{f}"), v, unit)?;
     }
     Ok(())
 }

@@ -181,6 +181,8 @@ pub struct CompliantContact {
     pub link: Link,
     /// This step: what the link did.
     pub link_step: LinkStep,
+    /// This step: what the soft-capture platform did (when there is one).
+    pub platform_step: PlatformStep,
 }
 
 /// A spring–damper latch between the two docking bodies ([`crate::scene::CompliantLatch`]).
@@ -221,6 +223,78 @@ pub struct Link {
     pub latch: Option<LatchSpring>,
     /// Separation springs, from the release to the end of their stroke.
     pub separation: Option<SeparationSpring>,
+    /// The soft-capture platform, from the capture to the release.
+    pub platform: Option<PlatformLink>,
+}
+
+/// The soft-capture attenuation platform between the docking bodies
+/// ([`crate::contact::platform`]): its base frame P rides on the chaser, its capture ring is
+/// held by the capture latches to the target (the ring's pose fixed in the target's body
+/// frame: the latches are rigid and the ring's mass and inertia are lumped with the target's),
+/// and the legs' loads act on the chaser at P and, equal and opposite, on the target. The
+/// retraction shortens every leg's neutral length
+/// ([`crate::contact::platform::Platform::loads_retracted`]) at `retraction_rate_m_s` within
+/// the step, up to `retraction_max_m`.
+#[derive(Debug, Clone)]
+pub struct PlatformLink {
+    /// The platform.
+    pub platform: crate::contact::platform::Platform,
+    /// P in the chaser's body frame (origin at the chaser port origin).
+    pub port_c_body: Isometry3<f64>,
+    /// The ring frame R in the target's body frame.
+    pub ring_in_target: Isometry3<f64>,
+    /// Retraction at the start of the step, m.
+    pub retraction_m: f64,
+    /// Retraction rate over the step, m/s (0 or the retraction speed).
+    pub retraction_rate_m_s: f64,
+    /// Largest retraction, m.
+    pub retraction_max_m: f64,
+}
+
+impl PlatformLink {
+    /// The retraction `tau_s` into the step, m.
+    pub fn retraction_at(&self, tau_s: f64) -> f64 {
+        (self.retraction_m + self.retraction_rate_m_s * tau_s).min(self.retraction_max_m)
+    }
+
+    /// The platform base (from the chaser's state) and the ring (from the target's), world.
+    pub fn base_and_ring(
+        &self,
+        (com_c, sc): (&Vector3<f64>, &BodyState),
+        (com_t, st): (&Vector3<f64>, &BodyState),
+    ) -> (
+        crate::contact::platform::Base,
+        crate::contact::platform::RigidState,
+    ) {
+        let pose = sc.body_pose(com_c) * self.port_c_body;
+        let p = pose.translation.vector;
+        let base = crate::contact::platform::Base {
+            pose,
+            vel_m_s: point_vel(sc, &p),
+            omega_rad_s: sc.omega_rad_s,
+        };
+        let r = st.body_pose(com_t) * self.ring_in_target;
+        let c = r.translation.vector;
+        let ring = crate::contact::platform::RigidState {
+            pos_m: c,
+            vel_m_s: point_vel(st, &c),
+            att: r.rotation,
+            omega_rad_s: st.omega_rad_s,
+        };
+        (base, ring)
+    }
+
+    /// The legs' loads `tau_s` into the step.
+    pub fn loads(
+        &self,
+        c: (&Vector3<f64>, &BodyState),
+        t: (&Vector3<f64>, &BodyState),
+        tau_s: f64,
+    ) -> crate::contact::platform::PlatformLoads {
+        let (base, ring) = self.base_and_ring(c, t);
+        self.platform
+            .loads_retracted(&base, &ring, self.retraction_at(tau_s))
+    }
 }
 
 /// What the link did in one step.
@@ -238,15 +312,38 @@ pub struct LinkStep {
     pub separation_ended: bool,
 }
 
-/// (latch force on the chaser, latch moment on it, separation force on it, point p_c), world.
-type LinkWrench = (Vector3<f64>, Vector3<f64>, Vector3<f64>, Vector3<f64>);
+/// What the soft-capture platform did in one step.
+#[derive(Debug, Clone, Default)]
+pub struct PlatformStep {
+    /// Largest |leg force| over the sub-steps, N.
+    pub peak_leg_force_n: f64,
+    /// Largest |leg stroke| over the sub-steps, m.
+    pub peak_leg_stroke_m: f64,
+    /// The legs at the end of the step.
+    pub end: Option<crate::contact::platform::PlatformLoads>,
+    /// The ring frame R in the platform frame P at the end of the step.
+    pub ring_in_base: Option<Isometry3<f64>>,
+}
 
-/// The link's wrench at one configuration: (latch force on the chaser at p_c, latch moment
-/// on the chaser, separation force on the chaser at p_c, p_c), world frame.
+/// (latch and platform force on the chaser, their moment on it, separation force on it, point
+/// p_c, the platform's legs), world.
+type LinkWrench = (
+    Vector3<f64>,
+    Vector3<f64>,
+    Vector3<f64>,
+    Vector3<f64>,
+    Option<crate::contact::platform::PlatformLoads>,
+);
+
+/// The link's wrench at one configuration `tau_s` into the step: (latch and platform force on
+/// the chaser at p_c, their moment on the chaser about p_c, separation force on the chaser at
+/// p_c, p_c, the platform's legs), world frame. The latch and the platform both act at the
+/// chaser port origin p_c.
 fn link_wrench(
     link: &Link,
     (dc, sc): (&Dyn, &BodyState),
     (dt, st): (&Dyn, &BodyState),
+    tau_s: f64,
 ) -> Option<LinkWrench> {
     let pose_c = sc.body_pose(&dc.com);
     let pose_t = st.body_pose(&dt.com);
@@ -278,7 +375,15 @@ fn link_wrench(
         }
         p_c.get_or_insert(p);
     }
-    p_c.map(|p| (f, m, fs, p))
+    let mut legs = None;
+    if let Some(pl) = &link.platform {
+        let l = pl.loads((&dc.com, sc), (&dt.com, st), tau_s);
+        f += l.force_on_base_n;
+        m += l.moment_on_base_nm;
+        p_c.get_or_insert((sc.body_pose(&dc.com) * pl.port_c_body).translation.vector);
+        legs = Some(l);
+    }
+    p_c.map(|p| (f, m, fs, p, legs))
 }
 
 /// How much sub-stepping a run needed.
@@ -553,6 +658,8 @@ struct Stepper<'a> {
     half_h: f64,
     prediction_m: f64,
     link: &'a Link,
+    /// Time into the step of the configuration being evaluated, s (the retraction's clock).
+    tau_s: f64,
 }
 
 /// Forces of one evaluation: per pair (force on b, normal force, unclamped normal force), and
@@ -565,8 +672,11 @@ struct Forces {
     torque: (Vector3<f64>, Vector3<f64>),
     /// World inverse inertias used.
     ii: (Matrix3<f64>, Matrix3<f64>),
-    /// The link's (latch force, latch moment, separation force) on the chaser, world.
+    /// The link's (latch and platform force, their moment, separation force) on the chaser,
+    /// world.
     link: (Vector3<f64>, Vector3<f64>, Vector3<f64>),
+    /// The platform's legs.
+    legs: Option<crate::contact::platform::PlatformLoads>,
     /// The link's force on b, world, N.
     link_on_b: Vector3<f64>,
 }
@@ -592,6 +702,7 @@ impl Stepper<'_> {
             torque: (Vector3::zeros(), Vector3::zeros()),
             ii,
             link: (Vector3::zeros(), Vector3::zeros(), Vector3::zeros()),
+            legs: None,
             link_on_b: Vector3::zeros(),
         };
         let (c, t) = if self.link.chaser_is_b {
@@ -599,7 +710,8 @@ impl Stepper<'_> {
         } else {
             ((self.d.0, sa), (self.d.1, sb))
         };
-        if let Some((f, m, fs, p)) = link_wrench(self.link, c, t) {
+        if let Some((f, m, fs, p, legs)) = link_wrench(self.link, c, t, self.tau_s) {
+            out.legs = legs;
             let fc = f + fs;
             // On the chaser: fc at p and the couple m; on the target the opposite.
             let tc = (p - c.1.pos_m).cross(&fc) + m;
@@ -711,7 +823,10 @@ impl CompliantContact {
         self.impacts.clear();
         self.step_contact_s = 0.0;
         self.link_step = LinkStep::default();
-        let link_on = self.link.latch.is_some() || self.link.separation.is_some();
+        self.platform_step = PlatformStep::default();
+        let link_on = self.link.latch.is_some()
+            || self.link.separation.is_some()
+            || self.link.platform.is_some();
         if !self.enabled && !link_on {
             return None;
         }
@@ -808,6 +923,44 @@ impl CompliantContact {
                 .min(0.2 * m_port / j.damping_n_s_m)
                 .min(0.2 * i_min / j.rot_damping_nm_s_rad);
         }
+        if let Some(pl) = &self.link.platform {
+            // The platform's stiffest mode (every leg and its stop together, K = n·(k + k_stop))
+            // at the smallest effective mass of the pair at any attach point (lever arms from
+            // the centres of mass to the port and ring origins plus the attach radii), and a
+            // fifth of the fastest damping time constant (the damping is explicit).
+            let (dc, sc, dtg, stg) = if self.link.chaser_is_b {
+                (&db, sb0, &da, sa0)
+            } else {
+                (&da, sa0, &db, sb0)
+            };
+            let (base, ring) = pl.base_and_ring((&dc.com, sc), (&dtg.com, stg));
+            let rho_b = pl
+                .platform
+                .legs
+                .iter()
+                .map(|l| l.base_p_m.norm())
+                .fold(0.0_f64, f64::max);
+            let rho_r = pl
+                .platform
+                .legs
+                .iter()
+                .map(|l| l.ring_r_m.norm())
+                .fold(0.0_f64, f64::max);
+            let rc = (base.pose.translation.vector - sc.pos_m).norm() + rho_b;
+            let rt = (ring.pos_m - stg.pos_m).norm() + rho_r;
+            let m_leg = 1.0
+                / (w_red + rc * rc * dc.inv_inertia_bound() + rt * rt * dtg.inv_inertia_bound())
+                    .max(1e-30);
+            let sp = &pl.platform.spec;
+            let n_legs = pl.platform.legs.len() as f64;
+            let k_max = n_legs * (sp.stiffness_n_m + sp.stop_stiffness_n_m);
+            h_max = h_max
+                .min(
+                    std::f64::consts::TAU * (m_leg / k_max).sqrt()
+                        / f64::from(sp.substeps_per_period),
+                )
+                .min(0.2 * m_leg / (n_legs * sp.damping_n_s_m));
+        }
         if let Some(sp) = &self.link.separation {
             // The spring's force ends with a step at the end of its stroke: sub-steps short
             // enough to cross it within 0.5 % of the stroke.
@@ -850,21 +1003,45 @@ impl CompliantContact {
             // interpolated from the depths on either side).
             prediction_m: 2.0 * v_bound * h + 1e-6,
             link: &self.link,
+            tau_s: 0.0,
         };
         // The force at the start of the step (damping implicit over the first half-kick); then
         // per sub-step: half-kick with it, drift, the force at the new poses from the half-step
         // velocities with its damping implicit over the second half-kick, which makes it the
         // force at the end of the sub-step and the next sub-step's first kick. For the damping
         // this is the trapezoidal rule (second order, A-stable).
+        let platform_on = st.link.platform.is_some();
         let mut geo = st.geometry(&sa, &sb);
         let mut f0 = st.forces(&geo, &sa, &sb);
+        if let Some(l) = &f0.legs {
+            // The legs at the start of the step too (the first step after the capture starts
+            // with the dampers' largest force).
+            let ps = &mut self.platform_step;
+            for leg in &l.legs {
+                ps.peak_leg_force_n = ps.peak_leg_force_n.max(leg.force_n.abs());
+                ps.peak_leg_stroke_m = ps.peak_leg_stroke_m.max(leg.stroke_m.abs());
+            }
+        }
         let mut link_imp_b = Vector3::zeros();
         for i in 0..n {
             kick_both((&da, &db), (&mut sa, &mut sb), &held, &f0, 0.5 * h);
             drift(&da, &mut sa, h);
             drift(&db, &mut sb, h);
             geo = st.geometry(&sa, &sb);
-            let f1 = st.forces(&geo, &sa, &sb);
+            st.tau_s = f64::from(i + 1) * h;
+            let mut f1 = st.forces(&geo, &sa, &sb);
+            if platform_on {
+                // The platform's dampers need the end-of-sub-step velocities: one fixed-point
+                // iteration of the implicit half-kick (a trial half-kick with the force at the
+                // half-step velocities, then the force at the trial velocities), as
+                // `Platform::advance` does, keeps the damping second order. (The docking
+                // contact is off while the platform carries the chaser, so only the link's
+                // forces are evaluated twice.)
+                let (ta, tb) = (sa.clone(), sb.clone());
+                kick_both((&da, &db), (&mut sa, &mut sb), &held, &f1, 0.5 * h);
+                f1 = st.forces(&geo, &sa, &sb);
+                (sa, sb) = (ta, tb);
+            }
             kick_both((&da, &db), (&mut sa, &mut sb), &held, &f1, 0.5 * h);
             ang_a += (f0.torque.0 + f1.torque.0) * (0.5 * h);
             ang_b += (f0.torque.1 + f1.torque.1) * (0.5 * h);
@@ -875,6 +1052,14 @@ impl CompliantContact {
                 ls.peak_moment_nm = ls.peak_moment_nm.max(f1.link.1.norm());
                 ls.force_end_n = f1.link.0;
                 ls.moment_end_nm = f1.link.1;
+            }
+            if let Some(l) = &f1.legs {
+                let ps = &mut self.platform_step;
+                for leg in &l.legs {
+                    ps.peak_leg_force_n = ps.peak_leg_force_n.max(leg.force_n.abs());
+                    ps.peak_leg_stroke_m = ps.peak_leg_stroke_m.max(leg.stroke_m.abs());
+                }
+                ps.end = Some(l.clone());
             }
             for k in &candidates {
                 let j = (f0.per_pair[*k].0 + f1.per_pair[*k].0) * (0.5 * h);
@@ -976,6 +1161,16 @@ impl CompliantContact {
                 });
                 mean_f += impulse[k] / dt;
             }
+        }
+        if let Some(pl) = self.link.platform.as_mut() {
+            let (c, t) = if self.link.chaser_is_b {
+                ((&db.com, &sb), (&da.com, &sa))
+            } else {
+                ((&da.com, &sa), (&db.com, &sb))
+            };
+            let (base, ring) = pl.base_and_ring(c, t);
+            self.platform_step.ring_in_base = Some(pl.platform.ring_pose_in_base(&base, &ring));
+            pl.retraction_m = pl.retraction_at(dt);
         }
         if link_on {
             mean_f += link_imp_b / dt;
@@ -1192,6 +1387,7 @@ pub fn install_between(
         t_step_s: 0.0,
         link: Link::default(),
         link_step: LinkStep::default(),
+        platform_step: PlatformStep::default(),
     });
     Ok(())
 }

@@ -2,7 +2,10 @@
 //! or a compliant spring–damper, with a finite break force) that engages only within the
 //! capture rate limits, release with separation springs, and the state machine FREE →
 //! ATTRACTING → CONTACT → SOFT_CAPTURE → LATCHED → RELEASED, with REBOUND, JAMMED and MISSED.
-//! Every change is an event; `docs/mechanisms.md` describes the issue-28 additions.
+//! The soft-capture mechanism (`docking.mechanism: SoftCapture`) replaces the seat and latch by
+//! capture latches, the attenuation platform's legs, retraction and hooks: … → SOFT_CAPTURED →
+//! RETRACTED → HARD_DOCKED (→ RELEASED). Every change is an event; `docs/mechanisms.md`
+//! describes the issue-28 additions.
 //!
 //! Geometry and the magnet law are documented on [`crate::scene::DockingSpec`] and
 //! [`crate::scene::MagnetSpec`]. Contact is real: the cone and the slot's wall pieces are rapier
@@ -127,6 +130,14 @@ pub enum DockState {
     Missed,
     /// Released from the latch by a command (undocking); final.
     Released,
+    /// Soft capture: the capture latches hold the chaser's ring to the target's ring; the
+    /// chaser hangs on the platform's legs (attenuation, then retraction).
+    SoftCaptured,
+    /// Soft capture, the platform retracted to its retracted stroke; the hooks wait for the
+    /// interface to align.
+    Retracted,
+    /// The structural hooks are closed (a stiff compliant joint).
+    HardDocked,
 }
 
 impl DockState {
@@ -142,6 +153,9 @@ impl DockState {
             DockState::Jammed => 6.0,
             DockState::Missed => 7.0,
             DockState::Released => 8.0,
+            DockState::SoftCaptured => 9.0,
+            DockState::Retracted => 10.0,
+            DockState::HardDocked => 11.0,
         }
     }
     /// The name used in events and summaries.
@@ -156,8 +170,64 @@ impl DockState {
             DockState::Jammed => "JAMMED",
             DockState::Missed => "MISSED",
             DockState::Released => "RELEASED",
+            DockState::SoftCaptured => "SOFT_CAPTURED",
+            DockState::Retracted => "RETRACTED",
+            DockState::HardDocked => "HARD_DOCKED",
         }
     }
+    /// Docked: latched, or held by a soft-capture mechanism (captured, retracted, hard docked).
+    pub fn docked(self) -> bool {
+        matches!(
+            self,
+            DockState::Latched
+                | DockState::SoftCaptured
+                | DockState::Retracted
+                | DockState::HardDocked
+        )
+    }
+}
+
+/// Results of a soft-capture mechanism (`summary.json` → `docking.soft_capture`). Leg loads
+/// are the largest over every sub-step; the interface load is the platform's and the hooks'
+/// load on the chaser at (force) and about (moment) its port origin, world frame; each time is
+/// the end of the step that held the peak, s.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct SoftCaptureResults {
+    /// Event `SOFT_CAPTURED`, s.
+    pub t_soft_captured_s: Option<f64>,
+    /// The retraction began (end of the attenuation), s.
+    pub t_retraction_start_s: Option<f64>,
+    /// Event `RETRACTED`, s.
+    pub t_retracted_s: Option<f64>,
+    /// Event `HARD_DOCKED`, s.
+    pub t_hard_docked_s: Option<f64>,
+    /// Largest |leg stroke|, m.
+    pub peak_leg_stroke_m: f64,
+    /// When, s.
+    pub peak_leg_stroke_t_s: Option<f64>,
+    /// Largest |leg force|, N.
+    pub peak_leg_force_n: f64,
+    /// When, s.
+    pub peak_leg_force_t_s: Option<f64>,
+    /// Largest interface force on the chaser at its port, N.
+    pub peak_interface_force_n: f64,
+    /// When, s.
+    pub peak_interface_force_t_s: Option<f64>,
+    /// Largest interface moment on the chaser about its port, N·m.
+    pub peak_interface_moment_nm: f64,
+    /// When, s.
+    pub peak_interface_moment_t_s: Option<f64>,
+    /// Retraction at the end of the run, m.
+    pub retraction_m: f64,
+    /// The capture latches were tried in the present visit of the capture zone (one try per
+    /// visit: a refused ring bounces off, as a real capture latch does not engage later in
+    /// the same contact).
+    #[serde(skip)]
+    pub attempted: bool,
+    /// Trajectory columns: per leg (stroke, force), ring pose in P (x, y, z m, rotation
+    /// vector x, y, z deg), interface force (x, y, z N) and moment (x, y, z N·m), retraction.
+    #[serde(skip)]
+    pub cols: Vec<usize>,
 }
 
 /// Commands to the mechanism, acted on at the start of the next mechanism step: the Sequencer
@@ -284,9 +354,21 @@ pub struct Docking {
     /// Relative velocity of the chaser port w.r.t. the target when the separation springs
     /// reached the end of their stroke (world, m/s), and when, s.
     pub separation_end: Option<([f64; 3], f64)>,
+    /// A soft-capture mechanism's results (absent for the cone and slot).
+    pub soft: Option<SoftCaptureResults>,
     /// Diagnostics column indices: gap, axial, lateral, misalignment, magnet, state, joint force,
     /// joint torque.
     cols: [usize; 8],
+}
+
+/// The platform frame P of a port in its body frame: origin the port origin, +z the port axis,
+/// the rotation the shortest one from body +z onto the axis (half a turn about x when the axis
+/// is −z).
+pub fn port_platform_frame(port: &PortFrame) -> Isometry3<f64> {
+    let rot = UnitQuaternion::rotation_between(&Vector3::z(), &port.1).unwrap_or_else(|| {
+        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+    });
+    Isometry3::from_parts(Translation3::from(port.0), rot)
 }
 
 /// World port origin and unit axis of a body.
@@ -359,6 +441,46 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         diag.column("dock.joint_force_n"),
         diag.column("dock.joint_torque_nm"),
     ];
+    let soft = match &spec.mechanism {
+        crate::scene::Mechanism::SoftCapture(sc) => {
+            let n = crate::contact::platform::Platform::new(&sc.platform)
+                .map_err(|e| {
+                    loaded.error_at(
+                        &format!("docking.mechanism.platform.{}", e.field),
+                        e.why.clone(),
+                    )
+                })?
+                .legs
+                .len();
+            let mut c = Vec::with_capacity(2 * n + 13);
+            for i in 0..n {
+                c.push(diag.column(&format!("dock.leg{i}_stroke_m")));
+                c.push(diag.column(&format!("dock.leg{i}_force_n")));
+            }
+            for name in [
+                "dock.ring_x_m",
+                "dock.ring_y_m",
+                "dock.ring_z_m",
+                "dock.ring_rot_x_deg",
+                "dock.ring_rot_y_deg",
+                "dock.ring_rot_z_deg",
+                "dock.iface_fx_n",
+                "dock.iface_fy_n",
+                "dock.iface_fz_n",
+                "dock.iface_mx_nm",
+                "dock.iface_my_nm",
+                "dock.iface_mz_nm",
+                "dock.retraction_m",
+            ] {
+                c.push(diag.column(name));
+            }
+            Some(SoftCaptureResults {
+                cols: c,
+                ..Default::default()
+            })
+        }
+        crate::scene::Mechanism::ConeSlot => None,
+    };
     let magnet_on = spec.magnet.on_at_start;
     let spec_contact = spec.contact.clone();
     let start_latched = spec.start_latched;
@@ -427,6 +549,7 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         interface: None,
         t_release_s: None,
         separation_end: None,
+        soft,
         cols,
     });
     app.add_systems(
@@ -466,7 +589,7 @@ fn docking_actuate(
         dock.reason = "started latched (docking.start_latched)".into();
     }
     for source in std::mem::take(&mut cmds.release) {
-        if dock.state != DockState::Latched {
+        if !dock.state.docked() {
             log.push(
                 t,
                 "docking_release_ignored",
@@ -482,6 +605,9 @@ fn docking_actuate(
         let (pt, at) = port_world(ts, &tb.com_body_m, &dock.ports.1);
         if let Some(c) = compliant.as_deref_mut() {
             c.link.latch = None;
+            // A soft-capture mechanism opens everything: hooks, capture latches (the ring
+            // returns to the chaser's platform).
+            c.link.platform = None;
             c.link.chaser_is_b = c.indices.1 == cb.index;
             c.link.separation = dock.spec.separation.as_ref().map(|sp| SeparationSpring {
                 stroke_m: sp.stroke_m,
@@ -503,7 +629,7 @@ fn docking_actuate(
         log.push(
             t,
             "docking_state",
-            serde_json::json!({"from": "LATCHED", "to": "RELEASED", "reason": reason}),
+            serde_json::json!({"from": dock.state.name(), "to": "RELEASED", "reason": reason}),
         );
         dock.state = DockState::Released;
         dock.reason = reason;
@@ -515,7 +641,7 @@ fn docking_actuate(
     if !dock.magnet_on && m.activation_distance_m > 0.0 && g.gap_m < m.activation_distance_m {
         dock.magnet_on = true;
     }
-    let on = dock.magnet_on && !matches!(dock.state, DockState::Latched | DockState::Released);
+    let on = dock.magnet_on && !dock.state.docked() && dock.state != DockState::Released;
     let f = if on {
         (m.f0_n / (1.0 + g.gap_m / m.g0_m).powi(2)).min(m.max_force_n)
     } else {
@@ -554,7 +680,7 @@ fn docking_monitor(
     // Loads on the mechanism up to the latch: the compliant model's sub-step history, or the
     // rigid contacts' impulse / dt.
     let mut joint_now = (0.0, 0.0);
-    if dock.state != DockState::Latched {
+    if !dock.state.docked() {
         let chaser = cb.index;
         let loads = &mut dock.loads;
         let mut j_step = Vector3::zeros();
@@ -652,9 +778,125 @@ fn docking_monitor(
     let old = dock.state;
     let mut new = old;
     let mut reason = String::new();
+    let soft_spec = match &spec.mechanism {
+        crate::scene::Mechanism::SoftCapture(sc) => Some(sc.clone()),
+        crate::scene::Mechanism::ConeSlot => None,
+    };
+    if !seated && let Some(r) = dock.soft.as_mut() {
+        r.attempted = false;
+    }
     use DockState::*;
     match old {
         Missed => {}
+        SoftCaptured | Retracted | HardDocked => {
+            let sc = soft_spec
+                .as_ref()
+                .expect("soft-capture states need the mechanism");
+            let ports = dock.ports;
+            let (ls, ps) = compliant
+                .as_deref()
+                .map(|c| (c.link_step, c.platform_step.clone()))
+                .unwrap_or_default();
+            joint_now = (ls.peak_force_n, ls.peak_moment_nm);
+            let r = dock.soft.as_mut().expect("soft-capture results");
+            let peak = |v: f64, p: &mut f64, pt: &mut Option<f64>| {
+                if v > *p {
+                    *p = v;
+                    *pt = Some(t);
+                }
+            };
+            peak(
+                ps.peak_leg_stroke_m,
+                &mut r.peak_leg_stroke_m,
+                &mut r.peak_leg_stroke_t_s,
+            );
+            peak(
+                ps.peak_leg_force_n,
+                &mut r.peak_leg_force_n,
+                &mut r.peak_leg_force_t_s,
+            );
+            peak(
+                ls.peak_force_n,
+                &mut r.peak_interface_force_n,
+                &mut r.peak_interface_force_t_s,
+            );
+            peak(
+                ls.peak_moment_nm,
+                &mut r.peak_interface_moment_nm,
+                &mut r.peak_interface_moment_t_s,
+            );
+            let retraction = compliant
+                .as_deref()
+                .and_then(|c| c.link.platform.as_ref())
+                .map_or(0.0, |p| p.retraction_m);
+            r.retraction_m = retraction;
+            let t_cap = r.t_soft_captured_s.unwrap_or(t);
+            if old != HardDocked && ls.peak_force_n > spec.latch.break_force_n {
+                // The capture latches let go: the ring returns to the chaser's platform.
+                if let Some(c) = compliant.as_deref_mut() {
+                    c.link.platform = None;
+                    c.enabled = true;
+                }
+                new = Free;
+                reason = format!(
+                    "capture latches let go: interface force {:.1} N > break force {:.1} N",
+                    ls.peak_force_n, spec.latch.break_force_n
+                );
+            } else if old == SoftCaptured
+                && r.t_retraction_start_s.is_none()
+                && t - t_cap >= sc.attenuation_s - 1e-9
+            {
+                // Attenuation over: the platform retracts from the next step on.
+                r.t_retraction_start_s = Some(t);
+                if let Some(p) = compliant
+                    .as_deref_mut()
+                    .and_then(|c| c.link.platform.as_mut())
+                {
+                    p.retraction_rate_m_s = sc.retraction_speed_m_s;
+                }
+                log.push(
+                    t,
+                    "retraction_start",
+                    serde_json::json!({"speed_m_s": sc.retraction_speed_m_s,
+                        "stroke_m": sc.retracted_stroke_m}),
+                );
+            } else if old == SoftCaptured
+                && r.t_retraction_start_s.is_some()
+                && retraction >= sc.retracted_stroke_m
+            {
+                r.t_retracted_s = Some(t);
+                if let Some(p) = compliant
+                    .as_deref_mut()
+                    .and_then(|c| c.link.platform.as_mut())
+                {
+                    p.retraction_rate_m_s = 0.0;
+                }
+                new = Retracted;
+                reason = format!(
+                    "retracted {:.4} m at {} m/s",
+                    retraction, sc.retraction_speed_m_s
+                );
+            } else if old == Retracted
+                && g.lateral_m <= sc.hook_lateral_tolerance_m
+                && g.misalignment_deg <= sc.hook_angle_tolerance_deg
+            {
+                r.t_hard_docked_s = Some(t);
+                if let Some(c) = compliant.as_deref_mut() {
+                    let pt: Isometry3<f64> = ts.body_pose(&tb.com_body_m);
+                    let pc: Isometry3<f64> = cs.body_pose(&cb.com_body_m);
+                    c.link.latch = Some(LatchSpring {
+                        spec: sc.hooks.clone(),
+                        port_c_body_m: ports.0.0,
+                        caught: pt.inv_mul(&pc),
+                    });
+                }
+                new = HardDocked;
+                reason = format!(
+                    "hooks closed: lateral {:.4} m, misalignment {:.3}° (axial {:.4} m)",
+                    g.lateral_m, g.misalignment_deg, g.axial_error_m
+                );
+            }
+        }
         Released => {
             if let Some(c) = compliant.as_deref()
                 && c.link_step.separation_ended
@@ -782,7 +1024,40 @@ fn docking_monitor(
                     "the approach turned away outside the mouth: lateral offset {:.3} m > {:.3} m, separating at {:.3e} m/s",
                     g.lateral_m, spec.mouth_radius_m, g.axial_rate_m_s
                 );
-            } else if seated && (docking_contact || old == SoftCapture) {
+            } else if let Some(sc) = soft_spec.as_ref()
+                && seated
+                && !dock.soft.as_ref().is_some_and(|r| r.attempted)
+            {
+                // The capture latches get one try per visit of the capture zone.
+                if let Some(r) = dock.soft.as_mut() {
+                    r.attempted = true;
+                }
+                if let Some((payload, why)) = capture_rate_violation(&spec.latch.capture_rates, &g)
+                {
+                    dock.refusals += 1;
+                    let mut payload = payload;
+                    payload["reason"] = why.replace("latch refused", "capture refused").into();
+                    log.push(t, "capture_refused", payload);
+                    dock.reason = why.replace("latch refused", "capture refused");
+                } else {
+                    dock.latch_rates = Some([
+                        g.axial_rate_m_s.abs(),
+                        g.lateral_rate_m_s,
+                        g.angular_rate_deg_s,
+                    ]);
+                    new = SoftCaptured;
+                    reason = format!(
+                        "capture latches engaged: axial {:.4} m, lateral {:.4} m, misalignment {:.2}°, closing at {:.4} m/s",
+                        g.axial_error_m, g.lateral_m, g.misalignment_deg, -g.axial_rate_m_s
+                    );
+                    if let Some(c) = compliant.as_deref_mut() {
+                        engage_platform(&dock, sc, (cs, cb), (ts, tb), c);
+                    }
+                    if let Some(r) = dock.soft.as_mut() {
+                        r.t_soft_captured_s = Some(t);
+                    }
+                }
+            } else if soft_spec.is_none() && seated && (docking_contact || old == SoftCapture) {
                 if old != SoftCapture {
                     new = SoftCapture;
                     dock.seated_since = Some(t);
@@ -899,7 +1174,84 @@ fn docking_monitor(
     for (c, v) in dock.cols.iter().zip(values) {
         diag.values[*c] = v;
     }
+    if let (Some(r), Some(sc)) = (dock.soft.as_ref(), soft_spec.as_ref()) {
+        // The platform while it carries the chaser; otherwise the ring at rest on its stops at
+        // the neutral pose and no load.
+        let live = compliant.as_deref().filter(|c| c.link.platform.is_some());
+        let ps = live.map(|c| c.platform_step.clone()).unwrap_or_default();
+        let n = (r.cols.len() - 13) / 2;
+        for i in 0..n {
+            let leg = ps.end.as_ref().and_then(|l| l.legs.get(i));
+            diag.values[r.cols[2 * i]] = leg.map_or(0.0, |l| l.stroke_m);
+            diag.values[r.cols[2 * i + 1]] = leg.map_or(0.0, |l| l.force_n);
+        }
+        let ring = ps
+            .ring_in_base
+            .unwrap_or_else(|| Isometry3::translation(0.0, 0.0, sc.platform.height_m));
+        let rot = ring.rotation.scaled_axis().map(f64::to_degrees);
+        let (f, m) = live.map_or((Vector3::zeros(), Vector3::zeros()), |c| {
+            (c.link_step.force_end_n, c.link_step.moment_end_nm)
+        });
+        let retraction = live
+            .and_then(|c| c.link.platform.as_ref())
+            .map_or(0.0, |p| p.retraction_m);
+        let rest = [
+            ring.translation.vector.x,
+            ring.translation.vector.y,
+            ring.translation.vector.z,
+            rot.x,
+            rot.y,
+            rot.z,
+            f.x,
+            f.y,
+            f.z,
+            m.x,
+            m.y,
+            m.z,
+            retraction,
+        ];
+        for (c, v) in r.cols[2 * n..].iter().zip(rest) {
+            diag.values[*c] = v;
+        }
+    }
     dock.geometry = g;
+}
+
+/// The capture latches engage: the chaser's ring, at the platform's neutral pose, is pressed
+/// flat on the target's ring (turned by the smallest rotation that puts its axis on −a_t and
+/// moved across onto the target port axis, keeping its axial position and its roll) and held
+/// there, fixed in the target's body frame; from then the legs carry the chaser and take up the
+/// misalignment the rings met with. The cone–slot contact stops (the ring holds the chaser).
+fn engage_platform(
+    dock: &Docking,
+    sc: &crate::scene::SoftCaptureSpec,
+    (cs, cb): (&BodyState, &SimBody),
+    (ts, tb): (&BodyState, &SimBody),
+    c: &mut CompliantContact,
+) {
+    let platform =
+        crate::contact::platform::Platform::new(&sc.platform).expect("validated platform");
+    let port_c_body = port_platform_frame(&dock.ports.0);
+    let p_world = cs.body_pose(&cb.com_body_m) * port_c_body;
+    let ring_now = p_world * Translation3::new(0.0, 0.0, sc.platform.height_m);
+    let target = ts.body_pose(&tb.com_body_m);
+    let (pt, at) = port_world(ts, &tb.com_body_m, &dock.ports.1);
+    let z_ring = ring_now.rotation * Vector3::z();
+    let turn =
+        UnitQuaternion::rotation_between(&z_ring, &(-at)).unwrap_or_else(UnitQuaternion::identity);
+    let c_ring = ring_now.translation.vector;
+    let c_nominal = pt + at * (c_ring - pt).dot(&at);
+    let ring_world = Isometry3::from_parts(Translation3::from(c_nominal), turn * ring_now.rotation);
+    c.link.chaser_is_b = c.indices.1 == cb.index;
+    c.link.platform = Some(super::contact_model::PlatformLink {
+        platform,
+        port_c_body,
+        ring_in_target: target.inv_mul(&ring_world),
+        retraction_m: 0.0,
+        retraction_rate_m_s: 0.0,
+        retraction_max_m: sc.retracted_stroke_m,
+    });
+    disable_contact(c);
 }
 
 /// Closes the latch where the chaser is: a rapier fixed joint, or the compliant latch's spring.
@@ -976,6 +1328,9 @@ pub fn summary(dock: &Docking) -> serde_json::Value {
         "final_geometry": dock.geometry,
         "contact": dock.loads,
     });
+    if let Some(r) = &dock.soft {
+        v["soft_capture"] = serde_json::to_value(r).unwrap_or_default();
+    }
     // A compliant latch's loads at the interface (a rigid latch's are `peak_latch_force_n`
     // and `contact.peak_joint_*`).
     if let Some(il) = &dock.interface {

@@ -57,7 +57,8 @@ pub enum Condition {
     /// A guarantee's margin (end of the previous step) below a value, in the guarantee's unit.
     MarginBelow(String, f64),
     /// The docking mechanism in one of these states (`FREE`, `ATTRACTING`, `CONTACT`,
-    /// `SOFT_CAPTURE`, `LATCHED`, `REBOUND`, `JAMMED`, `MISSED`, `RELEASED`).
+    /// `SOFT_CAPTURE`, `LATCHED`, `REBOUND`, `JAMMED`, `MISSED`, `RELEASED`, and the soft-capture
+    /// mechanism's `SOFT_CAPTURED`, `RETRACTED`, `HARD_DOCKED`).
     DockingState(Vec<String>),
     /// The phase's translation law tracks its reference within these errors.
     Settled {
@@ -73,7 +74,7 @@ pub enum Condition {
 }
 
 /// The docking states a `DockingState` condition may name.
-pub const DOCK_STATES: [&str; 9] = [
+pub const DOCK_STATES: [&str; 12] = [
     "FREE",
     "ATTRACTING",
     "CONTACT",
@@ -83,6 +84,9 @@ pub const DOCK_STATES: [&str; 9] = [
     "JAMMED",
     "MISSED",
     "RELEASED",
+    "SOFT_CAPTURED",
+    "RETRACTED",
+    "HARD_DOCKED",
 ];
 
 /// One exit of a phase.
