@@ -114,7 +114,8 @@ enum Cmd {
         /// Scene file (default scenes/free_drift.ron).
         #[arg(default_value = "scenes/free_drift.ron")]
         scene: PathBuf,
-        /// Steps per measurement (default 20000; 3000 per case with --meshes).
+        /// Steps per measurement (default 20000; with --meshes, 3000 per flagship and
+        /// guarantee case, the fly-bys 400).
         #[arg(long)]
         steps: Option<u64>,
         /// Instead of the scene: the swarm table for these body counts (e.g. 2,4,8,…,256).
@@ -126,13 +127,13 @@ enum Cmd {
         #[arg(long)]
         cliffs: bool,
         /// Instead of the scene: the mesh and guarantee costs of issues 26 and 27, each as a
-        /// ratio to its plain case in the same run — fly-bys of a generated 100 000-triangle
-        /// target at 20 m and 1.9 m against the Box primitive, the flagship with the example
-        /// mesh vehicle against the flagship, and each guarantee kind against the run without
-        /// it, with the bare rapier and parry floors (about 3 minutes); SCENE's folder must
-        /// hold orbit_approach_latch.ron, orbit_approach_latch_truss.ron,
-        /// requirements_approach.ron and orbit_approach_plume.ron. The generated mesh is
-        /// written to a temporary folder that is removed afterwards.
+        /// ratio to its plain case in the same run — fly-bys of generated 100 000-triangle
+        /// targets at 20 m and 1.9 m against the Box and Sphere primitives, the flagship with
+        /// the example mesh vehicle against the flagship, and each guarantee kind against the
+        /// run without it, with the bare rapier and parry floors (about 2 minutes); SCENE's
+        /// folder must hold orbit_approach_latch.ron, orbit_approach_latch_truss.ron,
+        /// requirements_approach.ron and orbit_approach_plume.ron. The generated meshes are
+        /// written to temporary folders that are removed afterwards.
         #[arg(long)]
         meshes: bool,
     },
