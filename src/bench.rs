@@ -4,7 +4,9 @@
 //! swarm table: N tumbling winged spacecraft in orbit ([`swarm_scene`]), pipeline against bare
 //! rapier, and the exact queries per step, for N = 2 … 256; and the cliffs ([`run_cliffs`]):
 //! the cases that used to run 5–50× slower than their plain scene, as ratios to it measured in
-//! the same run.
+//! the same run; and the meshes and guarantees of issues 26 and 27 ([`meshes::run_meshes`]).
+
+pub mod meshes;
 
 use crate::scene::{LoadedScene, SceneError, load_scene_file, load_scene_str};
 use crate::sim::{Physics, Simulation};
@@ -40,12 +42,37 @@ pub struct Measure {
 
 /// Measures a loaded scene.
 pub fn measure(loaded: &LoadedScene, steps: u64) -> Result<Measure, SceneError> {
+    measure_within(loaded, steps / 10, steps, f64::INFINITY)
+}
+
+/// Measures a loaded scene over `steps` steps after `warm_up` untimed ones, or over fewer when
+/// the pipeline's steps exceed `budget_s` of wall time (then stepped in chunks of a hundredth
+/// of `steps` and stopped at the first chunk past the budget; the floors are measured over the
+/// steps actually taken, [`Measure::steps`]).
+pub fn measure_within(
+    loaded: &LoadedScene,
+    warm_up: u64,
+    steps: u64,
+    budget_s: f64,
+) -> Result<Measure, SceneError> {
     // 1. The whole pipeline.
     let mut sim = Simulation::new(loaded)?;
-    sim.step(steps / 10); // warm-up
+    sim.step(warm_up);
     let before = sim.summary();
     let t0 = Instant::now();
-    sim.step(steps);
+    let steps = if budget_s.is_finite() {
+        let chunk = (steps / 100).max(1);
+        let mut done = 0;
+        while done < steps && (done == 0 || t0.elapsed().as_secs_f64() < budget_s) {
+            let n = chunk.min(steps - done);
+            sim.step(n);
+            done += n;
+        }
+        done
+    } else {
+        sim.step(steps);
+        steps
+    };
     let pipeline_s = t0.elapsed().as_secs_f64();
     let after = sim.summary();
     let count = |s: &serde_json::Value| {
@@ -73,7 +100,7 @@ pub fn measure(loaded: &LoadedScene, steps: u64) -> Result<Measure, SceneError> 
             .expect("physics")
             .world
     };
-    for _ in 0..steps / 10 {
+    for _ in 0..warm_up {
         world.step();
     }
     let t0 = Instant::now();

@@ -114,9 +114,10 @@ enum Cmd {
         /// Scene file (default scenes/free_drift.ron).
         #[arg(default_value = "scenes/free_drift.ron")]
         scene: PathBuf,
-        /// Steps per measurement.
-        #[arg(long, default_value_t = 20000)]
-        steps: u64,
+        /// Steps per measurement (default 20000; with --meshes, 3000 per flagship and
+        /// guarantee case, the fly-bys 400).
+        #[arg(long)]
+        steps: Option<u64>,
         /// Instead of the scene: the swarm table for these body counts (e.g. 2,4,8,…,256).
         #[arg(long, value_delimiter = ',')]
         swarm: Vec<usize>,
@@ -125,6 +126,16 @@ enum Cmd {
         /// case in the same run; SCENE's folder must hold docking_aligned.ron and free_drift.ron.
         #[arg(long)]
         cliffs: bool,
+        /// Instead of the scene: the mesh and guarantee costs of issues 26 and 27, each as a
+        /// ratio to its plain case in the same run — fly-bys of generated 100 000-triangle
+        /// targets at 20 m and 1.9 m against the Box and Sphere primitives, the flagship with
+        /// the example mesh vehicle against the flagship, and each guarantee kind against the
+        /// run without it, with the bare rapier and parry floors (about 2 minutes); SCENE's
+        /// folder must hold orbit_approach_latch.ron, orbit_approach_latch_truss.ron,
+        /// requirements_approach.ron and orbit_approach_plume.ron. The generated meshes are
+        /// written to temporary folders that are removed afterwards.
+        #[arg(long)]
+        meshes: bool,
     },
     /// Write an N-body swarm scene (tumbling winged spacecraft on a 20 m grid in orbit).
     Swarm {
@@ -508,7 +519,7 @@ fn main() -> ExitCode {
                 eprintln!("error: the swarm sizes must be 1 … 4096, got {n}");
                 return ExitCode::from(2);
             }
-            match rpod::bench::run_swarm(&swarm, steps) {
+            match rpod::bench::run_swarm(&swarm, steps.unwrap_or(20000)) {
                 Ok(report) => {
                     out!("{report}");
                     ExitCode::SUCCESS
@@ -526,7 +537,7 @@ fn main() -> ExitCode {
             ..
         } => {
             let folder = scene.parent().unwrap_or(std::path::Path::new("."));
-            match rpod::bench::run_cliffs(folder, steps) {
+            match rpod::bench::run_cliffs(folder, steps.unwrap_or(20000)) {
                 Ok(report) => {
                     out!("{report}");
                     ExitCode::SUCCESS
@@ -537,7 +548,25 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Cmd::Bench { scene, steps, .. } => match rpod::bench::run(&scene, steps) {
+        Cmd::Bench {
+            scene,
+            steps,
+            meshes: true,
+            ..
+        } => {
+            let folder = scene.parent().unwrap_or(std::path::Path::new("."));
+            match rpod::bench::meshes::run_meshes(folder, steps.unwrap_or(3000)) {
+                Ok(report) => {
+                    out!("{report}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            }
+        }
+        Cmd::Bench { scene, steps, .. } => match rpod::bench::run(&scene, steps.unwrap_or(20000)) {
             Ok(report) => {
                 out!("{report}");
                 ExitCode::SUCCESS

@@ -14,6 +14,7 @@
 //! Every actuator accounts the velocity increment ∫|F|/m dt it applied (m/s); thrusters also
 //! the propellant, Σ F_i·dt/(I_sp g₀).
 
+use super::pwpf::{Pwpf, PwpfParams};
 use super::thrusters::{G0_M_S2, ThrusterParams, ThrusterPwpf};
 use crate::control::interface::{ActuationReport, Command, Frame};
 use crate::math::rng::GaussianNoise;
@@ -63,6 +64,16 @@ pub enum ActuatorSpec {
         /// `PlumeKeepOff` guarantee), e.g. to study clearance with the struck body unmoved.
         #[serde(default = "yes")]
         plume_loads: bool,
+        /// Modulate each jet's allocated thrust through its own PWPF into on/off valve
+        /// commands ([`crate::actuation::rcs`], "PWPF"; default none: the mean thrust is
+        /// applied). Fields left out take the typical values.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        pwpf: Option<super::pwpf::PwpfParams>,
+        /// Raise a `jet_pulse` event in `events.jsonl` when a jet's firing pulse ends (its
+        /// start, duration, on-time and impulse; default false), capped per jet and per run
+        /// ([`super::rcs::MAX_PULSE_EVENTS_PER_JET`], [`super::rcs::MAX_PULSE_EVENTS_PER_RUN`]).
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        firing_events: bool,
     },
 }
 
@@ -96,7 +107,15 @@ impl ActuatorSpec {
                 }
                 Ok(())
             }
-            ActuatorSpec::Rcs { jets, isp_s, .. } => super::rcs::validate_jets(jets, *isp_s),
+            ActuatorSpec::Rcs {
+                jets, isp_s, pwpf, ..
+            } => {
+                super::rcs::validate_jets(jets, *isp_s)?;
+                if let Some(p) = pwpf {
+                    p.check().map_err(|(f, m)| (format!("pwpf.{f}"), m))?;
+                }
+                Ok(())
+            }
             ActuatorSpec::PlanarThrusters {
                 params,
                 thrust_noise,
@@ -168,6 +187,10 @@ pub struct Actuator {
     pub jets: Vec<super::rcs::JetTotals>,
     /// Steps in which the actuator could not meet the command.
     pub saturated_steps: u64,
+    /// Per jet (`Rcs` with `pwpf`): the jet's modulator.
+    pub jet_pwpf: Vec<Pwpf>,
+    /// Firing pulses that ended this step (`Rcs` with `firing_events`; the host drains them).
+    pub ended_pulses: Vec<super::rcs::JetPulse>,
     thrust_noise: GaussianNoise,
 }
 
@@ -192,6 +215,24 @@ impl Actuator {
                 .collect(),
             _ => Vec::new(),
         };
+        // One modulator per jet; its minimum on-time also honours the jet's minimum impulse
+        // bit (a pulse lasts at least I_min/F_max at full thrust).
+        let jet_pwpf = match &spec {
+            ActuatorSpec::Rcs {
+                jets,
+                pwpf: Some(p),
+                ..
+            } => jets
+                .iter()
+                .map(|j| {
+                    Pwpf::new(PwpfParams {
+                        min_on_time_s: p.min_on_time_s.max(j.min_impulse_bit_ns / j.max_thrust_n),
+                        ..p.clone()
+                    })
+                })
+                .collect(),
+            _ => Vec::new(),
+        };
         Self {
             spec,
             pwpf,
@@ -202,6 +243,8 @@ impl Actuator {
             delta_v_m_s: 0.0,
             jets,
             saturated_steps: 0,
+            jet_pwpf,
+            ended_pulses: Vec::new(),
             thrust_noise: GaussianNoise::new(noise_seed),
         }
     }
@@ -225,7 +268,12 @@ impl Actuator {
             }
         };
         let (f_world, t_world) = match &self.spec {
-            ActuatorSpec::Rcs { jets, isp_s, .. } => {
+            ActuatorSpec::Rcs {
+                jets,
+                isp_s,
+                firing_events,
+                ..
+            } => {
                 use super::rcs;
                 let thrust: Vec<f64> = match &cmd.valves {
                     Some(v) => jets
@@ -245,15 +293,48 @@ impl Actuator {
                         let w = nalgebra::Vector6::new(fb.x, fb.y, fb.z, tb.x, tb.y, tb.z);
                         let a = rcs::allocate(jets, &w);
                         report.saturated = a.saturated;
-                        rcs::apply_minimum_impulse(jets, &a.thrust_n, dt_s)
+                        if self.jet_pwpf.is_empty() {
+                            rcs::apply_minimum_impulse(jets, &a.thrust_n, dt_s)
+                        } else {
+                            // Each jet's demand through its modulator: full thrust or none.
+                            jets.iter()
+                                .zip(&a.thrust_n)
+                                .zip(self.jet_pwpf.iter_mut())
+                                .map(|((j, u), m)| {
+                                    if m.step_one_sided(u / j.max_thrust_n, dt_s) {
+                                        j.max_thrust_n
+                                    } else {
+                                        0.0
+                                    }
+                                })
+                                .collect()
+                        }
                     }
                 };
                 let mut flags = Vec::with_capacity(jets.len());
-                for ((j, t), u) in jets.iter().zip(self.jets.iter_mut()).zip(&thrust) {
+                for (k, ((j, t), u)) in jets
+                    .iter()
+                    .zip(self.jets.iter_mut())
+                    .zip(&thrust)
+                    .enumerate()
+                {
                     let impulse = u * dt_s;
                     let on = impulse > 0.0;
                     if on && !t.firing {
                         t.firings += 1;
+                        t.pulse = (0, 0.0, 0.0);
+                    }
+                    if on {
+                        t.pulse.0 += 1;
+                        t.pulse.1 += impulse;
+                        t.pulse.2 += impulse / j.max_thrust_n;
+                    } else if t.firing && *firing_events {
+                        self.ended_pulses.push(rcs::JetPulse {
+                            jet: k,
+                            steps: t.pulse.0,
+                            impulse_ns: t.pulse.1,
+                            on_time_s: t.pulse.2,
+                        });
                     }
                     t.firing = on;
                     t.impulse_ns += impulse;

@@ -35,8 +35,10 @@ use serde::{Deserialize, Serialize};
 
 /// PWPF constants. Typical values of the PWPF literature, our choice (the paper gives none):
 /// K_m = 4.5, T_m = 0.2 s, U_on = 0.45, U_off = 0.15.
+///
+/// In a scene each field may be left out (the typical value is used).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default)]
 pub struct PwpfParams {
     /// Prefilter gain `K_m` (dimensionless).
     pub k_m: f64,
@@ -67,6 +69,41 @@ impl PwpfParams {
             u_off: 0.15,
             min_on_time_s: 0.0,
         }
+    }
+
+    /// Checks the constants: `Err((field, message))`. K_m and T_m positive, 0 ≤ U_off < U_on <
+    /// K_m (else no command could ever open the valve: the dead zone U_on/K_m would reach
+    /// full scale), a finite minimum on-time ≥ 0.
+    pub fn check(&self) -> Result<(), (String, String)> {
+        let fin = |x: f64| x.is_finite();
+        if !(fin(self.k_m) && self.k_m > 0.0) {
+            return Err(("k_m".into(), format!("must be positive, got {}", self.k_m)));
+        }
+        if !(fin(self.t_m_s) && self.t_m_s > 0.0 && self.t_m_s <= 1e6) {
+            return Err((
+                "t_m_s".into(),
+                format!("must be positive and at most 1e6 s, got {}", self.t_m_s),
+            ));
+        }
+        if !(fin(self.u_off) && self.u_off >= 0.0) {
+            return Err(("u_off".into(), format!("must be ≥ 0, got {}", self.u_off)));
+        }
+        if !(fin(self.u_on) && self.u_on > self.u_off && self.u_on < self.k_m) {
+            return Err((
+                "u_on".into(),
+                format!(
+                    "must exceed u_off ({}) and be below k_m ({}), got {}",
+                    self.u_off, self.k_m, self.u_on
+                ),
+            ));
+        }
+        if !(fin(self.min_on_time_s) && (0.0..=1e6).contains(&self.min_on_time_s)) {
+            return Err((
+                "min_on_time_s".into(),
+                format!("must be in [0, 1e6] s, got {}", self.min_on_time_s),
+            ));
+        }
+        Ok(())
     }
 
     /// Dead zone of the normalised command, `U_on/K_m` (dimensionless).
@@ -150,12 +187,25 @@ impl Pwpf {
     /// the output `U` ∈ {−1, 0, +1} to apply over `[t, t + dt_s)` (see the module doc for the
     /// order: trigger on the current state, then the exact filter update).
     pub fn step(&mut self, r: f64, dt_s: f64) -> i8 {
+        self.advance(r, dt_s, true)
+    }
+
+    /// As [`Pwpf::step`] for a one-sided channel (a single jet, which can only push: r in
+    /// [0, 1], the valve open or closed): the trigger never switches to −1, so a dip of the
+    /// filter below −U_on (possible only when a step is not small against `T_m`) leaves the
+    /// valve closed. For r ≥ 0 the static characteristic is the two-sided one's positive
+    /// branch. Returns whether the valve is open over `[t, t + dt_s)`.
+    pub fn step_one_sided(&mut self, r: f64, dt_s: f64) -> bool {
+        self.advance(r, dt_s, false) > 0
+    }
+
+    fn advance(&mut self, r: f64, dt_s: f64, two_sided: bool) -> i8 {
         let p = &self.params;
         let hold = self.u != 0 && self.on_elapsed_s < p.min_on_time_s;
         let f = self.f;
         let next = match self.u {
             0 if f >= p.u_on => 1,
-            0 if f <= -p.u_on => -1,
+            0 if two_sided && f <= -p.u_on => -1,
             1 if f <= p.u_off && !hold => 0,
             -1 if f >= -p.u_off && !hold => 0,
             u => u,

@@ -22,6 +22,18 @@
 //! available: it is rounded to I_min when I ≥ I_min/2, else to 0 (the applied wrench is the
 //! rounded one).
 //!
+//! **PWPF (optional).** With `pwpf: Some(…)` on the actuator, each jet's allocated thrust u_j is
+//! not applied as a mean thrust: its normalised command r_j = u_j/F_max,j drives the jet's own
+//! one-sided pulse-width pulse-frequency modulator ([`super::pwpf`]), whose output opens the
+//! valve at full thrust for whole steps. The minimum impulse bit is then honoured by the valve's
+//! minimum on-time, max(`min_on_time_s`, I_min/F_max) (every pulse delivers at least I_min),
+//! not by the per-step rounding above. The steady average thrust for a constant demand is
+//! F_max·D(r), D the modulator's duty cycle ([`super::pwpf::PwpfParams::duty_cycle`]).
+//!
+//! **Firing pulses.** A pulse is a run of consecutive steps in which the jet delivers an
+//! impulse; it is counted in `firings` when it starts and reported (optionally, as a
+//! `jet_pulse` event) when it ends, with its steps, impulse and on-time.
+//!
 //! **Propellant.** Σ I_j / (I_sp g₀).
 
 use nalgebra::{Vector3, Vector6};
@@ -229,6 +241,34 @@ pub struct JetTotals {
     /// Fired in the last step.
     #[serde(skip)]
     pub firing: bool,
+    /// The pulse under way (while `firing`): steps, impulse N·s and on-time s so far.
+    #[serde(skip)]
+    pub pulse: (u64, f64, f64),
+    /// Firing events raised for this jet (`jet_pulse`, at most [`MAX_PULSE_EVENTS_PER_JET`]).
+    #[serde(skip)]
+    pub pulse_events: u64,
+}
+
+/// Most `jet_pulse` events one jet raises in a run; later pulses are counted in the summary's
+/// totals only (one `jet_pulse_events_capped` event says so).
+pub const MAX_PULSE_EVENTS_PER_JET: u64 = 1000;
+
+/// Most `jet_pulse` events all the jets of a run raise together (a tenth of the run's limit of
+/// 10⁶ events, `sim::guard`), so that a chattering layout can never stop a run.
+pub const MAX_PULSE_EVENTS_PER_RUN: u64 = 100_000;
+
+/// One firing pulse of a jet that has ended: the consecutive steps in which it delivered an
+/// impulse.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JetPulse {
+    /// Jet index in the layout.
+    pub jet: usize,
+    /// Steps the pulse lasted (its duration is `steps·dt`).
+    pub steps: u64,
+    /// Impulse delivered, N·s.
+    pub impulse_ns: f64,
+    /// Time at full thrust, Σ I/F_max, s (the duration for on/off valves).
+    pub on_time_s: f64,
 }
 
 /// Plume cone of a jet in the body frame: apex (the nozzle), unit axis (the exhaust

@@ -142,6 +142,8 @@ pub struct ControllerHost {
     systems_added: bool,
     /// The post-step diagnostics system is in the schedule.
     post_added: bool,
+    /// `jet_pulse` events raised so far in the run, all jets together.
+    jet_pulse_events: u64,
 }
 
 impl ControllerHost {
@@ -707,11 +709,12 @@ pub fn host_actuate(
         docking_now,
         planar,
         wrench_buf,
+        jet_pulse_events,
         ..
     } = &mut *host;
     let env = env_now.obs();
     let dt = clock.dt_s;
-    for slot in slots.iter_mut() {
+    for (index, slot) in slots.iter_mut().enumerate() {
         let own = &truth[slot.body];
         let uses_hill =
             slot.held.force_frame == Frame::Hill || slot.held.torque_frame == Frame::Hill;
@@ -753,6 +756,16 @@ pub fn host_actuate(
                 }
                 continue;
             }
+        }
+        if !slot.actuator.ended_pulses.is_empty() {
+            jet_pulse_log(
+                &mut slot.actuator,
+                index,
+                &info[slot.body].name,
+                &clock,
+                jet_pulse_events,
+                &mut log,
+            );
         }
         if let Ok(mut w) = wrenches.get_mut(roster.bodies[slot.body]) {
             let (f, t) = (slot.report.force_world_n, slot.report.torque_world_nm);
@@ -801,6 +814,63 @@ pub fn host_actuate(
         *docking_now,
         &mut diag,
     );
+}
+
+/// Raises a `jet_pulse` event for each firing pulse of `actuator`'s jets that ended this step
+/// (the pulse ran over the `steps` steps before this one: from `start_s` to now), within the
+/// caps: [`crate::actuation::rcs::MAX_PULSE_EVENTS_PER_JET`] per jet and
+/// [`crate::actuation::rcs::MAX_PULSE_EVENTS_PER_RUN`] for the run,
+/// each cap announced once by a `jet_pulse_events_capped` event. Drains the actuator's list.
+fn jet_pulse_log(
+    actuator: &mut Actuator,
+    controller: usize,
+    body: &str,
+    clock: &Clock,
+    run_count: &mut u64,
+    log: &mut EventLog,
+) {
+    use crate::actuation::rcs::{MAX_PULSE_EVENTS_PER_JET, MAX_PULSE_EVENTS_PER_RUN};
+    let t = clock.t_s();
+    for p in std::mem::take(&mut actuator.ended_pulses) {
+        let Some(totals) = actuator.jets.get_mut(p.jet) else {
+            continue;
+        };
+        if *run_count > MAX_PULSE_EVENTS_PER_RUN || totals.pulse_events > MAX_PULSE_EVENTS_PER_JET {
+            continue;
+        }
+        if *run_count == MAX_PULSE_EVENTS_PER_RUN {
+            *run_count += 1;
+            log.push(
+                t,
+                "jet_pulse_events_capped",
+                serde_json::json!({"scope": "run", "events": MAX_PULSE_EVENTS_PER_RUN,
+                    "reason": "later pulses of every jet are counted in summary.json's jets only"}),
+            );
+            continue;
+        }
+        if totals.pulse_events == MAX_PULSE_EVENTS_PER_JET {
+            totals.pulse_events += 1;
+            log.push(
+                t,
+                "jet_pulse_events_capped",
+                serde_json::json!({"scope": "jet", "body": body, "controller": controller,
+                    "jet": totals.name, "events": MAX_PULSE_EVENTS_PER_JET,
+                    "reason": "later pulses of this jet are counted in summary.json's jets only"}),
+            );
+            continue;
+        }
+        totals.pulse_events += 1;
+        *run_count += 1;
+        let start_step = clock.step.saturating_sub(p.steps);
+        log.push(
+            t,
+            "jet_pulse",
+            serde_json::json!({"body": body, "controller": controller, "jet": totals.name,
+                "start_s": start_step as f64 * clock.dt_s,
+                "duration_s": p.steps as f64 * clock.dt_s,
+                "on_time_s": p.on_time_s, "impulse_ns": p.impulse_ns}),
+        );
+    }
 }
 
 /// Writes the diagnostics of every slot that wants them at `at`, straight into its columns
