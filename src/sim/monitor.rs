@@ -248,7 +248,13 @@ pub fn shape_bracket(
                 return Bracket::exact(0.0);
             }
             let (Some(sa), Some(sb)) = (a.as_support_map(), b.as_support_map()) else {
-                return fallback();
+                // No support map (a mesh): the witnesses' distance is parry's distance; no
+                // second query.
+                let value = d as f64;
+                return Bracket {
+                    value,
+                    lower: (value * (1.0 - GJK_REL_TOL) - eps).max(0.0),
+                };
             };
             let n = (p2 - p1) / d;
             let pa = sa.local_support_point(n);
@@ -1103,9 +1109,21 @@ pub fn distances(
             // A distance is never negative: a threshold at or under zero (the pair has touched
             // already) is cleared by every sub-interval, whatever the rate bound (no refinement
             // while two bodies stay in contact, latched or not).
+            // A closest pair without support maps (a mesh part) has a certified lower bound
+            // only GJK_REL_TOL below its distance, wider than the tolerance: the search could
+            // never prove the tolerance and would spend its budget every step. Its tolerance is
+            // twice its own bracket's width (the bound stays certified; only how close the
+            // recorded closest approach is to the true one changes, by that width).
+            let mesh_slack = if geo.shapes[i][hit.a].as_support_map().is_none()
+                || geo.shapes[j][hit.b].as_support_map().is_none()
+            {
+                2.0 * (hit.d.value - hit.d.lower).max(d0.value - d0.lower)
+            } else {
+                0.0
+            };
             let thr = |b: f64| {
                 let w = w.min(b);
-                let t = w - min_distance_tolerance_m(w);
+                let t = w - min_distance_tolerance_m(w).max(mesh_slack);
                 if t <= 0.0 { f64::NEG_INFINITY } else { t }
             };
             if interval_lower_bound(d0.lower, hit.d.lower, rate, dt).max(0.0) < thr(hit.d.value) {
