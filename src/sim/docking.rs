@@ -107,72 +107,81 @@ pub struct InterfaceLoads {
     pub last_moment_nm: [f64; 3],
 }
 
-/// Docking state.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "SCREAMING_SNAKE_CASE")]
-pub enum DockState {
+/// Defines [`DockState`], its codes and its names from one list, so that a new state cannot
+/// lack a code, a name, a plot label or a place in [`DockState::ALL`].
+macro_rules! dock_states {
+    ($($(#[$doc:meta])* $variant:ident = $code:literal, $name:literal;)*) => {
+        /// Docking state.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+        #[serde(rename_all = "SCREAMING_SNAKE_CASE")]
+        pub enum DockState {
+            $($(#[$doc])* $variant,)*
+        }
+
+        impl DockState {
+            /// Every state, in the order of its code (the trajectory column `dock.state`).
+            pub const ALL: &'static [DockState] = &[$(DockState::$variant),*];
+            /// A number for the trajectory column `dock.state`.
+            pub fn code(self) -> f64 {
+                match self {
+                    $(DockState::$variant => $code as f64,)*
+                }
+            }
+            /// The name used in events and summaries.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(DockState::$variant => $name,)*
+                }
+            }
+        }
+    };
+}
+
+dock_states! {
     /// No magnet and no contact (yet, or again after a contact that ended without the chaser
     /// moving away).
-    Free,
+    Free = 0, "FREE";
     /// Magnet on, no contact yet.
-    Attracting,
+    Attracting = 1, "ATTRACTING";
     /// Cone touching the slot, not seated.
-    Contact,
+    Contact = 2, "CONTACT";
     /// Seated within the latch tolerances, waiting out the dwell.
-    SoftCapture,
+    SoftCapture = 3, "SOFT_CAPTURE";
     /// Latched: a fixed joint holds the bodies.
-    Latched,
+    Latched = 4, "LATCHED";
     /// The cone bounced out of the slot.
-    Rebound,
+    Rebound = 5, "REBOUND";
     /// Stuck in the slot without seating.
-    Jammed,
+    Jammed = 6, "JAMMED";
     /// Failed: passed beside the slot, or another part collided.
-    Missed,
+    Missed = 7, "MISSED";
     /// Released from the latch by a command (undocking); final.
-    Released,
+    Released = 8, "RELEASED";
     /// Soft capture: the capture latches hold the chaser's ring to the target's ring; the
     /// chaser hangs on the platform's legs (attenuation, then retraction).
-    SoftCaptured,
+    SoftCaptured = 9, "SOFT_CAPTURED";
     /// Soft capture, the platform retracted to its retracted stroke; the hooks wait for the
     /// interface to align.
-    Retracted,
+    Retracted = 10, "RETRACTED";
     /// The structural hooks are closed (a stiff compliant joint).
-    HardDocked,
+    HardDocked = 11, "HARD_DOCKED";
 }
 
 impl DockState {
-    /// A number for the trajectory column `dock.state`.
-    pub fn code(self) -> f64 {
-        match self {
-            DockState::Free => 0.0,
-            DockState::Attracting => 1.0,
-            DockState::Contact => 2.0,
-            DockState::SoftCapture => 3.0,
-            DockState::Latched => 4.0,
-            DockState::Rebound => 5.0,
-            DockState::Jammed => 6.0,
-            DockState::Missed => 7.0,
-            DockState::Released => 8.0,
-            DockState::SoftCaptured => 9.0,
-            DockState::Retracted => 10.0,
-            DockState::HardDocked => 11.0,
-        }
+    /// The state of a trajectory's `dock.state` code, if it is one.
+    pub fn from_code(code: f64) -> Option<DockState> {
+        DockState::ALL.iter().copied().find(|s| s.code() == code)
     }
-    /// The name used in events and summaries.
-    pub fn name(self) -> &'static str {
-        match self {
-            DockState::Free => "FREE",
-            DockState::Attracting => "ATTRACTING",
-            DockState::Contact => "CONTACT",
-            DockState::SoftCapture => "SOFT_CAPTURE",
-            DockState::Latched => "LATCHED",
-            DockState::Rebound => "REBOUND",
-            DockState::Jammed => "JAMMED",
-            DockState::Missed => "MISSED",
-            DockState::Released => "RELEASED",
-            DockState::SoftCaptured => "SOFT_CAPTURED",
-            DockState::Retracted => "RETRACTED",
-            DockState::HardDocked => "HARD_DOCKED",
+    /// The state of an event's or summary's name, if it is one.
+    pub fn from_name(name: &str) -> Option<DockState> {
+        DockState::ALL.iter().copied().find(|s| s.name() == name)
+    }
+    /// The state a successful docking ends in with this mechanism: LATCHED for the cone and
+    /// slot, HARD_DOCKED for the soft-capture mechanism (its hooks closed).
+    pub fn docked_end_state(mechanism: &crate::scene::Mechanism) -> DockState {
+        match mechanism {
+            crate::scene::Mechanism::ConeSlot => DockState::Latched,
+            crate::scene::Mechanism::SoftCapture(_) => DockState::HardDocked,
         }
     }
     /// Docked: latched, or held by a soft-capture mechanism (captured, retracted, hard docked).
@@ -1344,4 +1353,56 @@ pub fn summary(dock: &Docking) -> serde_json::Value {
             .unwrap_or_default();
     }
     v
+}
+
+#[cfg(test)]
+mod tests {
+    //! The state list against itself: the codes are 0, 1, … in the order of
+    //! [`DockState::ALL`] (the `dock.state` column and the plot labels rely on it), names are
+    //! unique and are the serde names, and the code and name lookups invert `code` and `name`.
+    use super::*;
+
+    #[test]
+    fn every_state_has_a_distinct_code_and_name_in_order() {
+        for (i, s) in DockState::ALL.iter().enumerate() {
+            assert_eq!(s.code(), i as f64, "{s:?}");
+            assert_eq!(DockState::from_code(s.code()), Some(*s));
+            assert_eq!(DockState::from_name(s.name()), Some(*s));
+            assert_eq!(
+                serde_json::to_value(s).expect("a unit variant serialises"),
+                serde_json::json!(s.name())
+            );
+        }
+        let mut names: Vec<&str> = DockState::ALL.iter().map(|s| s.name()).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), DockState::ALL.len());
+        assert_eq!(DockState::from_code(DockState::ALL.len() as f64), None);
+        assert_eq!(DockState::from_code(0.5), None);
+        assert_eq!(DockState::from_name("LATCHD"), None);
+    }
+
+    #[test]
+    fn docked_end_state_per_mechanism() {
+        assert_eq!(
+            DockState::docked_end_state(&crate::scene::Mechanism::ConeSlot),
+            DockState::Latched
+        );
+        let sc = crate::scene::load_scene_file(
+            std::path::Path::new(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/scenes/soft_capture.ron"
+            )),
+            &[],
+        )
+        .expect("the bundled soft-capture scene loads");
+        let m = &sc
+            .scene
+            .docking
+            .as_ref()
+            .expect("a docking mechanism")
+            .mechanism;
+        assert_eq!(DockState::docked_end_state(m), DockState::HardDocked);
+        assert!(DockState::HardDocked.docked() && DockState::Latched.docked());
+    }
 }
