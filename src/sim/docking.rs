@@ -247,6 +247,15 @@ pub struct DockingCommands {
     pub release: Vec<String>,
 }
 
+/// What let go of the chaser (`the capture latches let go`, `the latch broke`), when and by how
+/// much the `what` force (`interface`, `joint`) exceeded the break force, for [`Docking::let_go`].
+fn let_go_text(who: &str, what: &str, t_s: f64, force_n: f64, break_force_n: f64) -> String {
+    format!(
+        "{who} at {t_s:.3} s: {what} force {force_n:.1} N, {:.1} N above the break force {break_force_n:.1} N",
+        force_n - break_force_n
+    )
+}
+
 /// Port geometry at one instant (world frame).
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct PortGeometry {
@@ -365,6 +374,10 @@ pub struct Docking {
     pub separation_end: Option<([f64; 3], f64)>,
     /// A soft-capture mechanism's results (absent for the cone and slot).
     pub soft: Option<SoftCaptureResults>,
+    /// What let go of the chaser, when and why, if the latch broke or the capture latches let
+    /// go (`the capture latches let go at 2.310 s: interface force 5523.1 N, 523.1 N above the
+    /// break force 5000.0 N`): a later MISSED or REBOUND names it as its cause's start.
+    pub let_go: Option<String>,
     /// Diagnostics column indices: gap, axial, lateral, misalignment, magnet, state, joint force,
     /// joint torque.
     cols: [usize; 8],
@@ -558,6 +571,7 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         interface: None,
         t_release_s: None,
         separation_end: None,
+        let_go: None,
         soft,
         cols,
     });
@@ -851,6 +865,13 @@ fn docking_monitor(
                     "capture latches let go: interface force {:.1} N > break force {:.1} N",
                     ls.peak_force_n, spec.latch.break_force_n
                 );
+                dock.let_go = Some(let_go_text(
+                    "the capture latches let go",
+                    "interface",
+                    t,
+                    ls.peak_force_n,
+                    spec.latch.break_force_n,
+                ));
             } else if old == SoftCaptured
                 && r.t_retraction_start_s.is_none()
                 && t - t_cap >= sc.attenuation_s - 1e-9
@@ -952,6 +973,13 @@ fn docking_monitor(
                     "latch broke: joint force {:.1} N > break force {:.1} N",
                     ls.peak_force_n, spec.latch.break_force_n
                 );
+                dock.let_go = Some(let_go_text(
+                    "the latch broke",
+                    "joint",
+                    t,
+                    ls.peak_force_n,
+                    spec.latch.break_force_n,
+                ));
             }
         }
         Latched => {
@@ -1005,13 +1033,23 @@ fn docking_monitor(
                         "latch broke: joint force {f:.1} N > break force {:.1} N",
                         spec.latch.break_force_n
                     );
+                    dock.let_go = Some(let_go_text(
+                        "the latch broke",
+                        "joint",
+                        t,
+                        f,
+                        spec.latch.break_force_n,
+                    ));
                 }
             }
         }
         _ => {
             if let Some(pair) = collision {
                 new = Missed;
-                reason = format!("collision between {pair} before the latch engaged");
+                reason = match dock.let_go.as_deref() {
+                    Some(why) => format!("collision between {pair} after {why}"),
+                    None => format!("collision between {pair} before the latch engaged"),
+                };
             } else if armed
                 && g.axial_error_m < 0.0
                 && crossed_from_front
@@ -1160,7 +1198,19 @@ fn docking_monitor(
             }
         }
     }
+    if new != old
+        && matches!(new, Missed | Rebound)
+        && let Some(why) = dock.let_go.as_deref()
+        && !reason.contains(why)
+    {
+        // The cause began when the mechanism let go of the chaser: say so.
+        reason = format!("{reason}, after {why}");
+    }
     if new != old {
+        if new.docked() {
+            // Held again: a later let-go is a new one.
+            dock.let_go = None;
+        }
         dock.refusing = None;
         dock.state = new;
         dock.reason = reason.clone();
