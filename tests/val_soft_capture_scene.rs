@@ -44,7 +44,8 @@
 //!   let-go, not "before the latch engaged": the force it quotes is the summary's peak
 //!   interface force (recorded independently, per step, before the let-go is judged) within the
 //!   0.05 N of its one-decimal print, it exceeds the scene's break force, and the excess it
-//!   quotes is force − break force within 0.1 N (two roundings).
+//!   quotes is force − break force within 0.1 N (two roundings); it names a leg whose stroke
+//!   is beyond the scene's `stroke_max_m` (50 mm) at that step.
 //! - **Success `Docked`** is LATCHED or HARD_DOCKED: over the envelope campaign's trials 0, 7,
 //!   8 it agrees with the outcome being HARD_DOCKED (the soft-capture end state);
 //!   `Latched` over a soft-capture base scene is a located error naming `Docked`.
@@ -442,7 +443,12 @@ fn regress_missed_after_the_capture_latches_let_go_names_the_let_go() {
     let c = rpod::trials::load("scenes/trials/initial_contact_envelope.ron".as_ref())
         .unwrap_or_else(|e| panic!("{e}"));
     let scene = load_scene_file("scenes/soft_capture.ron".as_ref(), &[]).unwrap();
-    let break_n = scene.scene.docking.as_ref().unwrap().latch.break_force_n;
+    let spec = scene.scene.docking.as_ref().unwrap();
+    let break_n = spec.latch.break_force_n;
+    let Mechanism::SoftCapture(sc) = &spec.mechanism else {
+        panic!("soft_capture.ron has a SoftCapture mechanism")
+    };
+    let extension_mm = sc.platform.stroke_max_m * 1e3;
     let i_peak = rpod::trials::SOFT_CAPTURE_COLS
         .iter()
         .position(|c| *c == "peak_interface_force_n")
@@ -479,6 +485,12 @@ fn regress_missed_after_the_capture_latches_let_go_names_the_let_go() {
         if outcome == "MISSED" {
             assert!(r.reason.starts_with("collision between "), "{}", r.reason);
         }
+        // The leg that drove the force up: past the scene's extension limit.
+        let limit = format!("mm, past its {extension_mm:.1} mm extension limit");
+        assert!(r.reason.contains(&limit), "trial {k}: {}", r.reason);
+        let i = r.reason.find("(leg ").expect("a leg named");
+        let stroke_mm = number_after(&r.reason[i..], " at ");
+        assert!(stroke_mm > extension_mm, "trial {k}: {stroke_mm} mm");
     }
 }
 

@@ -861,16 +861,53 @@ fn docking_monitor(
                     c.enabled = true;
                 }
                 new = Free;
+                // The legs past a stroke limit at the end of the step (on their stops, which
+                // is what drives the interface force up): leg I as in `dock.legI_stroke_m`.
+                let (lo, hi) = (sc.platform.stroke_min_m, sc.platform.stroke_max_m);
+                let past: Vec<String> = ps
+                    .end
+                    .as_ref()
+                    .map(|e| {
+                        e.legs
+                            .iter()
+                            .enumerate()
+                            .filter_map(|(i, l)| {
+                                let s_mm = l.stroke_m * 1e3;
+                                if l.stroke_m > hi {
+                                    Some(format!(
+                                        "leg {i} at {s_mm:.1} mm, past its {:.1} mm extension limit",
+                                        hi * 1e3
+                                    ))
+                                } else if l.stroke_m < lo {
+                                    Some(format!(
+                                        "leg {i} at {s_mm:.1} mm, past its {:.1} mm compression limit",
+                                        lo * 1e3
+                                    ))
+                                } else {
+                                    None
+                                }
+                            })
+                            .collect()
+                    })
+                    .unwrap_or_default();
+                let legs = if past.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({})", past.join("; "))
+                };
                 reason = format!(
-                    "capture latches let go: interface force {:.1} N > break force {:.1} N",
+                    "capture latches let go: interface force {:.1} N > break force {:.1} N{legs}",
                     ls.peak_force_n, spec.latch.break_force_n
                 );
-                dock.let_go = Some(let_go_text(
-                    "the capture latches let go",
-                    "interface",
-                    t,
-                    ls.peak_force_n,
-                    spec.latch.break_force_n,
+                dock.let_go = Some(format!(
+                    "{}{legs}",
+                    let_go_text(
+                        "the capture latches let go",
+                        "interface",
+                        t,
+                        ls.peak_force_n,
+                        spec.latch.break_force_n,
+                    )
                 ));
             } else if old == SoftCaptured
                 && r.t_retraction_start_s.is_none()
