@@ -141,8 +141,12 @@ impl Parameter {
 /// and `Not`, e.g. `All([GuaranteeHeld("keep_out_10m"), MinClearance(0.5)])`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub enum Success {
-    /// The docking mechanism latched (and is still latched at the end).
+    /// The docking mechanism latched (and is still latched at the end): LATCHED, the cone and
+    /// slot's end state only (refused over a SoftCapture base scene, which never latches).
     Latched,
+    /// The docking mechanism is docked at the end, in its mechanism's successful end state:
+    /// LATCHED (cone and slot) or HARD_DOCKED (soft capture, hooks closed).
+    Docked,
     /// The final docking state is one of these (`"LATCHED"`, `"SOFT_CAPTURE"`, …).
     StateIn(Vec<String>),
     /// No collision (a contact between non-docking parts).
@@ -183,6 +187,7 @@ impl Success {
         };
         match self {
             Success::Latched => "Latched".into(),
+            Success::Docked => "Docked".into(),
             Success::StateIn(v) => format!("StateIn({})", v.join(", ")),
             Success::NoCollision => "NoCollision".into(),
             Success::GuaranteeHeld(n) => format!("GuaranteeHeld({n})"),
@@ -197,7 +202,7 @@ impl Success {
     /// probability).
     pub fn is_docking(&self) -> bool {
         match self {
-            Success::Latched | Success::StateIn(_) => true,
+            Success::Latched | Success::Docked | Success::StateIn(_) => true,
             Success::All(v) | Success::Any(v) => !v.is_empty() && v.iter().all(Success::is_docking),
             Success::Not(_)
             | Success::NoCollision
@@ -209,6 +214,11 @@ impl Success {
     fn judge(&self, j: &Judged) -> bool {
         match self {
             Success::Latched => j.outcome == "LATCHED",
+            Success::Docked => {
+                use crate::sim::docking::DockState;
+                DockState::from_name(j.outcome)
+                    .is_some_and(|s| matches!(s, DockState::Latched | DockState::HardDocked))
+            }
             Success::StateIn(v) => v.iter().any(|s| s == j.outcome),
             Success::NoCollision => !j.collided,
             Success::GuaranteeHeld(n) => (j.held)(n) == Some(true),
@@ -224,13 +234,20 @@ impl Success {
         &self,
         path: &str,
         guarantees: &[(String, String)],
-        has_docking: bool,
+        dock_end: Option<crate::sim::docking::DockState>,
     ) -> Result<(), (String, String)> {
         use crate::control::generic::sequencer::DOCK_STATES;
+        use crate::sim::docking::DockState;
         match self {
-            Success::Latched | Success::StateIn(_) if !has_docking => Err((
+            Success::Latched | Success::Docked | Success::StateIn(_) if dock_end.is_none() => Err((
                 path.to_string(),
                 "a docking criterion needs the base scene's `docking` mechanism: it could never be met"
+                    .into(),
+            )),
+            Success::Latched if dock_end == Some(DockState::HardDocked) => Err((
+                path.to_string(),
+                "`Latched` means LATCHED, which the base scene's SoftCapture mechanism never reaches: \
+                 use `Docked` (LATCHED or HARD_DOCKED) or `StateIn([\"HARD_DOCKED\"])`"
                     .into(),
             )),
             Success::StateIn(v) if v.is_empty() => Err((
@@ -273,10 +290,10 @@ impl Success {
                 v.iter()
                     .enumerate()
                     .try_for_each(|(i, c)| {
-                        c.check(&format!("{path}.0.{i}"), guarantees, has_docking)
+                        c.check(&format!("{path}.0.{i}"), guarantees, dock_end)
                     })
             }
-            Success::Not(c) => c.check(&format!("{path}.0"), guarantees, has_docking),
+            Success::Not(c) => c.check(&format!("{path}.0"), guarantees, dock_end),
             _ => Ok(()),
         }
     }
@@ -662,7 +679,6 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
         crate::scene::validate::check_steps("duration_s", d, loaded.scene.dt_s)
             .map_err(|(_, m)| located(&text, &file, "duration_s", "duration_s", m))?;
     }
-    let has_docking = loaded.scene.docking.is_some();
     c.soft_capture = loaded
         .scene
         .docking
@@ -708,7 +724,12 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
             ));
         }
     }
-    if let Err((p, m)) = c.spec.success.check("success", &c.guarantees, has_docking) {
+    let dock_end = loaded
+        .scene
+        .docking
+        .as_ref()
+        .map(|d| crate::sim::docking::DockState::docked_end_state(&d.mechanism));
+    if let Err((p, m)) = c.spec.success.check("success", &c.guarantees, dock_end) {
         return Err(located(&text, &file, &p, p.clone(), m));
     }
     Ok(c)

@@ -526,21 +526,23 @@ fn val_success_criteria_match_the_recorded_columns() {
     }
     // A docking criterion over a scene without a docking mechanism.
     let free = std::fs::canonicalize("scenes/free_drift.ron").unwrap();
-    std::fs::write(
-        &f,
-        text.replace(&scene.display().to_string(), &free.display().to_string())
-            .replace(
-                "GuaranteeHeld(\"clearance_5cm\"), MinClearance(0.01)",
-                "Latched",
-            ),
-    )
-    .unwrap();
-    let e = rpod::trials::load(&f).err().expect("refused");
-    assert_eq!(e.field, "success.0.0", "{e}");
-    assert!(
-        e.message.contains("needs the base scene's `docking`"),
-        "{e}"
-    );
+    for criterion in ["Latched", "Docked"] {
+        std::fs::write(
+            &f,
+            text.replace(&scene.display().to_string(), &free.display().to_string())
+                .replace(
+                    "GuaranteeHeld(\"clearance_5cm\"), MinClearance(0.01)",
+                    criterion,
+                ),
+        )
+        .unwrap();
+        let e = rpod::trials::load(&f).err().expect("refused");
+        assert_eq!(e.field, "success.0.0", "{criterion}: {e}");
+        assert!(
+            e.message.contains("needs the base scene's `docking`"),
+            "{criterion}: {e}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&d);
 }
 

@@ -41,7 +41,8 @@ port to the seat point (the target port origin plus ``seat_depth_m`` along its a
   end (in each guarantee's unit: metres for the bundled scene's 5 cm clearance, which the cone
   and slot themselves enter in the last centimetres of a docking);
 - ``collision`` = −``r_collision`` once (a contact that is not cone on slot), terminates;
-- ``latch`` = +``r_latch`` when the mechanism latches, terminates (``info["is_success"]``);
+- ``latch`` = +``r_latch`` when the mechanism docks (LATCHED; HARD_DOCKED with a SoftCapture
+  mechanism: ``docked_state``), terminates (``info["is_success"]``);
 - ``missed`` = −``r_missed`` when the mechanism reports MISSED, or when the chaser port strays
   farther than ``max_range_m`` from the seat (``info["departed"]``), terminates.
 
@@ -258,6 +259,9 @@ class DockingEnv(gym.Env):
         dock = probe.docking()
         if not dock:
             raise ValueError(f"{self.scene}: DockingEnv needs a scene with a docking mechanism")
+        # The state a successful docking ends in with this scene's mechanism: LATCHED for the
+        # cone and slot, HARD_DOCKED for the soft-capture mechanism.
+        self.docked_state = dock["docked_state"]
         self.dt_s = probe.dt_s
         self.control_period_s = _finite("control_period_s", control_period_s, 0.0, 1e6)
         n = self.control_period_s / self.dt_s
@@ -488,7 +492,7 @@ class DockingEnv(gym.Env):
         if m["first_collision_s"] is not None:
             terms["collision"] = -self.r["collision"]
             terminated = True
-        if state == "LATCHED":
+        if state == self.docked_state:
             terms["latch"] = self.r["latch"]
             terminated = True
         elif state == "MISSED":
@@ -502,7 +506,7 @@ class DockingEnv(gym.Env):
         info = {
             "t_s": self.sim.t_s,
             "docking_state": state,
-            "is_success": state == "LATCHED",
+            "is_success": state == self.docked_state,
             "departed": departed,
             "distance_to_seat_m": d,
             "misalignment_rad": theta,

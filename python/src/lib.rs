@@ -1460,7 +1460,9 @@ impl PySimulation {
 
     /// The scene's docking mechanism, or None: `chaser`, `chaser_port`, `target`,
     /// `target_port`, `seat_depth_m` (chaser port above the target port when seated, m),
-    /// `mouth_radius_m`, `state`, `reason`, `t_latch_s`, `spec` (the scene's whole `docking`
+    /// `mouth_radius_m`, `state`, `reason`, `t_latch_s`, `docked_state` (the state a successful
+    /// docking ends in with the scene's mechanism: `LATCHED`, or `HARD_DOCKED` for
+    /// `SoftCapture`), `spec` (the scene's whole `docking`
     /// entry as a dict: `magnet` (`f0_n`, `g0_m`, `max_force_n`, `activation_distance_m`, …),
     /// `latch` (`axial_tolerance_m`, `lateral_tolerance_m`, `angle_tolerance_deg`, `dwell_s`,
     /// `break_force_n`), `miss`, `contact`) and `contact_model` (its description).
@@ -1483,6 +1485,10 @@ impl PySimulation {
         d.set_item("state", k.state.name())?;
         d.set_item("reason", k.reason.as_str())?;
         d.set_item("t_latch_s", k.t_latch_s)?;
+        d.set_item(
+            "docked_state",
+            rpod::sim::docking::DockState::docked_end_state(&k.spec.mechanism).name(),
+        )?;
         d.set_item("mouth_radius_m", k.spec.mouth_radius_m)?;
         let spec =
             serde_json::to_string(&k.spec).map_err(|e| SimulationError::new_err(e.to_string()))?;

@@ -355,7 +355,7 @@ pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, String> {
         let mut fig = Figure::new(format!("{run}: docking and contact")).cols(1);
         if let Some(s) = state {
             fig.push(
-                Plot::new("docking state (0 FREE, 1 ATTRACTING, 2 CONTACT, 3 SOFT_CAPTURE, 4 LATCHED, 5 REBOUND, 6 JAMMED, 7 MISSED)")
+                Plot::new(state_legend(s))
                     .x_label("t [s]")
                     .y_label("state code")
                     .line("dock.state", t.iter().copied().zip(s.iter().copied())),
@@ -412,4 +412,68 @@ pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, String> {
         write(out, "commands", &fig, &header, &data, &mut written)?;
     }
     Ok(written)
+}
+
+/// The docking-state plot's title: every state code the run's `dock.state` column holds, with
+/// its name from [`crate::sim::docking::DockState`] (the one definition of the codes), in code
+/// order, e.g. `docking state (0 FREE, 2 CONTACT, 9 SOFT_CAPTURED)`. A code that is no state
+/// (a file from another version) is shown with `?`; non-finite values are skipped.
+pub fn state_legend(codes: &[f64]) -> String {
+    use crate::sim::docking::DockState;
+    let mut seen: Vec<f64> = codes.iter().copied().filter(|c| c.is_finite()).collect();
+    seen.sort_by(f64::total_cmp);
+    seen.dedup();
+    let labels: Vec<String> = seen
+        .iter()
+        .map(|&c| match DockState::from_code(c) {
+            Some(s) => format!("{c} {}", s.name()),
+            None => format!("{c} ?"),
+        })
+        .collect();
+    if labels.is_empty() {
+        "docking state".into()
+    } else {
+        format!("docking state ({})", labels.join(", "))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The docking-state legend against the state list itself ([`DockState::ALL`], where the
+    //! codes are defined): every state code gets its own name.
+    use super::state_legend;
+    use crate::sim::docking::DockState;
+
+    #[test]
+    fn every_state_code_has_a_label() {
+        for s in DockState::ALL {
+            assert_eq!(
+                state_legend(&[s.code()]),
+                format!("docking state ({} {})", s.code(), s.name())
+            );
+        }
+        let all: Vec<f64> = DockState::ALL.iter().rev().map(|s| s.code()).collect();
+        let legend = state_legend(&all);
+        for s in DockState::ALL {
+            assert!(
+                legend.contains(&format!("{} {}", s.code(), s.name())),
+                "{legend}"
+            );
+        }
+        assert!(!legend.contains('?'), "{legend}");
+    }
+
+    #[test]
+    fn a_soft_capture_run_is_labelled_in_code_order() {
+        let codes = [0.0, 0.0, 2.0, 9.0, 9.0, 10.0, 11.0, f64::NAN];
+        assert_eq!(
+            state_legend(&codes),
+            "docking state (0 FREE, 2 CONTACT, 9 SOFT_CAPTURED, 10 RETRACTED, 11 HARD_DOCKED)"
+        );
+        assert_eq!(
+            state_legend(&[4.0, 99.0]),
+            "docking state (4 LATCHED, 99 ?)"
+        );
+        assert_eq!(state_legend(&[f64::NAN]), "docking state");
+    }
 }

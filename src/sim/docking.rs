@@ -107,72 +107,81 @@ pub struct InterfaceLoads {
     pub last_moment_nm: [f64; 3],
 }
 
-/// Docking state.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "SCREAMING_SNAKE_CASE")]
-pub enum DockState {
+/// Defines [`DockState`], its codes and its names from one list, so that a new state cannot
+/// lack a code, a name, a plot label or a place in [`DockState::ALL`].
+macro_rules! dock_states {
+    ($($(#[$doc:meta])* $variant:ident = $code:literal, $name:literal;)*) => {
+        /// Docking state.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+        #[serde(rename_all = "SCREAMING_SNAKE_CASE")]
+        pub enum DockState {
+            $($(#[$doc])* $variant,)*
+        }
+
+        impl DockState {
+            /// Every state, in the order of its code (the trajectory column `dock.state`).
+            pub const ALL: &'static [DockState] = &[$(DockState::$variant),*];
+            /// A number for the trajectory column `dock.state`.
+            pub fn code(self) -> f64 {
+                match self {
+                    $(DockState::$variant => $code as f64,)*
+                }
+            }
+            /// The name used in events and summaries.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(DockState::$variant => $name,)*
+                }
+            }
+        }
+    };
+}
+
+dock_states! {
     /// No magnet and no contact (yet, or again after a contact that ended without the chaser
     /// moving away).
-    Free,
+    Free = 0, "FREE";
     /// Magnet on, no contact yet.
-    Attracting,
+    Attracting = 1, "ATTRACTING";
     /// Cone touching the slot, not seated.
-    Contact,
+    Contact = 2, "CONTACT";
     /// Seated within the latch tolerances, waiting out the dwell.
-    SoftCapture,
+    SoftCapture = 3, "SOFT_CAPTURE";
     /// Latched: a fixed joint holds the bodies.
-    Latched,
+    Latched = 4, "LATCHED";
     /// The cone bounced out of the slot.
-    Rebound,
+    Rebound = 5, "REBOUND";
     /// Stuck in the slot without seating.
-    Jammed,
+    Jammed = 6, "JAMMED";
     /// Failed: passed beside the slot, or another part collided.
-    Missed,
+    Missed = 7, "MISSED";
     /// Released from the latch by a command (undocking); final.
-    Released,
+    Released = 8, "RELEASED";
     /// Soft capture: the capture latches hold the chaser's ring to the target's ring; the
     /// chaser hangs on the platform's legs (attenuation, then retraction).
-    SoftCaptured,
+    SoftCaptured = 9, "SOFT_CAPTURED";
     /// Soft capture, the platform retracted to its retracted stroke; the hooks wait for the
     /// interface to align.
-    Retracted,
+    Retracted = 10, "RETRACTED";
     /// The structural hooks are closed (a stiff compliant joint).
-    HardDocked,
+    HardDocked = 11, "HARD_DOCKED";
 }
 
 impl DockState {
-    /// A number for the trajectory column `dock.state`.
-    pub fn code(self) -> f64 {
-        match self {
-            DockState::Free => 0.0,
-            DockState::Attracting => 1.0,
-            DockState::Contact => 2.0,
-            DockState::SoftCapture => 3.0,
-            DockState::Latched => 4.0,
-            DockState::Rebound => 5.0,
-            DockState::Jammed => 6.0,
-            DockState::Missed => 7.0,
-            DockState::Released => 8.0,
-            DockState::SoftCaptured => 9.0,
-            DockState::Retracted => 10.0,
-            DockState::HardDocked => 11.0,
-        }
+    /// The state of a trajectory's `dock.state` code, if it is one.
+    pub fn from_code(code: f64) -> Option<DockState> {
+        DockState::ALL.iter().copied().find(|s| s.code() == code)
     }
-    /// The name used in events and summaries.
-    pub fn name(self) -> &'static str {
-        match self {
-            DockState::Free => "FREE",
-            DockState::Attracting => "ATTRACTING",
-            DockState::Contact => "CONTACT",
-            DockState::SoftCapture => "SOFT_CAPTURE",
-            DockState::Latched => "LATCHED",
-            DockState::Rebound => "REBOUND",
-            DockState::Jammed => "JAMMED",
-            DockState::Missed => "MISSED",
-            DockState::Released => "RELEASED",
-            DockState::SoftCaptured => "SOFT_CAPTURED",
-            DockState::Retracted => "RETRACTED",
-            DockState::HardDocked => "HARD_DOCKED",
+    /// The state of an event's or summary's name, if it is one.
+    pub fn from_name(name: &str) -> Option<DockState> {
+        DockState::ALL.iter().copied().find(|s| s.name() == name)
+    }
+    /// The state a successful docking ends in with this mechanism: LATCHED for the cone and
+    /// slot, HARD_DOCKED for the soft-capture mechanism (its hooks closed).
+    pub fn docked_end_state(mechanism: &crate::scene::Mechanism) -> DockState {
+        match mechanism {
+            crate::scene::Mechanism::ConeSlot => DockState::Latched,
+            crate::scene::Mechanism::SoftCapture(_) => DockState::HardDocked,
         }
     }
     /// Docked: latched, or held by a soft-capture mechanism (captured, retracted, hard docked).
@@ -236,6 +245,15 @@ pub struct SoftCaptureResults {
 pub struct DockingCommands {
     /// Release commands not yet acted on, each with where it came from.
     pub release: Vec<String>,
+}
+
+/// What let go of the chaser (`the capture latches let go`, `the latch broke`), when and by how
+/// much the `what` force (`interface`, `joint`) exceeded the break force, for [`Docking::let_go`].
+fn let_go_text(who: &str, what: &str, t_s: f64, force_n: f64, break_force_n: f64) -> String {
+    format!(
+        "{who} at {t_s:.3} s: {what} force {force_n:.1} N, {:.1} N above the break force {break_force_n:.1} N",
+        force_n - break_force_n
+    )
 }
 
 /// Port geometry at one instant (world frame).
@@ -356,6 +374,10 @@ pub struct Docking {
     pub separation_end: Option<([f64; 3], f64)>,
     /// A soft-capture mechanism's results (absent for the cone and slot).
     pub soft: Option<SoftCaptureResults>,
+    /// What let go of the chaser, when and why, if the latch broke or the capture latches let
+    /// go (`the capture latches let go at 2.310 s: interface force 5523.1 N, 523.1 N above the
+    /// break force 5000.0 N`): a later MISSED or REBOUND names it as its cause's start.
+    pub let_go: Option<String>,
     /// Diagnostics column indices: gap, axial, lateral, misalignment, magnet, state, joint force,
     /// joint torque.
     cols: [usize; 8],
@@ -549,6 +571,7 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         interface: None,
         t_release_s: None,
         separation_end: None,
+        let_go: None,
         soft,
         cols,
     });
@@ -838,10 +861,54 @@ fn docking_monitor(
                     c.enabled = true;
                 }
                 new = Free;
+                // The legs past a stroke limit at the end of the step (on their stops, which
+                // is what drives the interface force up): leg I as in `dock.legI_stroke_m`.
+                let (lo, hi) = (sc.platform.stroke_min_m, sc.platform.stroke_max_m);
+                let past: Vec<String> = ps
+                    .end
+                    .as_ref()
+                    .map(|e| {
+                        e.legs
+                            .iter()
+                            .enumerate()
+                            .filter_map(|(i, l)| {
+                                let s_mm = l.stroke_m * 1e3;
+                                if l.stroke_m > hi {
+                                    Some(format!(
+                                        "leg {i} at {s_mm:.1} mm, past its {:.1} mm extension limit",
+                                        hi * 1e3
+                                    ))
+                                } else if l.stroke_m < lo {
+                                    Some(format!(
+                                        "leg {i} at {s_mm:.1} mm, past its {:.1} mm compression limit",
+                                        lo * 1e3
+                                    ))
+                                } else {
+                                    None
+                                }
+                            })
+                            .collect()
+                    })
+                    .unwrap_or_default();
+                let legs = if past.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({})", past.join("; "))
+                };
                 reason = format!(
-                    "capture latches let go: interface force {:.1} N > break force {:.1} N",
+                    "capture latches let go: interface force {:.1} N > break force {:.1} N{legs}",
                     ls.peak_force_n, spec.latch.break_force_n
                 );
+                dock.let_go = Some(format!(
+                    "{}{legs}",
+                    let_go_text(
+                        "the capture latches let go",
+                        "interface",
+                        t,
+                        ls.peak_force_n,
+                        spec.latch.break_force_n,
+                    )
+                ));
             } else if old == SoftCaptured
                 && r.t_retraction_start_s.is_none()
                 && t - t_cap >= sc.attenuation_s - 1e-9
@@ -943,6 +1010,13 @@ fn docking_monitor(
                     "latch broke: joint force {:.1} N > break force {:.1} N",
                     ls.peak_force_n, spec.latch.break_force_n
                 );
+                dock.let_go = Some(let_go_text(
+                    "the latch broke",
+                    "joint",
+                    t,
+                    ls.peak_force_n,
+                    spec.latch.break_force_n,
+                ));
             }
         }
         Latched => {
@@ -996,13 +1070,23 @@ fn docking_monitor(
                         "latch broke: joint force {f:.1} N > break force {:.1} N",
                         spec.latch.break_force_n
                     );
+                    dock.let_go = Some(let_go_text(
+                        "the latch broke",
+                        "joint",
+                        t,
+                        f,
+                        spec.latch.break_force_n,
+                    ));
                 }
             }
         }
         _ => {
             if let Some(pair) = collision {
                 new = Missed;
-                reason = format!("collision between {pair} before the latch engaged");
+                reason = match dock.let_go.as_deref() {
+                    Some(why) => format!("collision between {pair} after {why}"),
+                    None => format!("collision between {pair} before the latch engaged"),
+                };
             } else if armed
                 && g.axial_error_m < 0.0
                 && crossed_from_front
@@ -1151,7 +1235,19 @@ fn docking_monitor(
             }
         }
     }
+    if new != old
+        && matches!(new, Missed | Rebound)
+        && let Some(why) = dock.let_go.as_deref()
+        && !reason.contains(why)
+    {
+        // The cause began when the mechanism let go of the chaser: say so.
+        reason = format!("{reason}, after {why}");
+    }
     if new != old {
+        if new.docked() {
+            // Held again: a later let-go is a new one.
+            dock.let_go = None;
+        }
         dock.refusing = None;
         dock.state = new;
         dock.reason = reason.clone();
@@ -1344,4 +1440,56 @@ pub fn summary(dock: &Docking) -> serde_json::Value {
             .unwrap_or_default();
     }
     v
+}
+
+#[cfg(test)]
+mod tests {
+    //! The state list against itself: the codes are 0, 1, … in the order of
+    //! [`DockState::ALL`] (the `dock.state` column and the plot labels rely on it), names are
+    //! unique and are the serde names, and the code and name lookups invert `code` and `name`.
+    use super::*;
+
+    #[test]
+    fn every_state_has_a_distinct_code_and_name_in_order() {
+        for (i, s) in DockState::ALL.iter().enumerate() {
+            assert_eq!(s.code(), i as f64, "{s:?}");
+            assert_eq!(DockState::from_code(s.code()), Some(*s));
+            assert_eq!(DockState::from_name(s.name()), Some(*s));
+            assert_eq!(
+                serde_json::to_value(s).expect("a unit variant serialises"),
+                serde_json::json!(s.name())
+            );
+        }
+        let mut names: Vec<&str> = DockState::ALL.iter().map(|s| s.name()).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), DockState::ALL.len());
+        assert_eq!(DockState::from_code(DockState::ALL.len() as f64), None);
+        assert_eq!(DockState::from_code(0.5), None);
+        assert_eq!(DockState::from_name("LATCHD"), None);
+    }
+
+    #[test]
+    fn docked_end_state_per_mechanism() {
+        assert_eq!(
+            DockState::docked_end_state(&crate::scene::Mechanism::ConeSlot),
+            DockState::Latched
+        );
+        let sc = crate::scene::load_scene_file(
+            std::path::Path::new(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/scenes/soft_capture.ron"
+            )),
+            &[],
+        )
+        .expect("the bundled soft-capture scene loads");
+        let m = &sc
+            .scene
+            .docking
+            .as_ref()
+            .expect("a docking mechanism")
+            .mechanism;
+        assert_eq!(DockState::docked_end_state(m), DockState::HardDocked);
+        assert!(DockState::HardDocked.docked() && DockState::Latched.docked());
+    }
 }
