@@ -1920,11 +1920,11 @@ pub struct Geng2015Disturbance {
     pub set: Geng2015Disturbances,
 }
 
-impl crate::control::registry::Disturbance for Geng2015Disturbance {
+impl crate::control::spec::Disturbance for Geng2015Disturbance {
     fn wrenches(
         &mut self,
-        ctx: &crate::control::registry::DisturbanceContext,
-        out: &mut Vec<crate::control::registry::BodyWrench>,
+        ctx: &crate::control::spec::DisturbanceContext,
+        out: &mut Vec<crate::control::spec::BodyWrench>,
     ) {
         let dist = &self.set;
         for (idx, is_chaser) in [(self.chaser, true), (self.target, false)] {
@@ -1944,7 +1944,7 @@ impl crate::control::registry::Disturbance for Geng2015Disturbance {
             );
             let tq = torque_disturbance_nm(dist.torque_scale_nm, dist.omega_orbit_rad_s, ctx.t_s);
             let s = &ctx.bodies[idx];
-            out.push(crate::control::registry::BodyWrench {
+            out.push(crate::control::spec::BodyWrench {
                 body: idx,
                 force_n: Some(s.att * (a * ctx.info[idx].mass_kg)),
                 torque_nm: Some(s.att * tq),
@@ -1982,12 +1982,12 @@ fn positive(x: f64) -> bool {
     x.is_finite() && x > 0.0
 }
 
-impl crate::control::registry::LawSpec for SceneSpec {
+impl crate::control::spec::LawSpec for SceneSpec {
     fn build(
         &self,
-        ctx: &mut crate::control::registry::BuildContext,
-    ) -> Result<crate::control::registry::Built, crate::control::registry::BuildError> {
-        use crate::control::registry::{BuildError, Built, Slot};
+        ctx: &mut crate::control::spec::BuildContext,
+    ) -> Result<crate::control::spec::Built, crate::control::spec::BuildError> {
+        use crate::control::spec::{BuildError, Built, Slot};
         let spec = self;
         let scene = ctx.scene;
         let chaser = ctx.body("0.body", &spec.body)?;
@@ -2140,7 +2140,7 @@ impl crate::control::registry::LawSpec for SceneSpec {
                 (MU_EARTH_M3_S2 / a.powi(3)).sqrt()
             })
             .unwrap_or(0.0);
-        let disturbances: Vec<Box<dyn crate::control::registry::Disturbance>> = spec
+        let disturbances: Vec<Box<dyn crate::control::spec::Disturbance>> = spec
             .disturbance
             .as_ref()
             .map(|d| {
@@ -2148,7 +2148,7 @@ impl crate::control::registry::LawSpec for SceneSpec {
                     chaser,
                     target,
                     set: d.to_disturbances(omega_orbit),
-                }) as Box<dyn crate::control::registry::Disturbance>
+                }) as Box<dyn crate::control::spec::Disturbance>
             })
             .into_iter()
             .collect();

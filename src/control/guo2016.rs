@@ -1277,15 +1277,15 @@ pub struct Guo2016Disturbance {
     pub last_body_nm: Vector3<f64>,
 }
 
-impl crate::control::registry::Disturbance for Guo2016Disturbance {
+impl crate::control::spec::Disturbance for Guo2016Disturbance {
     fn wrenches(
         &mut self,
-        ctx: &crate::control::registry::DisturbanceContext,
-        out: &mut Vec<crate::control::registry::BodyWrench>,
+        ctx: &crate::control::spec::DisturbanceContext,
+        out: &mut Vec<crate::control::spec::BodyWrench>,
     ) {
         let d = self.amplitude_nm * (self.rate_rad_s * ctx.t_s).cos();
         self.last_body_nm = d;
-        out.push(crate::control::registry::BodyWrench {
+        out.push(crate::control::spec::BodyWrench {
             body: self.chaser,
             force_n: None,
             torque_nm: Some(ctx.bodies[self.chaser].att * d),
@@ -1337,12 +1337,12 @@ impl crate::guarantee::Guarantee for CorridorGuarantee {
 
 use crate::control::generic::mean_motion_rad_s;
 
-impl crate::control::registry::LawSpec for SceneSpec {
+impl crate::control::spec::LawSpec for SceneSpec {
     fn build(
         &self,
-        ctx: &mut crate::control::registry::BuildContext,
-    ) -> Result<crate::control::registry::Built, crate::control::registry::BuildError> {
-        use crate::control::registry::{BuildError, Built, Slot};
+        ctx: &mut crate::control::spec::BuildContext,
+    ) -> Result<crate::control::spec::Built, crate::control::spec::BuildError> {
+        use crate::control::spec::{BuildError, Built, Slot};
         let chaser = ctx.body("0.chaser", &self.chaser)?;
         let target = ctx.body("0.target", &self.target)?;
         if chaser == target {

@@ -1385,18 +1385,18 @@ pub struct Xu2015Maneuver {
     pub maneuver: ManeuverSpec,
 }
 
-impl crate::control::registry::Disturbance for Xu2015Maneuver {
+impl crate::control::spec::Disturbance for Xu2015Maneuver {
     fn wrenches(
         &mut self,
-        ctx: &crate::control::registry::DisturbanceContext,
-        out: &mut Vec<crate::control::registry::BodyWrench>,
+        ctx: &crate::control::spec::DisturbanceContext,
+        out: &mut Vec<crate::control::spec::BodyWrench>,
     ) {
         let Some((r, v)) = ctx.env.reference() else {
             return;
         };
         let c = dcm_eci_from_tof_state(&r, &v);
         let f_t = self.maneuver.force_tof_n(ctx.t_s + 0.5 * ctx.dt_s);
-        out.push(crate::control::registry::BodyWrench {
+        out.push(crate::control::spec::BodyWrench {
             body: self.target,
             force_n: Some(c * f_t),
             torque_nm: None,
@@ -1460,12 +1460,12 @@ const AXES: [&str; 3] = ["x", "y", "z"];
 #[derive(Default)]
 struct Xu2015Count(usize);
 
-impl crate::control::registry::LawSpec for SceneSpec {
+impl crate::control::spec::LawSpec for SceneSpec {
     fn build(
         &self,
-        ctx: &mut crate::control::registry::BuildContext,
-    ) -> Result<crate::control::registry::Built, crate::control::registry::BuildError> {
-        use crate::control::registry::{BuildError, Built, Slot};
+        ctx: &mut crate::control::spec::BuildContext,
+    ) -> Result<crate::control::spec::Built, crate::control::spec::BuildError> {
+        use crate::control::spec::{BuildError, Built, Slot};
         let spec = self;
         // The spec sits inside the `Xu2015(( … ))` newtype: its fields are at `0.field`.
         let chaser = ctx.body("0.body", &spec.body)?;

@@ -1213,12 +1213,12 @@ impl VisionSpec {
     }
 }
 
-impl crate::control::registry::LawSpec for SceneSpec {
+impl crate::control::spec::LawSpec for SceneSpec {
     fn build(
         &self,
-        ctx: &mut crate::control::registry::BuildContext,
-    ) -> Result<crate::control::registry::Built, crate::control::registry::BuildError> {
-        use crate::control::registry::{BuildError, Built, Slot};
+        ctx: &mut crate::control::spec::BuildContext,
+    ) -> Result<crate::control::spec::Built, crate::control::spec::BuildError> {
+        use crate::control::spec::{BuildError, Built, Slot};
         let chaser = ctx.body("0.chaser", &self.chaser)?;
         self.validate()
             .map_err(|(field, msg)| BuildError::at(format!("0.{field}"), msg))?;

@@ -1562,12 +1562,12 @@ fn game_state(states: &[L2State], p: usize, e: usize) -> GameState {
     x
 }
 
-impl crate::control::registry::LawSpec for SceneSpec {
+impl crate::control::spec::LawSpec for SceneSpec {
     fn build(
         &self,
-        ctx: &mut crate::control::registry::BuildContext,
-    ) -> Result<crate::control::registry::Built, crate::control::registry::BuildError> {
-        use crate::control::registry::{BuildError, Built, Slot};
+        ctx: &mut crate::control::spec::BuildContext,
+    ) -> Result<crate::control::spec::Built, crate::control::spec::BuildError> {
+        use crate::control::spec::{BuildError, Built, Slot};
         let spec = self;
         // The spec is the newtype content of `Zhang2018((...))`: its fields are under `0.`.
         let body = ctx.body("0.body", &spec.body)?;

@@ -29,7 +29,7 @@ use super::{TranslationFeedback, TranslationGains, target_mean_motion, unique_pr
 use crate::control::interface::{
     ActuationReport, Command, Controller, DiagnosticsAt, Frame, MeasuredFrame, Observation,
 };
-use crate::control::registry::{BuildError, Commands, LawContext, LawParams};
+use crate::control::spec::{BuildError, Commands, LawContext, LawParams};
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use serde::{Deserialize, Serialize};
 
