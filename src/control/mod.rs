@@ -9,8 +9,9 @@
 //!   `controllers` list selects laws by the name they were registered under
 //!   ([`ControllerSpec`]).
 //! - [`sensor`]: a relative-navigation sensor (rate, noise, latency, seed) any law can use.
-//! - One file per paper law ([`guo2016`], [`xu2015`], [`geng2015`], [`xu2019`],
-//!   [`zhang2018`]): the law, its scene entry, its controller and guarantees.
+//! - One folder per paper law ([`guo2016`], [`xu2015`], [`geng2015`], [`xu2019`],
+//!   [`zhang2018`]): the law in `mod.rs`, its scene binding (entry, controller, disturbances)
+//!   in `scene.rs`, its unit tests in `tests.rs`.
 
 pub mod generic;
 pub mod geng2015;
