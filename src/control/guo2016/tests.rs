@@ -1,4 +1,3 @@
-
 //! The coupled model and the law against independent references:
 //! - Property 1/2 of the paper (M SPD, Ṁ − 2C skew) with Ṁ by central finite differences;
 //! - the model (25)–(28) against an independently written plant: rigid-body attitude in

@@ -1,4 +1,3 @@
-
 //! References: linear error dynamics of the normalised-gradient identifier, the closed
 //! form of the golden-section error recursion, and a closed-loop f64 simulation of the
 //! paper's scenario on the relative dynamics of [`crate::orbit::elliptic`].

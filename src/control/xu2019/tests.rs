@@ -1,4 +1,3 @@
-
 use super::*;
 use crate::actuation::thrusters::{ThrusterParams, ThrusterPwpf};
 

@@ -1,4 +1,3 @@
-
 //! Physics checked: the optimal directions against sampled and finite-differenced H, the
 //! transversality conditions (10)–(11) against finite differences of the ∂D
 //! parametrisation, the costate equations against finite differences of H and against the
