@@ -14,7 +14,7 @@
 //!        params: ( /* the fields of P */ ))
 //!   ```
 //!   and rpod resolves and validates everything but `params` (see [`LawEntry`]); `P` turns its
-//!   parameters into a [`Controller`] ([`LawParams::build`]).
+//!   parameters into a [`Controller`](crate::control::interface::Controller) ([`LawParams::build`]).
 //! - [`register_spec::<S>("Name")`](register_spec) — for a law that reads its own entry
 //!   (`Name((...))`: the five paper laws keep the scene format of their reproductions) and
 //!   builds its slots itself ([`LawSpec::build`]).
