@@ -30,7 +30,7 @@
 use crate::control::interface::{
     ActuationReport, Command, Controller, DiagnosticsAt, Frame, Observation, port_axes,
 };
-use crate::control::registry::{BuildError, Commands, LawContext, LawParams};
+use crate::control::spec::{BuildError, Commands, LawContext, LawParams};
 use crate::orbit::lvlh::{LocalFrame, LocalFrameKind};
 use crate::scene::AttitudeSpec;
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
@@ -133,7 +133,7 @@ impl LawParams for AttitudeParams {
         let own = ctx.own();
         let port_in_body = match (&self.mode, &ctx.ports) {
             (AttitudeMode::AlignPort, Some((p, _))) => {
-                let (_, axis) = own.port(p).expect("checked by the registry");
+                let (_, axis) = own.port(p).expect("checked by LawEntry::build");
                 port_axes(&axis)
             }
             _ => UnitQuaternion::identity(),

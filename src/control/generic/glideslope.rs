@@ -36,7 +36,7 @@ use super::{TranslationFeedback, TranslationGains, target_mean_motion, unique_pr
 use crate::control::interface::{
     ActuationReport, Command, Controller, DiagnosticsAt, Frame, Observation,
 };
-use crate::control::registry::{BuildError, Commands, LawContext, LawParams};
+use crate::control::spec::{BuildError, Commands, LawContext, LawParams};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 

@@ -29,7 +29,7 @@ use super::{TranslationFeedback, TranslationGains, target_mean_motion, unique_pr
 use crate::control::interface::{
     ActuationReport, Command, Controller, DiagnosticsAt, Frame, MeasuredFrame, Observation,
 };
-use crate::control::registry::{BuildError, Commands, LawContext, LawParams};
+use crate::control::spec::{BuildError, Commands, LawContext, LawParams};
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -463,26 +463,10 @@ mod tests {
         let n = 0.0011;
         let t = 37.0;
         let (ad, _) = cw_discrete(n, t);
-        let (s, c) = (n * t).sin_cos();
-        // Closed-form CW transition (x radial, y along-track, z normal).
-        let mut phi = SMatrix::<f64, 6, 6>::zeros();
-        phi[(0, 0)] = 4.0 - 3.0 * c;
-        phi[(0, 3)] = s / n;
-        phi[(0, 4)] = 2.0 * (1.0 - c) / n;
-        phi[(1, 0)] = 6.0 * (s - n * t);
-        phi[(1, 1)] = 1.0;
-        phi[(1, 3)] = -2.0 * (1.0 - c) / n;
-        phi[(1, 4)] = (4.0 * s - 3.0 * n * t) / n;
-        phi[(2, 2)] = c;
-        phi[(2, 5)] = s / n;
-        phi[(3, 0)] = 3.0 * n * s;
-        phi[(3, 3)] = c;
-        phi[(3, 4)] = 2.0 * s;
-        phi[(4, 0)] = -6.0 * n * (1.0 - c);
-        phi[(4, 3)] = -2.0 * s;
-        phi[(4, 4)] = 4.0 * c - 3.0;
-        phi[(5, 2)] = -n * s;
-        phi[(5, 5)] = c;
+        // Closed-form CW transition (x radial, y along-track, z normal), Clohessy & Wiltshire
+        // 1960, as `orbit::cw` writes it (the same expressions as the copy this test used to
+        // carry, bit for bit at this n and t).
+        let phi = crate::orbit::cw::cw_stm(n, t);
         assert!((ad - phi).norm() < 1e-9, "{}", (ad - phi).norm());
     }
 

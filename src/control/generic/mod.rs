@@ -1,5 +1,5 @@
 //! Generic GNC laws any scene can fly, each one file, registered under its scene name
-//! ([`crate::control::registry::register_law`]):
+//! ([`crate::control::register_law`]):
 //!
 //! | scene name | file | what it does |
 //! |---|---|---|
@@ -212,7 +212,7 @@ impl TranslationFeedback {
 }
 
 /// A column prefix unique per law kind in one scene: `base`, then `base_1`, `base_2`, …
-pub fn unique_prefix(ctx: &mut crate::control::registry::LawContext, base: &str) -> String {
+pub fn unique_prefix(ctx: &mut crate::control::spec::LawContext, base: &str) -> String {
     #[derive(Default)]
     struct Count(std::collections::BTreeMap<String, usize>);
     let c = ctx.build.shared::<Count>("generic.prefix");

@@ -37,7 +37,7 @@
 use crate::control::interface::{
     ActuationReport, Command, Controller, ControllerEvent, DiagnosticsAt, Observation,
 };
-use crate::control::registry::{BuildError, Commands, LawContext, LawParams, LawParamsSpec};
+use crate::control::spec::{BuildError, Commands, LawContext, LawParams, LawParamsSpec};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
