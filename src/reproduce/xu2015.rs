@@ -1102,7 +1102,7 @@ fn method_text() -> String {
 F_t = [10 sin(0.08t+π/6), 4 sin(0.05t+π/4), 8 sin(0.1t+π/2)] N in the target orbital frame; \
 chaser 100 kg (90, 110 kg cases), ≤ 5 N per axis; only relative position measured, every \
 h = 0.1 s, no noise (configurable: `sensor: (noise_sigma_m, seed)`); ξ0 = [−20, 0, 5] m, goal \
-[−0.01, 0, 0] m, 300 s. Controllers and every reconstructed choice: `src/control/xu2015.rs`.\n\
+[−0.01, 0, 0] m, 300 s. Controllers and every reconstructed choice: `src/control/xu2015/`.\n\
 - **Frames.** World: inertial axes, origin on the reference orbit = the target's unforced orbit. \
 The controller, the maneuver and the thrust limit live in the target orbital frame (tof: x in-plane \
 transverse, y = −orbit normal, z to Earth's centre) **of the reference orbit**, rebuilt each step \
