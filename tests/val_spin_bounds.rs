@@ -731,3 +731,69 @@ fn regress_min_distance_broken_only_between_samples_of_a_fast_spin() {
     // No contact happened (the plate passes 2 cm under the ball).
     assert!(s["first_contact_s"].is_null(), "{}", s["first_contact_s"]);
 }
+
+/// Soundness beyond the resolved rotation: a body spinning at 100 rad/s far (≈ 2 m) from a
+/// ball, with `MinDistance` (its rate bound rests on the spin: Ω·extent) and `KeepOutSphere`
+/// (centres of mass only). At dt = 10 ms every step turns the spinner 1 rad, more than the
+/// 0.3 rad for which the rate bounds' RK4 allowance is argued (`UNDER_RESOLVED_TURN_RAD`), so
+/// `MinDistance` is not proven and must be `unresolved`, never `held`; `KeepOutSphere`, whose
+/// bound reads no rotation, is still `held`. At dt = 1 ms (0.1 rad per step) both are `held`.
+/// Reference: the geometry (the plate's far corner stays ≥ 1.3 m from the ball at all angles).
+#[test]
+fn val_guarantee_resting_on_an_under_resolved_rotation_is_not_held() {
+    let verdicts = |dt: f64| {
+        let text = format!(
+            r#"Scene(name: "fast_spin", dt_s: {dt}, duration_s: 0.1, environment: FreeSpace,
+               bodies: [
+                 (name: "spinner", role: Other, mass_kg: 50.0,
+                  inertia_kg_m2: (xx: 20.0, yy: 30.0, zz: 45.0),
+                  initial: (pos_m: (0.0, 0.0, 0.0), rate_body_deg_s: (0.0, 0.0, {})),
+                  parts: [Bus(name: "plate", pos_m: (0.5, 0.0, 0.0), shape: Box(size_m: (1.0, 0.3, 0.02)))]),
+                 (name: "ball", role: Other, mass_kg: 10.0,
+                  inertia_kg_m2: (xx: 1.0, yy: 1.0, zz: 1.0),
+                  initial: (pos_m: (0.0, 0.0, 2.5)),
+                  parts: [Bus(name: "ball", shape: Sphere(radius_m: 0.1))]),
+               ],
+               guarantees: [
+                 MinDistance(name: "clear_1m", a: "spinner", b: "ball", min_m: 1.0),
+                 KeepOutSphere(name: "com_2m", body: "spinner", around: "ball", radius_m: 2.0),
+               ])"#,
+            100f64.to_degrees()
+        );
+        let loaded = load_scene_str(&text, "fast_spin", &[]).unwrap_or_else(|e| panic!("{e}"));
+        let mut sim = Simulation::new(&loaded).unwrap_or_else(|e| panic!("{e}"));
+        let n = sim.steps_for(sim.scene.duration_s);
+        sim.step(n);
+        let s = sim.summary();
+        println!(
+            "dt {dt}: under-resolved steps {}, {}",
+            s["monitor"]["rotation_under_resolved_steps"], s["guarantees"]
+        );
+        let v = |name: &str| {
+            s["guarantees"]
+                .as_array()
+                .expect("guarantees")
+                .iter()
+                .find(|g| g["name"] == name)
+                .expect("guarantee")["verdict"]
+                .as_str()
+                .expect("verdict")
+                .to_string()
+        };
+        (
+            v("clear_1m"),
+            v("com_2m"),
+            s["monitor"]["rotation_under_resolved_steps"]
+                .as_u64()
+                .expect("count"),
+        )
+    };
+    let (d, k, n) = verdicts(0.01);
+    assert!(n > 0, "every step turns 1 rad");
+    assert_eq!(d, "unresolved");
+    assert_eq!(k, "held");
+    let (d, k, n) = verdicts(0.001);
+    assert_eq!(n, 0);
+    assert_eq!(d, "held");
+    assert_eq!(k, "held");
+}

@@ -541,6 +541,10 @@ impl guarantee_bounds::MotionBounds for motion::StepMotion {
 struct FrameMotion<'a> {
     motion: &'a motion::StepMotion,
     hill_rate_rad_s: Option<f64>,
+    /// Set when a bound that rests on the bodies' rotation was read (an angular-speed bound,
+    /// or a full-geometry distance rate): in a step that turns a body by more than
+    /// [`motion::UNDER_RESOLVED_TURN_RAD`] such a bound is not proven.
+    rotation_read: std::cell::Cell<bool>,
 }
 
 impl guarantee_bounds::MotionBounds for FrameMotion<'_> {
@@ -554,6 +558,7 @@ impl guarantee_bounds::MotionBounds for FrameMotion<'_> {
         self.motion.rel_speed_bound(i, j)
     }
     fn omega_bound(&self, i: usize) -> f64 {
+        self.rotation_read.set(true);
         self.motion.omega_bound(i)
     }
     fn extent_m(&self, i: usize) -> f64 {
@@ -563,6 +568,7 @@ impl guarantee_bounds::MotionBounds for FrameMotion<'_> {
         self.motion.separation_bound(i, j)
     }
     fn distance_rate_bound(&self, i: usize, j: usize) -> f64 {
+        self.rotation_read.set(true);
         self.motion.distance_rate_bound(i, j)
     }
     fn hill_rate_bound_rad_s(&self) -> Option<f64> {
@@ -758,6 +764,7 @@ fn physics_step(
     motion.dt_s = dt;
     motion.ready = true;
     motion.under_resolved_steps += u64::from(under_resolved);
+    motion.under_resolved = under_resolved;
     bp.update(&motion);
     // 2. The swept test over the near pairs of bodies in free flight.
     let prev_attached: Vec<bool> = roster
@@ -1079,6 +1086,7 @@ fn check_guarantees(
             let (r, v) = o.reference.state();
             crate::orbit::lvlh::hill_rate_bound_rad_s(&r, &v, motion.dt_s, o.j2)
         }),
+        rotation_read: std::cell::Cell::new(false),
     };
     let g = &mut *g;
     g.last.resize(g.list.len(), Bracket::exact(f64::INFINITY));
@@ -1090,11 +1098,15 @@ fn check_guarantees(
     for k in 0..g.list.len() {
         let inv = &g.list[k];
         let m1 = inv.margin_bracket(&view);
+        frame_motion.rotation_read.set(false);
         let rate = if motion.ready {
             inv.rate_bound(&frame_motion)
         } else {
             None
         };
+        // A rate bound resting on rotation is not proven in a step that turns a body by more
+        // than UNDER_RESOLVED_TURN_RAD (the RK4 allowance is argued below that).
+        let rotation_unproven = motion.under_resolved && frame_motion.rotation_read.get();
         let st = &mut g.status[k];
         let Some(rate) = rate else {
             let m = m1.value;
@@ -1290,7 +1302,7 @@ fn check_guarantees(
                 Crossing::Never => None,
             };
         }
-        finding.unresolved = !went_negative && finding.lower < 0.0;
+        finding.unresolved = !went_negative && (finding.lower < 0.0 || rotation_unproven);
         for c in st.update_interval(t, m1.value, &finding, dt) {
             let kind = if c.violated {
                 "guarantee_violated"

@@ -369,6 +369,10 @@ pub struct StepMotion {
     pub ready: bool,
     /// Steps in which some body turned by more than [`UNDER_RESOLVED_TURN_RAD`].
     pub under_resolved_steps: u64,
+    /// The current step turned some body by more than [`UNDER_RESOLVED_TURN_RAD`]: a rate
+    /// bound resting on the bodies' rotation is not proven over it, so a guarantee judged with
+    /// one is at best `unresolved` for the step.
+    pub under_resolved: bool,
     /// Per body: its f64 free-flight path for the step when rapier took the step (or its
     /// rest) instead — the unobstructed motion, on which a contact's time of first touch is
     /// found.
