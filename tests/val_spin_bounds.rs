@@ -769,6 +769,23 @@ fn val_guarantee_resting_on_an_under_resolved_rotation_is_not_held() {
             "dt {dt}: under-resolved steps {}, {}",
             s["monitor"]["rotation_under_resolved_steps"], s["guarantees"]
         );
+        // One event says so, at the first such step, with the step that would resolve it
+        // (0.3 rad at 100 rad/s: 3 ms).
+        let said: Vec<_> = sim
+            .events()
+            .iter()
+            .filter(|e| e.kind == "rotation_under_resolved")
+            .cloned()
+            .collect();
+        if dt > 0.005 {
+            assert_eq!(said.len(), 1, "{said:?}");
+            assert_eq!(said[0].data["body"], "spinner");
+            let want = 0.3 / 100.0;
+            let got = said[0].data["dt_s_to_resolve"].as_f64().expect("dt");
+            assert!((got - want).abs() < 1e-3 * want, "{got} vs {want}");
+        } else {
+            assert!(said.is_empty(), "{said:?}");
+        }
         let v = |name: &str| {
             s["guarantees"]
                 .as_array()

@@ -735,7 +735,13 @@ fn physics_step(
         );
         end.att = att;
         end.omega_rad_s = omega;
-        under_resolved |= s.att.angle_to(&att) > motion::UNDER_RESOLVED_TURN_RAD;
+        let turn = s.att.angle_to(&att);
+        if turn > motion::UNDER_RESOLVED_TURN_RAD {
+            under_resolved = true;
+            if turn > motion.max_turn_rad.0 {
+                motion.max_turn_rad = (turn, b.index);
+            }
+        }
         let path = match sub_of(b.index) {
             // Sub-stepped under the compliant contact: its end state, and (as for a step
             // rapier takes) a straight line plus constant-rate rotation between the ends.
@@ -1060,6 +1066,23 @@ fn check_guarantees(
     use crate::geometry::bounds::{Bracket, Crossing, first_below, interval_lower_bound, minimize};
     use crate::guarantee::{IntervalFinding, Reads, ReferenceView};
     let t = clock.t_s();
+    if motion.under_resolved && motion.under_resolved_steps == 1 {
+        // The first step whose rotation the rate bounds do not cover: say so once, with the
+        // step that would (the count is in summary.json's monitor).
+        let (turn, body) = motion.max_turn_rad;
+        let name = mon.bodies.get(body).map_or("", |b| b.name.as_str());
+        log.push(
+            t,
+            "rotation_under_resolved",
+            serde_json::json!({
+                "body": name,
+                "turn_rad": turn,
+                "limit_rad": motion::UNDER_RESOLVED_TURN_RAD,
+                "dt_s_to_resolve": motion.dt_s * motion::UNDER_RESOLVED_TURN_RAD / turn,
+                "consequence": "guarantees whose rate bound rests on the rotation are unresolved over such steps, never held",
+            }),
+        );
+    }
     let jets = jets_view(host.as_deref());
     let orbit = orbit.as_deref();
     let reference_at = |back_s: f64| {

@@ -373,6 +373,8 @@ pub struct StepMotion {
     /// bound resting on the bodies' rotation is not proven over it, so a guarantee judged with
     /// one is at best `unresolved` for the step.
     pub under_resolved: bool,
+    /// The largest turn in an under-resolved step so far, rad, and its body (scene order).
+    pub max_turn_rad: (f64, usize),
     /// Per body: its f64 free-flight path for the step when rapier took the step (or its
     /// rest) instead — the unobstructed motion, on which a contact's time of first touch is
     /// found.
