@@ -266,3 +266,16 @@ def test_finish_into_a_file_keeps_the_run(tmp_path):
     assert not_a_folder.read_text() == "x"
     summary = sim.finish(tmp_path / "out")
     assert summary["steps"] == 50 and (tmp_path / "out" / "summary.json").is_file()
+
+
+def test_docked_state_names_each_mechanism_s_end_state():
+    """`docking()["docked_state"]`: LATCHED for the cone and slot, HARD_DOCKED for the soft-capture
+    mechanism; soft_capture.ron reaches it (its header: HARD_DOCKED at 12.77 s)."""
+    cone = rpod.Simulation(rpod.scenes.path("docking_aligned"), record=False)
+    assert cone.docking()["docked_state"] == "LATCHED"
+    soft = rpod.Simulation(rpod.scenes.path("soft_capture"), record=False)
+    dock = soft.docking()
+    assert dock["docked_state"] == "HARD_DOCKED"
+    assert dock["state"] == "FREE"
+    soft.run_until(14.0)
+    assert soft.docking()["state"] == soft.docking()["docked_state"]
