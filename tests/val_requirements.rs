@@ -614,6 +614,23 @@ fn passive_safety_bad_periods_and_grids_are_located_errors() {
     println!("{e}");
     assert_eq!(e.field, "guarantees.ps.grid_s", "{e}");
     assert!(e.message.contains("90"), "{e}");
+    // Nor may a horizon make every evaluation integrate for seconds: 10⁶ s (11.6 days) on a
+    // 90 s grid at 15.3 s sub-steps is 6.7·10⁴ of them.
+    let e = load_scene_str(
+        &orbit_scene(
+            (20.0, 30.0, 0.0, 0.0),
+            r#"PassiveSafety(name: "ps", body: "chaser", around: "target", radius_m: Some(5.0),
+                 horizon_s: 1e6, grid_s: 90.0)"#,
+            1.0,
+            true,
+        ),
+        "ps",
+        &[],
+    )
+    .unwrap_err();
+    println!("{e}");
+    assert_eq!(e.field, "guarantees.ps.horizon_s", "{e}");
+    assert!(e.message.contains("shorten horizon_s"), "{e}");
 }
 
 const PANEL: &str = r#"Bus(name: "panel", shape: Box(size_m: (2.0, 0.4, 2.0)))"#;
