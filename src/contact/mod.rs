@@ -39,6 +39,7 @@
 //!   comes from its drop or pendulum tests: set it in the scene.
 
 pub mod closed_form;
+pub mod dock_state;
 pub mod platform;
 
 use serde::{Deserialize, Serialize};

@@ -415,11 +415,11 @@ pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, String> {
 }
 
 /// The docking-state plot's title: every state code the run's `dock.state` column holds, with
-/// its name from [`crate::sim::docking::DockState`] (the one definition of the codes), in code
+/// its name from [`crate::contact::dock_state::DockState`] (the one definition of the codes), in code
 /// order, e.g. `docking state (0 FREE, 2 CONTACT, 9 SOFT_CAPTURED)`. A code that is no state
 /// (a file from another version) is shown with `?`; non-finite values are skipped.
 pub fn state_legend(codes: &[f64]) -> String {
-    use crate::sim::docking::DockState;
+    use crate::contact::dock_state::DockState;
     let mut seen: Vec<f64> = codes.iter().copied().filter(|c| c.is_finite()).collect();
     seen.sort_by(f64::total_cmp);
     seen.dedup();
@@ -442,7 +442,7 @@ mod tests {
     //! The docking-state legend against the state list itself ([`DockState::ALL`], where the
     //! codes are defined): every state code gets its own name.
     use super::state_legend;
-    use crate::sim::docking::DockState;
+    use crate::contact::dock_state::DockState;
 
     #[test]
     fn every_state_code_has_a_label() {
