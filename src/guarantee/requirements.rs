@@ -508,7 +508,7 @@ impl GuaranteeParams for PassiveSafetyParams {
             return Err(BuildError::at(
                 "grid_s",
                 format!(
-                    "must be at most horizon_s ({} s) and give at most {MAX_DRIFT_GRID_POINTS} grid points, got {} s",
+                    "must be at most horizon_s ({:?} s) and give at most {MAX_DRIFT_GRID_POINTS} grid points, got {:?} s",
                     self.horizon_s, self.grid_s
                 ),
             ));

@@ -786,6 +786,24 @@ pub fn pair_rate_gain(
     (sc.rates.get(a * nj + b).copied().unwrap_or(body), body)
 }
 
+/// Every part's pose (and bounding radius) of bodies i and j at τ into the step, on the bodies'
+/// paths, into `tmp`.
+fn part_poses_at<'a>(
+    geo: &MonitorGeometry,
+    motion: &StepMotion,
+    i: usize,
+    j: usize,
+    tau: f64,
+    tmp: &'a mut [Vec<(Isometry3<f64>, f64)>; 2],
+) -> &'a mut [Vec<(Isometry3<f64>, f64)>; 2] {
+    let (xi, qi) = motion.paths[i].pose_at(tau);
+    let (xj, qj) = motion.paths[j].pose_at(tau);
+    let [ti, tj] = &mut *tmp;
+    geo.part_poses(i, &xi, &qi, ti);
+    geo.part_poses(j, &xj, &qj, tj);
+    tmp
+}
+
 /// Full-geometry distance of bodies i < j at τ on the step's paths with every part pair's
 /// certified lower bound ([`closest_parts_lows`]).
 #[allow(clippy::too_many_arguments)]
@@ -800,11 +818,7 @@ pub fn pair_lows_at(
     count: &mut QueryCount,
     lows: &mut Vec<f64>,
 ) -> PartPairHit {
-    let (xi, qi) = motion.paths[i].pose_at(tau);
-    let (xj, qj) = motion.paths[j].pose_at(tau);
-    let [ti, tj] = &mut sc.tmp;
-    geo.part_poses(i, &xi, &qi, ti);
-    geo.part_poses(j, &xj, &qj, tj);
+    let [ti, tj] = part_poses_at(geo, motion, i, j, tau, &mut sc.tmp);
     closest_parts_lows(
         geo,
         i,
@@ -904,11 +918,7 @@ pub fn pair_at(
     sc: &mut DistanceScratch,
     count: &mut QueryCount,
 ) -> PartPairHit {
-    let (xi, qi) = motion.paths[i].pose_at(tau);
-    let (xj, qj) = motion.paths[j].pose_at(tau);
-    let [ti, tj] = &mut sc.tmp;
-    geo.part_poses(i, &xi, &qi, ti);
-    geo.part_poses(j, &xj, &qj, tj);
+    let [ti, tj] = part_poses_at(geo, motion, i, j, tau, &mut sc.tmp);
     closest_parts(
         geo,
         i,
