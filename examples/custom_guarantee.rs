@@ -60,6 +60,21 @@ impl GuaranteeParams for CommsRangeParams {
             max_range_m: self.max_range_m,
         }))
     }
+    /// The viewer draws the radio's range as a sphere about `around` (`rpod view`).
+    fn drawn(&self, scene: &Scene) -> Vec<rpod::geometry::drawn::DrawnSurface> {
+        let Some(body) = scene.bodies.iter().position(|b| b.name == self.around) else {
+            return Vec::new();
+        };
+        vec![rpod::geometry::drawn::DrawnSurface::SphereAboutBody {
+            legend: format!(
+                "radio range {} (green): {} m about {}",
+                self.name, self.max_range_m, self.around
+            ),
+            body,
+            radius_m: self.max_range_m,
+            rgba: [0.3, 1.0, 0.4, 0.08],
+        }]
+    }
 }
 
 /// The running guarantee.

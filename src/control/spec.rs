@@ -13,6 +13,8 @@ use crate::actuation::ActuatorSpec;
 use crate::control::interface::{AsAny, BodyInfo, BodyObs, Controller};
 use crate::control::sensor::SensorSpec;
 use crate::environment::EnvObs;
+use crate::geometry::drawn::DrawnSurface;
+use crate::scene::Scene;
 use std::any::Any;
 use std::collections::BTreeMap;
 use std::fmt;
@@ -227,6 +229,11 @@ impl<'a> BuildContext<'a> {
 pub trait LawSpec: LawSpecClone + AsAny + fmt::Debug + Send + Sync {
     /// The controllers (and disturbances) of this entry.
     fn build(&self, ctx: &mut BuildContext) -> Result<Built, BuildError>;
+    /// The constraint surfaces a viewer should draw for this entry (none by default): the
+    /// geometry the law itself uses, in f64 ([`DrawnSurface`]).
+    fn drawn(&self, _scene: &Scene) -> Vec<DrawnSurface> {
+        Vec::new()
+    }
 }
 
 /// Cloning boxed specs (implemented for every `LawSpec + Clone`).
@@ -291,6 +298,11 @@ pub trait LawParams: LawParamsClone + AsAny + fmt::Debug + Send + Sync {
     /// and a `sequencer_dropped` event says so the first time it is non-zero in a phase.
     fn commands(&self) -> Commands {
         Commands::ForceAndTorque
+    }
+    /// The constraint surfaces a viewer should draw for this law flying `body` (scene index)
+    /// toward `target` (none by default): the geometry the law itself uses ([`DrawnSurface`]).
+    fn drawn(&self, _scene: &Scene, _body: usize, _target: Option<usize>) -> Vec<DrawnSurface> {
+        Vec::new()
     }
 }
 
@@ -527,6 +539,23 @@ impl ControllerSpec {
         match &self.body {
             ControllerBody::Law(l) => (*l.params).as_any().downcast_ref::<P>(),
             ControllerBody::Spec(_) => None,
+        }
+    }
+    /// The constraint surfaces the entry's law asks a viewer to draw (its `drawn` hook; none
+    /// for a `register_law` entry whose body is not in the scene).
+    pub fn drawn(&self, scene: &Scene) -> Vec<DrawnSurface> {
+        match &self.body {
+            ControllerBody::Spec(s) => s.drawn(scene),
+            ControllerBody::Law(l) => {
+                let index = |n: &str| scene.bodies.iter().position(|b| b.name == n);
+                match index(&l.body) {
+                    Some(body) => {
+                        let target = l.target.as_deref().and_then(index);
+                        l.params.drawn(scene, body, target)
+                    }
+                    None => Vec::new(),
+                }
+            }
         }
     }
     /// Builds the entry's slots.

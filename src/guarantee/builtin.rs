@@ -95,6 +95,20 @@ impl GuaranteeParams for KeepOutSphereParams {
             radius_m: self.radius_m,
         }))
     }
+    fn drawn(&self, scene: &Scene) -> Vec<crate::geometry::drawn::DrawnSurface> {
+        let Some(body) = scene.bodies.iter().position(|b| b.name == self.around) else {
+            return Vec::new();
+        };
+        vec![crate::geometry::drawn::DrawnSurface::SphereAboutBody {
+            legend: format!(
+                "keep-out {} (yellow): {} m about {}",
+                self.name, self.radius_m, self.around
+            ),
+            body,
+            radius_m: self.radius_m,
+            rgba: [1.0, 0.85, 0.2, 0.1],
+        }]
+    }
 }
 
 /// `ApproachCone`: while `body`'s centre of mass is between `to_range_m` and `from_range_m`

@@ -20,6 +20,7 @@
 use super::Guarantee;
 use crate::control::interface::AsAny;
 use crate::control::registry::{BuildError, RegisterError};
+use crate::geometry::drawn::DrawnSurface;
 use crate::scene::Scene;
 use crate::scene::parts::PartCollider;
 use serde::de::{self, DeserializeSeed, EnumAccess, VariantAccess, Visitor};
@@ -67,6 +68,12 @@ pub trait GuaranteeParams: GuaranteeParamsClone + AsAny + fmt::Debug + Send + Sy
     }
     /// The guarantee, from its checked values.
     fn build(&self, ctx: &GuaranteeContext) -> Result<Box<dyn Guarantee>, BuildError>;
+    /// The surfaces a viewer should draw for this guarantee (none by default): its zone as the
+    /// guarantee itself uses it ([`DrawnSurface`]).
+    fn drawn(&self, scene: &Scene) -> Vec<DrawnSurface> {
+        let _ = scene;
+        Vec::new()
+    }
 }
 
 /// Cloning boxed parameters (implemented for every `GuaranteeParams + Clone`).
@@ -112,6 +119,10 @@ impl GuaranteeSpec {
     /// The fields as the type `P` of a registered kind, if they are.
     pub fn params<P: 'static>(&self) -> Option<&P> {
         (*self.params).as_any().downcast_ref::<P>()
+    }
+    /// The surfaces the guarantee asks a viewer to draw (its `drawn` hook).
+    pub fn drawn(&self, scene: &Scene) -> Vec<DrawnSurface> {
+        self.params.drawn(scene)
     }
     /// The fields as `P`, mutably (to change a loaded scene before a run).
     pub fn params_mut<P: 'static>(&mut self) -> Option<&mut P> {

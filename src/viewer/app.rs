@@ -329,8 +329,7 @@ pub fn run_live(loaded: &LoadedScene, opts: ViewerOptions) -> Result<(), String>
     let mut app = base_app(&opts, &sim.scene.name);
     let reference = sim.reference_state();
     let snap = live_snapshot(&sim);
-    app.insert_resource(ContactForces::new(&geom, 0.0));
-    app.insert_resource(Corridors::of(&sim.scene))
+    app.insert_resource(ContactForces::new(&geom, 0.0))
         .insert_resource(Table::of(&sim.scene))
         .insert_resource(Surfaces::of(&sim.scene));
     app.insert_resource(geom)
@@ -399,8 +398,7 @@ pub fn run_replay(loaded: &LoadedScene, rec: Recording, opts: ViewerOptions) -> 
     app.insert_resource(ContactForces::new(&geom, rec.peak_contact_force_n()));
     let mut snap = rec.sample(timeline.t_s);
     snap.bodies = order.iter().map(|&i| snap.bodies[i]).collect();
-    app.insert_resource(Corridors::of(scene))
-        .insert_resource(Table::of(scene))
+    app.insert_resource(Table::of(scene))
         .insert_resource(Surfaces::of(scene));
     app.insert_resource(geom)
         .insert_resource(Current {
@@ -607,29 +605,6 @@ type SurfaceItem = (
 #[derive(Component)]
 struct SurfaceOf(usize);
 
-/// Constraint surfaces to draw: (body index, surface of revolution about the body's +x axis
-/// with its vertex at the centre of mass: a, tan θ of the cissoid).
-#[derive(Resource, Default)]
-struct Corridors(Vec<(usize, crate::geometry::cissoid::Cissoid)>);
-
-impl Corridors {
-    fn of(scene: &crate::scene::Scene) -> Self {
-        let mut v = Vec::new();
-        for c in &scene.controllers {
-            if let Some(g) = c.spec::<crate::control::guo2016::SceneSpec>()
-                && let Some(i) = scene.bodies.iter().position(|b| b.name == g.target)
-                && g.corridor_a_m > 0.0
-            {
-                v.push((
-                    i,
-                    crate::geometry::cissoid::Cissoid::new(g.corridor_a_m, g.corridor_tan_theta),
-                ));
-            }
-        }
-        Self(v)
-    }
-}
-
 /// The constraint surfaces of the laws and guarantees ([`super::surfaces`]), their panel
 /// legend, and the body whose centre-of-mass height the table curves are drawn at.
 #[derive(Resource, Default)]
@@ -642,11 +617,8 @@ struct Surfaces {
 impl Surfaces {
     fn of(scene: &crate::scene::Scene) -> Self {
         let list = super::surfaces::scene_surfaces(scene);
-        let legend = list.iter().map(|s| s.legend(scene)).collect();
-        let curve_body = scene.controllers.iter().find_map(|c| {
-            let x = c.spec::<crate::control::xu2019::SceneSpec>()?;
-            scene.bodies.iter().position(|b| b.name == x.chaser)
-        });
+        let legend = list.iter().map(|s| s.legend().to_string()).collect();
+        let curve_body = list.iter().find_map(|s| s.curve_body);
         Self {
             list,
             legend,
@@ -659,7 +631,6 @@ impl Surfaces {
 fn setup(
     mut commands: Commands,
     geom: Res<SceneGeom>,
-    corridors: Res<Corridors>,
     surfaces: Res<Surfaces>,
     table: Res<Table>,
     layers: Res<Layers>,
@@ -715,43 +686,16 @@ fn setup(
                 }
             });
     }
-    // The cissoid approach corridor (Guo et al. 2016) in the target's body frame, vertex at its
-    // centre of mass, axis +x; drawn out to a radius of a (it is asymptotic to x = 2a).
-    for (i, cis) in &corridors.0 {
-        let mesh = super::geometry::revolution_mesh(|x| cis.radius_at_m(x), 2.0 * cis.a_m, cis.a_m);
-        let com = &geom.bodies[*i].com_body_m;
-        commands.spawn((
-            Mesh3d(meshes.add(mesh)),
-            MeshMaterial3d(materials.add(StandardMaterial {
-                base_color: Color::srgba(0.3, 0.85, 1.0, 0.12),
-                alpha_mode: AlphaMode::Blend,
-                cull_mode: None,
-                double_sided: true,
-                // Unlit: a flat tint costs the software renderer a fraction of PBR shading
-                // over the many pixels a surface covers.
-                unlit: true,
-                ..default()
-            })),
-            Transform::from_translation(v3(com)),
-            if layers.surfaces {
-                Visibility::Inherited
-            } else {
-                Visibility::Hidden
-            },
-            ConstraintSurface,
-            SurfaceOf(*i),
-        ));
-    }
     // The laws' and guarantees' constraint surfaces (semi-transparent; a depth bias keeps a
     // surface that coincides with a collider, such as the Xu 2019 obstacle, in front of it).
     // Spheres about a body show their inner (far) side only: one layer of tint whether the
     // camera is outside or inside (a 10 m keep-out sphere fills the picture, and each blended
     // layer costs the software renderer about 30 ms at 1280×720). The table prisms, which
-    // wrap colliders, are drawn two-sided.
+    // wrap colliders, and the surfaces of revolution (a corridor) are drawn two-sided.
     for s in &surfaces.list {
         use super::surfaces::Anchor;
         let [r, g, b, a] = s.rgba;
-        let sphere = matches!(s.anchor, Anchor::BodyCom(_));
+        let sphere = !s.two_sided;
         let mut e = commands.spawn((
             Mesh3d(meshes.add(s.mesh.to_mesh())),
             MeshMaterial3d(materials.add(StandardMaterial {

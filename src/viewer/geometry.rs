@@ -215,58 +215,6 @@ impl SceneGeom {
     }
 }
 
-/// The surface of revolution `ρ(x)` about the local `+x` axis from the vertex out to where
-/// the radius first exceeds `max_radius_m` (or `x_end_m`), as a triangle list with smooth
-/// normals (draw it two-sided).
-pub fn revolution_mesh(
-    radius_at_m: impl Fn(f64) -> Option<f64>,
-    x_end_m: f64,
-    max_radius_m: f64,
-) -> Mesh {
-    const RINGS: usize = 96;
-    const SEGS: usize = 48;
-    let mut rings: Vec<(f64, f64)> = Vec::new();
-    for k in 0..=RINGS {
-        let x = x_end_m * k as f64 / RINGS as f64;
-        match radius_at_m(x) {
-            Some(r) if r.is_finite() && r <= max_radius_m => rings.push((x, r)),
-            _ => break,
-        }
-    }
-    let mut pos: Vec<[f32; 3]> = Vec::new();
-    let mut nrm: Vec<[f32; 3]> = Vec::new();
-    for (i, &(x, r)) in rings.iter().enumerate() {
-        // Meridian slope dρ/dx by finite differences, for the normal.
-        let (x0, r0) = rings[i.saturating_sub(1)];
-        let (x1, r1) = rings[(i + 1).min(rings.len() - 1)];
-        let slope = if x1 > x0 { (r1 - r0) / (x1 - x0) } else { 0.0 };
-        for j in 0..SEGS {
-            let phi = std::f64::consts::TAU * j as f64 / SEGS as f64;
-            let (c, s) = (phi.cos(), phi.sin());
-            pos.push([x as f32, (r * c) as f32, (r * s) as f32]);
-            let n = Vec3::new(-slope as f32, c as f32, s as f32).normalize_or_zero();
-            nrm.push(n.to_array());
-        }
-    }
-    let mut idx: Vec<u32> = Vec::new();
-    for i in 0..rings.len().saturating_sub(1) {
-        for j in 0..SEGS {
-            let a = (i * SEGS + j) as u32;
-            let b = (i * SEGS + (j + 1) % SEGS) as u32;
-            let c = a + SEGS as u32;
-            let d = b + SEGS as u32;
-            idx.extend_from_slice(&[a, c, b, b, c, d]);
-        }
-    }
-    Mesh::new(
-        PrimitiveTopology::TriangleList,
-        RenderAssetUsages::default(),
-    )
-    .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, pos)
-    .with_inserted_attribute(Mesh::ATTRIBUTE_NORMAL, nrm)
-    .with_inserted_indices(Indices::U32(idx))
-}
-
 /// A render mesh of a primitive in its own frame (flat-shaded hulls).
 pub fn primitive_mesh(p: &Primitive) -> Mesh {
     match p {

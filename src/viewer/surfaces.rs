@@ -1,5 +1,7 @@
-//! Constraint surfaces (layer `S`), built from the same geometry the laws and guarantees use,
-//! as plain f64 vertex lists (tested without a window) turned into Bevy meshes:
+//! Constraint surfaces (layer `S`), as plain f64 vertex lists (tested without a window) turned
+//! into Bevy meshes. The viewer knows no law: every controller entry and every guarantee
+//! describes its own surfaces through its `drawn` hook ([`crate::geometry::drawn`]), and a
+//! user's law or guarantee draws its own the same way. The built-in ones:
 //!
 //! - Xu, Wen, Wei (2019), air-bearing table: the superquadric obstacle and the heart-shaped
 //!   keep-out of the target, from the scene's `Xu2019` controller
@@ -10,19 +12,16 @@
 //!   chaser's current centre-of-mass height.
 //! - Zhang et al. (2018): the capture sphere of radius l (`capture_radius_m`) about every body's
 //!   centre of mass (the law's capture guarantee is `|r_a − r_b| ≥ l` for every pair).
+//! - Guo et al. (2016): the cissoid approach corridor in the target's body frame.
 //! - Every `KeepOutSphere` guarantee: the sphere of `radius_m` about `around`'s centre of mass.
 
-use crate::geometry::heart::HeartParams;
-use crate::geometry::superquadric::SuperquadricParams;
-use crate::guarantee::builtin::KeepOutSphereParams;
-use crate::scene::{Environment, Scene};
+use crate::geometry::drawn::DrawnSurface;
+pub use crate::geometry::drawn::OUTLINE_POINTS;
+use crate::scene::Scene;
 use bevy::asset::RenderAssetUsages;
 use bevy::mesh::{Indices, PrimitiveTopology};
 use bevy::prelude::Mesh;
 use nalgebra::{Vector2, Vector3};
-
-/// Points on each closed curve of a prism (superquadric and heart outlines).
-pub const OUTLINE_POINTS: usize = 240;
 
 /// A triangle mesh in f64: positions (m, in the surface's own frame), one normal per vertex,
 /// triangle indices.
@@ -127,25 +126,37 @@ pub fn sphere(radius_m: f64, rings: usize, segments: usize) -> SurfaceMesh {
     m
 }
 
-/// What a constraint surface is.
-#[derive(Debug, Clone, PartialEq)]
-pub enum SurfaceKind {
-    /// Xu 2019 superquadric obstacle (lab frame of the table).
-    Superquadric(SuperquadricParams),
-    /// Xu 2019 heart-shaped keep-out (lab frame of the table).
-    Heart(HeartParams),
-    /// Zhang 2018 capture sphere of radius l about a body's centre of mass.
-    Capture {
-        /// l, m.
-        radius_m: f64,
-    },
-    /// A `KeepOutSphere` guarantee about a body's centre of mass.
-    KeepOut {
-        /// Guarantee name.
-        name: String,
-        /// Radius, m.
-        radius_m: f64,
-    },
+/// The surface of revolution about +x of a meridian (x, radius) in m: `segments` around, one
+/// ring per meridian point, normals from the meridian's slope (finite differences). Every
+/// vertex is at its ring's radius from the axis.
+pub fn revolution(meridian_m: &[(f64, f64)], segments: usize) -> SurfaceMesh {
+    let mut m = SurfaceMesh::default();
+    let n = meridian_m.len();
+    for (i, &(x, r)) in meridian_m.iter().enumerate() {
+        let (x0, r0) = meridian_m[i.saturating_sub(1)];
+        let (x1, r1) = meridian_m[(i + 1).min(n - 1)];
+        let slope = if x1 > x0 { (r1 - r0) / (x1 - x0) } else { 0.0 };
+        for j in 0..segments {
+            let phi = std::f64::consts::TAU * j as f64 / segments as f64;
+            let (c, s) = (phi.cos(), phi.sin());
+            m.positions_m.push(Vector3::new(x, r * c, r * s));
+            m.normals.push(
+                Vector3::new(-slope, c, s)
+                    .try_normalize(0.0)
+                    .unwrap_or_else(Vector3::y),
+            );
+        }
+    }
+    let s = segments as u32;
+    for i in 0..n.saturating_sub(1) as u32 {
+        for j in 0..s {
+            let a = i * s + j;
+            let b = i * s + (j + 1) % s;
+            let (c, d) = (a + s, b + s);
+            m.indices.extend_from_slice(&[a, c, b, b, c, d]);
+        }
+    }
+    m
 }
 
 /// Where a surface sits.
@@ -161,138 +172,107 @@ pub enum Anchor {
 /// prisms, the curve (lab x, y, m) the law's point is kept out of.
 #[derive(Debug, Clone)]
 pub struct Surface {
-    /// What it is.
-    pub kind: SurfaceKind,
+    /// The legend line (from the law's or guarantee's hook).
+    pub legend: String,
     /// Where it is.
     pub anchor: Anchor,
     /// Mesh in the anchor's frame.
     pub mesh: SurfaceMesh,
     /// Closed curve in the lab frame (table prisms only), m.
     pub curve_lab_m: Vec<Vector2<f64>>,
+    /// The body whose centre-of-mass height the curve is drawn at (table prisms only).
+    pub curve_body: Option<usize>,
+    /// Drawn from both sides (prisms and surfaces of revolution); a sphere shows its inner
+    /// side only.
+    pub two_sided: bool,
     /// RGBA colour (alpha: opacity).
     pub rgba: [f32; 4],
 }
 
 impl Surface {
     /// A one-line legend for the panel, with units and frame.
-    pub fn legend(&self, scene: &Scene) -> String {
-        let body = |a: &Anchor| match a {
-            Anchor::BodyCom(i) => scene.bodies.get(*i).map_or("?", |b| b.name.as_str()),
-            Anchor::World(_) => "world",
-        };
-        match &self.kind {
-            SurfaceKind::Superquadric(p) => format!(
-                "Xu2019 obstacle (magenta): superquadric a {} m, b {} m, s {}, centre ({}, {}) m (lab)",
-                p.a_m, p.b_m, p.s, p.centre_lab_m[0], p.centre_lab_m[1]
-            ),
-            SurfaceKind::Heart(h) => format!(
-                "Xu2019 keep-out (orange): heart R1 {} m, R2 {} m, R3 {} m, notch ({}, {}) m (lab)",
-                h.r1_m, h.r2_m, h.r3_m, h.centre_lab_m[0], h.centre_lab_m[1]
-            ),
-            SurfaceKind::Capture { radius_m } => format!(
-                "Zhang2018 capture sphere (red): l = {radius_m} m about {}",
-                body(&self.anchor)
-            ),
-            SurfaceKind::KeepOut { name, radius_m } => format!(
-                "keep-out {name} (yellow): {radius_m} m about {}",
-                body(&self.anchor)
-            ),
-        }
+    pub fn legend(&self) -> &str {
+        &self.legend
     }
 }
 
 /// Rings and segments of the sphere meshes.
 const SPHERE_RINGS: usize = 24;
 const SPHERE_SEGMENTS: usize = 48;
+/// Segments around a surface of revolution.
+const REVOLUTION_SEGMENTS: usize = 48;
 
 /// The constraint surfaces of a scene (see the module doc); empty when it has none.
 pub fn scene_surfaces(scene: &Scene) -> Vec<Surface> {
-    let mut out = Vec::new();
-    let index = |name: &str| scene.bodies.iter().position(|b| b.name == name);
-    for c in &scene.controllers {
-        if let Some(spec) = c.spec::<crate::control::xu2019::SceneSpec>()
-            && matches!(scene.environment, Environment::AirBearing(_))
-        {
-            let params = spec.params();
-            // Prism height: twice the chaser's centre-of-mass height (its plane mid-way).
-            let z1 = index(&spec.chaser)
-                .map(|i| 2.0 * scene.bodies[i].initial.pos_m[2])
-                .filter(|z| *z > 0.0)
-                .unwrap_or(0.3);
-            let sq = params.obstacle;
-            let curve = sq.outline_lab_m(OUTLINE_POINTS);
-            out.push(table_prism(
-                SurfaceKind::Superquadric(sq.clone()),
-                sq.centre(),
-                curve,
-                z1,
-                [1.0, 0.3, 0.75, 0.22],
-            ));
-            let h = params.heart;
-            let curve = h.outline_lab_m(OUTLINE_POINTS);
-            out.push(table_prism(
-                SurfaceKind::Heart(h.clone()),
-                h.centre(),
-                curve,
-                z1,
-                [1.0, 0.55, 0.15, 0.2],
-            ));
-        } else if let Some(spec) = c.spec::<crate::control::zhang2018::SceneSpec>() {
-            // One capture radius per scene (the law checks it): one sphere per body.
-            if out
-                .iter()
-                .any(|s: &Surface| matches!(s.kind, SurfaceKind::Capture { .. }))
-            {
-                continue;
-            }
-            for i in 0..scene.bodies.len() {
-                out.push(Surface {
-                    kind: SurfaceKind::Capture {
-                        radius_m: spec.capture_radius_m,
-                    },
-                    anchor: Anchor::BodyCom(i),
-                    mesh: sphere(spec.capture_radius_m, SPHERE_RINGS, SPHERE_SEGMENTS),
-                    curve_lab_m: Vec::new(),
-                    rgba: [1.0, 0.2, 0.2, 0.12],
-                });
-            }
+    let mut drawn: Vec<DrawnSurface> = Vec::new();
+    let hooks = scene
+        .controllers
+        .iter()
+        .flat_map(|c| c.drawn(scene))
+        .chain(scene.guarantees.iter().flat_map(|g| g.drawn(scene)));
+    for d in hooks {
+        // Several entries of one law (Zhang 2018's per-pair slots) describe the same surface.
+        if !drawn.contains(&d) {
+            drawn.push(d);
         }
     }
-    for g in &scene.guarantees {
-        if let Some(k) = g.params::<KeepOutSphereParams>()
-            && let Some(i) = index(&k.around)
-        {
-            out.push(Surface {
-                kind: SurfaceKind::KeepOut {
-                    name: k.name.clone(),
-                    radius_m: k.radius_m,
-                },
-                anchor: Anchor::BodyCom(i),
-                mesh: sphere(k.radius_m, SPHERE_RINGS, SPHERE_SEGMENTS),
-                curve_lab_m: Vec::new(),
-                rgba: [1.0, 0.85, 0.2, 0.1],
-            });
-        }
-    }
-    out
+    drawn.into_iter().filter_map(surface_of).collect()
 }
 
-/// A prism over a lab curve, its mesh relative to `centre` (small f32 coordinates), standing on
-/// the table top (z = 0) up to `z1_m`.
-fn table_prism(
-    kind: SurfaceKind,
-    centre: Vector2<f64>,
-    curve_lab_m: Vec<Vector2<f64>>,
-    z1_m: f64,
-    rgba: [f32; 4],
-) -> Surface {
-    let rel: Vec<_> = curve_lab_m.iter().map(|p| p - centre).collect();
-    Surface {
-        kind,
-        anchor: Anchor::World(Vector3::new(centre.x, centre.y, 0.0)),
-        mesh: prism(&rel, 0.0, z1_m),
-        curve_lab_m,
-        rgba,
+/// The viewer's surface for a law's or guarantee's description (none for a degenerate one:
+/// an outline of fewer than three points, a non-positive radius, an empty meridian).
+pub fn surface_of(d: DrawnSurface) -> Option<Surface> {
+    match d {
+        DrawnSurface::TablePrism {
+            legend,
+            outline_lab_m,
+            centre_lab_m,
+            top_m,
+            curve_body,
+            rgba,
+        } => {
+            if outline_lab_m.len() < 3 || !(top_m.is_finite() && top_m > 0.0) {
+                return None;
+            }
+            let rel: Vec<_> = outline_lab_m.iter().map(|p| p - centre_lab_m).collect();
+            Some(Surface {
+                legend,
+                anchor: Anchor::World(Vector3::new(centre_lab_m.x, centre_lab_m.y, 0.0)),
+                mesh: prism(&rel, 0.0, top_m),
+                curve_lab_m: outline_lab_m,
+                curve_body,
+                two_sided: true,
+                rgba,
+            })
+        }
+        DrawnSurface::SphereAboutBody {
+            legend,
+            body,
+            radius_m,
+            rgba,
+        } => (radius_m.is_finite() && radius_m > 0.0).then(|| Surface {
+            legend,
+            anchor: Anchor::BodyCom(body),
+            mesh: sphere(radius_m, SPHERE_RINGS, SPHERE_SEGMENTS),
+            curve_lab_m: Vec::new(),
+            curve_body: None,
+            two_sided: false,
+            rgba,
+        }),
+        DrawnSurface::RevolutionAboutBody {
+            legend,
+            body,
+            meridian_m,
+            rgba,
+        } => (meridian_m.len() >= 2).then(|| Surface {
+            legend,
+            anchor: Anchor::BodyCom(body),
+            mesh: revolution(&meridian_m, REVOLUTION_SEGMENTS),
+            curve_lab_m: Vec::new(),
+            curve_body: None,
+            two_sided: true,
+            rgba,
+        }),
     }
 }
 
@@ -328,23 +308,21 @@ mod tests {
             panic!("xu2019 scene has an Xu2019 controller");
         };
         let law = spec.params();
-        let sq = surfaces
-            .iter()
-            .find_map(|s| match &s.kind {
-                SurfaceKind::Superquadric(p) => Some((s, p)),
-                _ => None,
-            })
-            .expect("superquadric surface");
-        let heart = surfaces
-            .iter()
-            .find_map(|s| match &s.kind {
-                SurfaceKind::Heart(p) => Some((s, p)),
-                _ => None,
-            })
-            .expect("heart surface");
-        // The very geometry the law uses.
-        assert_eq!(sq.1, &law.obstacle);
-        assert_eq!(heart.1, &law.heart);
+        let named = |prefix: &str| {
+            surfaces
+                .iter()
+                .find(|s| s.legend.starts_with(prefix))
+                .expect("surface")
+        };
+        // The very geometry the law uses: its own parameters, and the outline its hook gives.
+        let sq = (named("Xu2019 obstacle"), &law.obstacle);
+        let heart = (named("Xu2019 keep-out"), &law.heart);
+        assert_eq!(sq.0.curve_lab_m, law.obstacle.outline_lab_m(OUTLINE_POINTS));
+        assert_eq!(heart.0.curve_lab_m, law.heart.outline_lab_m(OUTLINE_POINTS));
+        let chaser = scene.bodies.iter().position(|b| b.name == spec.chaser);
+        assert!(chaser.is_some());
+        assert_eq!(sq.0.curve_body, chaser);
+        assert_eq!(heart.0.curve_body, chaser);
         // Superquadric: every vertex satisfies the implicit equation to 1e-9, at z = 0 or at
         // twice the chaser's centre-of-mass height (0.32 m).
         let (s, p) = sq;
@@ -406,8 +384,9 @@ mod tests {
         let l = spec.capture_radius_m;
         let caps: Vec<_> = scene_surfaces(&scene)
             .into_iter()
-            .filter(|s| matches!(s.kind, SurfaceKind::Capture { .. }))
+            .filter(|s| s.legend.starts_with("Zhang2018 capture sphere"))
             .collect();
+        // One sphere per body, whatever the number of the law's entries (deduplicated).
         assert_eq!(caps.len(), scene.bodies.len());
         for (i, s) in caps.iter().enumerate() {
             assert_eq!(s.anchor, Anchor::BodyCom(i));
@@ -423,7 +402,7 @@ mod tests {
         let scene = load("free_drift.ron");
         let ko: Vec<_> = scene_surfaces(&scene)
             .into_iter()
-            .filter(|s| matches!(s.kind, SurfaceKind::KeepOut { .. }))
+            .filter(|s| s.legend.starts_with("keep-out "))
             .collect();
         assert_eq!(ko.len(), 1);
         let target = scene.bodies.iter().position(|b| b.name == "target");
@@ -435,5 +414,104 @@ mod tests {
                 .iter()
                 .all(|v| (v.norm() - 10.0).abs() < 1e-9)
         );
+    }
+
+    #[test]
+    fn invariant_viewer_guo2016_corridor_on_the_cissoid() {
+        // The corridor a Guo 2016 entry draws: every vertex at the cissoid's radius for its x,
+        // to 1e-9 m, in the target's body frame, out to r = a.
+        let scene = load("guo2016_corridor.ron");
+        let Some(spec) = scene.controllers[0].spec::<crate::control::guo2016::SceneSpec>() else {
+            panic!("guo2016 scene has a Guo2016 controller");
+        };
+        let cis =
+            crate::geometry::cissoid::Cissoid::new(spec.corridor_a_m, spec.corridor_tan_theta);
+        let list = scene_surfaces(&scene);
+        let cor: Vec<_> = list
+            .iter()
+            .filter(|s| s.legend.starts_with("Guo2016 corridor"))
+            .collect();
+        assert_eq!(cor.len(), 1);
+        let target = scene.bodies.iter().position(|b| b.name == spec.target);
+        assert_eq!(Some(cor[0].anchor), target.map(Anchor::BodyCom));
+        let m = &cor[0].mesh;
+        assert!(m.positions_m.len() >= 2 * REVOLUTION_SEGMENTS);
+        for v in &m.positions_m {
+            let r = cis.radius_at_m(v.x).expect("inside the corridor's range");
+            let rho = (v.y * v.y + v.z * v.z).sqrt();
+            assert!(
+                (rho - r).abs() < 1e-9,
+                "x {} m: ρ {rho} m, cissoid {r} m",
+                v.x
+            );
+            assert!(rho <= cis.a_m + 1e-12);
+        }
+        let n = m.positions_m.len() as u32;
+        assert!(m.indices.iter().all(|&i| i < n));
+    }
+
+    /// A guarantee kind the viewer has never seen (a user's): its hook's sphere is drawn.
+    #[derive(Debug, Clone)]
+    struct UsersRange;
+
+    impl crate::guarantee::registry::GuaranteeParams for UsersRange {
+        fn name(&self) -> &str {
+            "users_range"
+        }
+        fn bodies(&self) -> Vec<(&'static str, &str)> {
+            vec![("body", "chaser"), ("around", "target")]
+        }
+        fn build(
+            &self,
+            _ctx: &crate::guarantee::registry::GuaranteeContext,
+        ) -> Result<Box<dyn crate::guarantee::Guarantee>, crate::control::spec::BuildError>
+        {
+            Err(crate::control::spec::BuildError::at(
+                "",
+                "not built in this test",
+            ))
+        }
+        fn drawn(&self, scene: &Scene) -> Vec<DrawnSurface> {
+            vec![DrawnSurface::SphereAboutBody {
+                legend: "users_range: 45 m".into(),
+                body: scene.bodies.len() - 1,
+                radius_m: 45.0,
+                rgba: [0.0, 1.0, 0.0, 0.1],
+            }]
+        }
+    }
+
+    #[test]
+    fn invariant_viewer_draws_a_users_guarantee_through_its_hook() {
+        // Reference: the hook's own description — a 45 m sphere about the last body, every
+        // vertex at 45 m to 1e-9; a degenerate description (radius 0) draws nothing.
+        let mut scene = load("free_drift.ron");
+        scene
+            .guarantees
+            .push(crate::guarantee::registry::GuaranteeSpec {
+                kind: "UsersRange".into(),
+                params: Box::new(UsersRange),
+            });
+        let list = scene_surfaces(&scene);
+        let s: Vec<_> = list
+            .iter()
+            .filter(|s| s.legend == "users_range: 45 m")
+            .collect();
+        assert_eq!(s.len(), 1);
+        assert_eq!(s[0].anchor, Anchor::BodyCom(scene.bodies.len() - 1));
+        assert!(!s[0].two_sided);
+        assert!(
+            s[0].mesh
+                .positions_m
+                .iter()
+                .all(|v| (v.norm() - 45.0).abs() < 1e-9)
+        );
+        let none = surface_of(DrawnSurface::SphereAboutBody {
+            legend: String::new(),
+            body: 0,
+            radius_m: 0.0,
+            rgba: [0.0; 4],
+        });
+        assert!(none.is_none());
     }
 }

@@ -304,6 +304,32 @@ impl crate::guarantee::Guarantee for CorridorGuarantee {
 use crate::control::generic::mean_motion_rad_s;
 
 impl crate::control::spec::LawSpec for SceneSpec {
+    /// The cissoid approach corridor in the target's body frame, vertex at its centre of mass,
+    /// axis +x, out to a radius of a (it is asymptotic to x = 2a); none without a corridor.
+    fn drawn(&self, scene: &crate::scene::Scene) -> Vec<crate::geometry::drawn::DrawnSurface> {
+        let Some(body) = scene.bodies.iter().position(|b| b.name == self.target) else {
+            return Vec::new();
+        };
+        if self.corridor_a_m.is_nan() || self.corridor_a_m <= 0.0 {
+            return Vec::new();
+        }
+        let cis =
+            crate::geometry::cissoid::Cissoid::new(self.corridor_a_m, self.corridor_tan_theta);
+        vec![crate::geometry::drawn::DrawnSurface::RevolutionAboutBody {
+            legend: format!(
+                "Guo2016 corridor (cyan): cissoid a {} m, tan θ {} about {}'s +x axis",
+                self.corridor_a_m, self.corridor_tan_theta, self.target
+            ),
+            body,
+            meridian_m: crate::geometry::drawn::meridian(
+                |x| cis.radius_at_m(x),
+                2.0 * cis.a_m,
+                cis.a_m,
+                96,
+            ),
+            rgba: [0.3, 0.85, 1.0, 0.12],
+        }]
+    }
     fn build(
         &self,
         ctx: &mut crate::control::spec::BuildContext,

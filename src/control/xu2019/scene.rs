@@ -323,6 +323,47 @@ impl VisionSpec {
 }
 
 impl crate::control::spec::LawSpec for SceneSpec {
+    /// On an air-bearing table: the superquadric obstacle and the heart-shaped keep-out the law
+    /// keeps the chaser's centre of mass out of (its own [`Xu2019Params`]), as prisms over the
+    /// table up to twice the chaser's initial centre-of-mass height (its plane mid-way).
+    fn drawn(&self, scene: &crate::scene::Scene) -> Vec<crate::geometry::drawn::DrawnSurface> {
+        use crate::geometry::drawn::{DrawnSurface, OUTLINE_POINTS};
+        if !matches!(scene.environment, crate::scene::Environment::AirBearing(_)) {
+            return Vec::new();
+        }
+        let params = self.params();
+        let chaser = scene.bodies.iter().position(|b| b.name == self.chaser);
+        let top_m = chaser
+            .map(|i| 2.0 * scene.bodies[i].initial.pos_m[2])
+            .filter(|z| *z > 0.0)
+            .unwrap_or(0.3);
+        let sq = params.obstacle;
+        let h = params.heart;
+        vec![
+            DrawnSurface::TablePrism {
+                legend: format!(
+                    "Xu2019 obstacle (magenta): superquadric a {} m, b {} m, s {}, centre ({}, {}) m (lab)",
+                    sq.a_m, sq.b_m, sq.s, sq.centre_lab_m[0], sq.centre_lab_m[1]
+                ),
+                outline_lab_m: sq.outline_lab_m(OUTLINE_POINTS),
+                centre_lab_m: sq.centre(),
+                top_m,
+                curve_body: chaser,
+                rgba: [1.0, 0.3, 0.75, 0.22],
+            },
+            DrawnSurface::TablePrism {
+                legend: format!(
+                    "Xu2019 keep-out (orange): heart R1 {} m, R2 {} m, R3 {} m, notch ({}, {}) m (lab)",
+                    h.r1_m, h.r2_m, h.r3_m, h.centre_lab_m[0], h.centre_lab_m[1]
+                ),
+                outline_lab_m: h.outline_lab_m(OUTLINE_POINTS),
+                centre_lab_m: h.centre(),
+                top_m,
+                curve_body: chaser,
+                rgba: [1.0, 0.55, 0.15, 0.2],
+            },
+        ]
+    }
     fn build(
         &self,
         ctx: &mut crate::control::spec::BuildContext,

@@ -201,6 +201,26 @@ fn game_state(states: &[L2State], p: usize, e: usize) -> GameState {
 }
 
 impl crate::control::spec::LawSpec for SceneSpec {
+    /// The capture sphere of radius l about every body's centre of mass (the law's capture
+    /// guarantee is |r_a − r_b| ≥ l for every pair).
+    fn drawn(&self, scene: &crate::scene::Scene) -> Vec<crate::geometry::drawn::DrawnSurface> {
+        scene
+            .bodies
+            .iter()
+            .enumerate()
+            .map(
+                |(i, b)| crate::geometry::drawn::DrawnSurface::SphereAboutBody {
+                    legend: format!(
+                        "Zhang2018 capture sphere (red): l = {} m about {}",
+                        self.capture_radius_m, b.name
+                    ),
+                    body: i,
+                    radius_m: self.capture_radius_m,
+                    rgba: [1.0, 0.2, 0.2, 0.12],
+                },
+            )
+            .collect()
+    }
     fn build(
         &self,
         ctx: &mut crate::control::spec::BuildContext,
