@@ -41,11 +41,12 @@
 
 use nalgebra::Vector2;
 use rpod::control::zhang2018::{
-    Drift, PlannedManeuver, PursuerRole, ThrustSegment, Zhang2018Params, boundary_value_history,
-    e_state, p_state, paper_initial_state_l2c, paper_initial_state_rot, simulate_reconfiguration,
+    Drift, PlannedManeuver, PursuerRole, ThrustSegment, Zhang2018Params, e_state, p_state,
+    paper_initial_state_l2c, paper_initial_state_rot,
 };
 use rpod::orbit::l2::{L2Params, L2State};
 use rpod::reproduce::zhang2018::{Trace, refined_min_separation, run_scene};
+use rpod::reproduce::zhang2018_sim::{boundary_value_history, simulate_reconfiguration};
 use std::path::Path;
 
 const PAIR: &str = "scenes/zhang2018_pair.ron";

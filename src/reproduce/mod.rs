@@ -16,6 +16,7 @@ pub mod guo2016_ct;
 pub mod xu2015;
 pub mod xu2019;
 pub mod zhang2018;
+pub mod zhang2018_sim;
 
 /// The papers `rpod reproduce` knows, in the order it runs them.
 pub const PAPERS: &[&str] = &["guo2016", "xu2015", "geng2015", "xu2019", "zhang2018"];

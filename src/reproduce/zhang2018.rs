@@ -236,12 +236,14 @@ fn sign_changes(t: &[f64], v: &[f64]) -> Vec<f64> {
 /// Runs every case (a few seconds in release).
 pub fn compute() -> Result<Results, String> {
     use crate::control::zhang2018::{
-        Drift, PlannedManeuver, PursuerRole, Zhang2018Params, boundary_value_history, bup_state,
-        collision_course_plan, gamma_on_boundary, los_angle_s5_rad, p_state,
-        paper_initial_state_l2c, paper_initial_state_rot, rel_pos_m, retrograde_path,
-        simulate_reconfiguration,
+        Drift, PlannedManeuver, PursuerRole, Zhang2018Params, bup_state, gamma_on_boundary,
+        los_angle_s5_rad, p_state, paper_initial_state_l2c, paper_initial_state_rot, rel_pos_m,
+        retrograde_path,
     };
     use crate::orbit::l2::L2Params;
+    use crate::reproduce::zhang2018_sim::{
+        boundary_value_history, collision_course_plan, simulate_reconfiguration,
+    };
     use nalgebra::Vector2;
     let l2 = L2Params::paper();
     let p = Zhang2018Params::paper();

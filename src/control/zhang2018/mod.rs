@@ -21,8 +21,10 @@
 //!   eq (17) (the force-free barrier) is checked in the tests.
 //! * Capture/escape classification of any state → [`closest_approach`], [`barrier_function_m`],
 //!   [`classify_state`].
-//! * Avoidance during reconfiguration → [`AvoidanceController`], [`PlannedManeuver`],
-//!   [`simulate_reconfiguration`], [`collision_course_plan`].
+//! * Avoidance during reconfiguration → [`AvoidanceController`], [`PlannedManeuver`]; the
+//!   closed-loop simulator the reproduction and the validation use (`simulate_reconfiguration`,
+//!   `collision_course_plan`, `boundary_value_history`) is reproduction code, in
+//!   `crate::reproduce::zhang2018_sim` (feature `sim`).
 //! * How a scene asks for the law → [`SceneSpec`] (fixed thrust, planned maneuver in `rot`,
 //!   avoidance on/off, l, margin); the ECS wiring (floating origin at the formation centre,
 //!   capture guarantee) is in `scene.rs`.
@@ -236,14 +238,16 @@ pub fn e_state(x: &GameState) -> L2State {
     x.fixed_rows::<4>(4).into_owned()
 }
 
-fn join(p: &L2State, e: &L2State) -> GameState {
+/// The game state of P's and E's states.
+pub(crate) fn join(p: &L2State, e: &L2State) -> GameState {
     let mut x = GameState::zeros();
     x.fixed_rows_mut::<4>(0).copy_from(p);
     x.fixed_rows_mut::<4>(4).copy_from(e);
     x
 }
 
-fn dir(angle_rad: f64) -> Vector2<f64> {
+/// The unit vector at `angle_rad` from +X towards +Y.
+pub(crate) fn dir(angle_rad: f64) -> Vector2<f64> {
     Vector2::new(angle_rad.cos(), angle_rad.sin())
 }
 
@@ -726,177 +730,6 @@ impl AvoidanceController {
             barrier_m: b,
         }
     }
-}
-
-/// Outcome of a closed-loop reconfiguration run.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct SimResult {
-    /// Minimum separation, m (refined within steps by the closed-form line).
-    pub min_separation_m: f64,
-    /// Time of the minimum, s.
-    pub t_min_s: f64,
-    /// First time the avoidance engaged, s.
-    pub first_engaged_s: Option<f64>,
-    /// Total time engaged, s.
-    pub engaged_time_s: f64,
-    /// State at the start of the step that contains the minimum.
-    pub state_at_min: GameState,
-    /// Final state.
-    pub final_state: GameState,
-}
-
-/// Simulates both spacecraft (RK4 step `dt_s`, thrust held over each step) for `duration_s`:
-/// P flies `plan_p`; E flies `plan_e`, through the [`AvoidanceController`] if `avoid`.
-pub fn simulate_reconfiguration(
-    params: &Zhang2018Params,
-    x0: &GameState,
-    plan_p: &PlannedManeuver,
-    plan_e: &PlannedManeuver,
-    avoid: bool,
-    dt_s: f64,
-    duration_s: f64,
-) -> SimResult {
-    let mut ctl = AvoidanceController::new(params.clone());
-    let mut x = *x0;
-    let mut res = SimResult {
-        min_separation_m: f64::INFINITY,
-        t_min_s: 0.0,
-        first_engaged_s: None,
-        engaged_time_s: 0.0,
-        state_at_min: x,
-        final_state: x,
-    };
-    let steps = (duration_s / dt_s).round() as usize;
-    for k in 0..steps {
-        let t = k as f64 * dt_s;
-        let ca = closest_approach(&x);
-        let tl = ca.t_ca_s.min(dt_s);
-        let sep = (rel_pos_m(&x) + rel_vel_m_s(&x) * tl).norm();
-        if sep < res.min_separation_m {
-            res.min_separation_m = sep;
-            res.t_min_s = t + tl;
-            res.state_at_min = x;
-        }
-        let v = plan_p.dir_at(t);
-        let u = if avoid {
-            let c = ctl.evader_command(&x, plan_e.dir_at(t));
-            if c.engaged {
-                res.engaged_time_s += dt_s;
-                res.first_engaged_s.get_or_insert(t);
-            }
-            c.dir_rad
-        } else {
-            plan_e.dir_at(t)
-        };
-        let ap = v.map_or(Vector2::zeros(), |a| dir(a) * params.alpha_p_m_s2());
-        let ae = u.map_or(Vector2::zeros(), |a| dir(a) * params.alpha_e_m_s2());
-        let p = params.drift.rk4_step(&p_state(&x), &ap, dt_s);
-        let e = params.drift.rk4_step(&e_state(&x), &ae, dt_s);
-        x = join(&p, &e);
-    }
-    let sep = rel_pos_m(&x).norm();
-    if sep < res.min_separation_m {
-        res.min_separation_m = sep;
-        res.t_min_s = steps as f64 * dt_s;
-        res.state_at_min = x;
-    }
-    res.final_state = x;
-    res
-}
-
-/// A reconfiguration of P whose unprotected path runs through E (the paper gives no maneuver;
-/// this is the premise of the avoidance test, built deliberately). P swaps past E: it thrusts in
-/// a fixed direction θ for t_m, then in θ + π for t_m (arriving at rest, force-free, at twice
-/// its crossing point). t_m solves ‖ρ0 + w0 t_m‖ = ½ (F_p/M_p) t_m² (force-free intercept of
-/// coasting E), rounded to a multiple of `dt_s`; θ is then corrected by `iterations` secant
-/// steps on the signed miss of the unprotected run (E coasting) in the full drift model.
-/// Returns P's plan (empty if P has no thrust).
-pub fn collision_course_plan(
-    params: &Zhang2018Params,
-    x0: &GameState,
-    dt_s: f64,
-    iterations: usize,
-) -> PlannedManeuver {
-    let rho = rel_pos_m(x0);
-    let w = rel_vel_m_s(x0);
-    let alpha = params.alpha_p_m_s2();
-    if alpha <= 0.0 || !alpha.is_finite() {
-        return PlannedManeuver::default();
-    }
-    let g = |t: f64| (rho + w * t).norm() - 0.5 * alpha * t * t;
-    let (mut lo, mut hi) = (0.0, 1.0);
-    while g(hi) > 0.0 {
-        hi *= 2.0;
-    }
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if g(mid) > 0.0 {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    let t_m = (hi / dt_s).round() * dt_s;
-    let aim = rho + w * t_m;
-    let plan = |theta: f64| PlannedManeuver {
-        segments: vec![
-            ThrustSegment {
-                t_start_s: 0.0,
-                t_end_s: t_m,
-                dir_rad: theta,
-            },
-            ThrustSegment {
-                t_start_s: t_m,
-                t_end_s: 2.0 * t_m,
-                dir_rad: theta + std::f64::consts::PI,
-            },
-        ],
-    };
-    let none = PlannedManeuver::default();
-    // Signed miss: the cross product of ρ at closest approach with the relative velocity there.
-    let signed_miss = |theta: f64| {
-        let r = simulate_reconfiguration(params, x0, &plan(theta), &none, false, dt_s, 1.5 * t_m);
-        let xs = r.state_at_min;
-        let ca = closest_approach(&xs);
-        let wv = rel_vel_m_s(&xs);
-        let m = rel_pos_m(&xs) + wv * ca.t_ca_s.min(dt_s);
-        (m[0] * wv[1] - m[1] * wv[0]) / wv.norm()
-    };
-    let mut th0 = aim[1].atan2(aim[0]);
-    let mut th1 = th0 + 1e-6;
-    let mut f0 = signed_miss(th0);
-    for _ in 0..iterations {
-        let f1 = signed_miss(th1);
-        if f1 == f0 {
-            break;
-        }
-        let th2 = th1 - f1 * (th1 - th0) / (f1 - f0);
-        th0 = th1;
-        f0 = f1;
-        th1 = th2;
-    }
-    plan(th1)
-}
-
-/// Fig. 2 of the paper: eq (12) along the thrust-free motion of both spacecraft from `x0`
-/// (RK4 step `dt_s`, `steps` steps). Returns `(t_s, value)` for `steps + 1` samples.
-pub fn boundary_value_history(
-    params: &Zhang2018Params,
-    x0: &GameState,
-    role: PursuerRole,
-    dt_s: f64,
-    steps: usize,
-) -> Vec<(f64, BoundaryValue)> {
-    let mut x = *x0;
-    let mut out = Vec::with_capacity(steps + 1);
-    out.push((0.0, boundary_value(params, &x, role)));
-    for k in 0..steps {
-        let p = params.drift.rk4_step(&p_state(&x), &Vector2::zeros(), dt_s);
-        let e = params.drift.rk4_step(&e_state(&x), &Vector2::zeros(), dt_s);
-        x = join(&p, &e);
-        out.push(((k + 1) as f64 * dt_s, boundary_value(params, &x, role)));
-    }
-    out
 }
 
 // The scene binding (scene entry, `LawSpec`, disturbances, the simulation adapter) and the
