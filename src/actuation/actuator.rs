@@ -137,6 +137,10 @@ impl ActuatorSpec {
                             .into(),
                     ));
                 }
+                params
+                    .pwpf
+                    .check()
+                    .map_err(|(f, m)| (format!("params.pwpf.{f}"), m))?;
                 Ok(())
             }
         }
@@ -465,6 +469,40 @@ mod tests {
             hill: Some(Matrix3::identity()),
             target_body: None,
         }
+    }
+
+    #[test]
+    fn invariant_planar_thrusters_pwpf_constants_are_checked() {
+        // The modulator's own rules (`PwpfParams::check`): u_on between u_off and k_m.
+        let mut params = ThrusterParams::paper();
+        assert!(
+            ActuatorSpec::PlanarThrusters {
+                params: params.clone(),
+                thrust_noise: 0.0,
+                seed: 0
+            }
+            .validate()
+            .is_ok()
+        );
+        params.pwpf.u_on = params.pwpf.k_m * 2.0;
+        let e = ActuatorSpec::PlanarThrusters {
+            params: params.clone(),
+            thrust_noise: 0.0,
+            seed: 0,
+        }
+        .validate()
+        .expect_err("u_on above k_m");
+        assert_eq!(e.0, "params.pwpf.u_on");
+        params.pwpf = PwpfParams::typical();
+        params.pwpf.t_m_s = f64::NAN;
+        let e = ActuatorSpec::PlanarThrusters {
+            params,
+            thrust_noise: 0.0,
+            seed: 0,
+        }
+        .validate()
+        .expect_err("NaN time constant");
+        assert_eq!(e.0, "params.pwpf.t_m_s");
     }
 
     #[test]

@@ -18,6 +18,8 @@ macro_rules! dock_states {
         impl DockState {
             /// Every state, in the order of its code (the trajectory column `dock.state`).
             pub const ALL: &'static [DockState] = &[$(DockState::$variant),*];
+            /// Every state's name, in the order of [`DockState::ALL`].
+            pub const NAMES: &'static [&'static str] = &[$($name),*];
             /// A number for the trajectory column `dock.state`.
             pub fn code(self) -> f64 {
                 match self {

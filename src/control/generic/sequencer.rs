@@ -73,21 +73,9 @@ pub enum Condition {
     Any(Vec<Condition>),
 }
 
-/// The docking states a `DockingState` condition may name.
-pub const DOCK_STATES: [&str; 12] = [
-    "FREE",
-    "ATTRACTING",
-    "CONTACT",
-    "SOFT_CAPTURE",
-    "LATCHED",
-    "REBOUND",
-    "JAMMED",
-    "MISSED",
-    "RELEASED",
-    "SOFT_CAPTURED",
-    "RETRACTED",
-    "HARD_DOCKED",
-];
+/// The docking states a `DockingState` condition may name: every state of both mechanisms
+/// ([`crate::contact::dock_state::DockState::NAMES`], so the list cannot miss one).
+pub const DOCK_STATES: &[&str] = crate::contact::dock_state::DockState::NAMES;
 
 /// One exit of a phase.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
