@@ -765,6 +765,47 @@ fn default_out(name: &str) -> PathBuf {
     PathBuf::from("out").join(rpod::sim::output::safe_dir_name(name))
 }
 
+/// Prints one reproduced paper's folder and claims (or its error), as one block.
+fn report_paper(
+    bar: &indicatif::ProgressBar,
+    n: &str,
+    dir: &std::path::Path,
+    r: Result<(), String>,
+) {
+    use std::fmt::Write as _;
+    if let Err(e) = r {
+        bar.suspend(|| {
+            out!("== {n} → {}", dir.display());
+            eprintln!("error: {n}: {e}");
+        });
+        return;
+    }
+    let claims =
+        rpod::report::fsio::read_regular_string(&dir.join("claims.json"), 64 << 20, "claims table")
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+    let mut block = format!("== {n} → {}", dir.display());
+    for c in claims
+        .as_ref()
+        .and_then(|v| v.as_array())
+        .into_iter()
+        .flatten()
+    {
+        let _ = write!(
+            block,
+            "\n  [{}] {}: {}",
+            if c["held"].as_bool() == Some(true) {
+                "held"
+            } else {
+                "NOT held"
+            },
+            c["id"].as_str().unwrap_or(""),
+            c["measured"].as_str().unwrap_or("")
+        );
+    }
+    bar.suspend(|| out!("{block}"));
+}
+
 fn reproduce(name: Option<String>, out: &std::path::Path) -> ExitCode {
     let names: Vec<String> = match name {
         // An unknown name (a path among them) is refused before any folder is made.
@@ -788,44 +829,52 @@ fn reproduce(name: Option<String>, out: &std::path::Path) -> ExitCode {
         "{spinner} [{elapsed_precise}] {bar:20} {pos}/{len} papers  {msg}",
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
-    for n in &names {
-        let dir = out.join(n);
-        bar.set_message(format!("reproducing {n}"));
-        let r = rpod::reproduce::run(n, &dir);
-        bar.inc(1);
-        bar.suspend(|| out!("== {n} → {}", dir.display()));
-        if let Err(e) = r {
-            bar.suspend(|| eprintln!("error: {n}: {e}"));
-            failed = true;
-            continue;
+    // The papers are independent (each writes only its own folder, every run deterministic),
+    // so they run side by side on the machine's cores, the longest first; each paper's lines
+    // are printed together when it finishes.
+    let workers = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(names.len())
+        .max(1);
+    let mut order: Vec<&String> = names.iter().collect();
+    order.sort_by_key(|n| {
+        rpod::reproduce::TYPICAL_ORDER
+            .iter()
+            .position(|p| p == n)
+            .unwrap_or(usize::MAX)
+    });
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let running = std::sync::Mutex::new(Vec::<String>::new());
+    let any_failed = std::sync::atomic::AtomicBool::new(false);
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| {
+                loop {
+                    let k = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                    let Some(n) = order.get(k) else { break };
+                    let show = |list: &Vec<String>| {
+                        bar.set_message(format!("reproducing {}", list.join(", ")));
+                    };
+                    if let Ok(mut l) = running.lock() {
+                        l.push(n.to_string());
+                        show(&l);
+                    }
+                    let dir = out.join(n.as_str());
+                    let r = rpod::reproduce::run(n, &dir);
+                    if let Ok(mut l) = running.lock() {
+                        l.retain(|x| x != n.as_str());
+                        show(&l);
+                    }
+                    bar.inc(1);
+                    if r.is_err() {
+                        any_failed.store(true, std::sync::atomic::Ordering::SeqCst);
+                    }
+                    report_paper(&bar, n, &dir, r);
+                }
+            });
         }
-        let claims = rpod::report::fsio::read_regular_string(
-            &dir.join("claims.json"),
-            64 << 20,
-            "claims table",
-        )
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
-        bar.suspend(|| {
-            for c in claims
-                .as_ref()
-                .and_then(|v| v.as_array())
-                .into_iter()
-                .flatten()
-            {
-                out!(
-                    "  [{}] {}: {}",
-                    if c["held"].as_bool() == Some(true) {
-                        "held"
-                    } else {
-                        "NOT held"
-                    },
-                    c["id"].as_str().unwrap_or(""),
-                    c["measured"].as_str().unwrap_or("")
-                );
-            }
-        });
-    }
+    });
+    failed |= any_failed.load(std::sync::atomic::Ordering::SeqCst);
     bar.finish_and_clear();
     // INDEX.md at the top of the output folder, rebuilt from the claims.json files there.
     match rpod::reproduce::write_index(out) {
