@@ -187,7 +187,15 @@ const VALUES: &[&str] = &[
 
 fn scenes() -> Vec<(String, String)> {
     let mut v = Vec::new();
-    for dir in ["scenes", "tests/broken_scenes"] {
+    for dir in [
+        "scenes",
+        "scenes/papers/geng2015",
+        "scenes/papers/guo2016",
+        "scenes/papers/xu2015",
+        "scenes/papers/xu2019",
+        "scenes/papers/zhang2018",
+        "tests/broken_scenes",
+    ] {
         let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
             .unwrap()
             .map(|e| e.unwrap().path())

@@ -175,24 +175,28 @@ fn golden_orbit_approach_latch() {
 
 #[test]
 fn golden_guo2016_corridor() {
-    check("guo2016_corridor", "scenes/guo2016_corridor.ron", &[]);
+    check(
+        "guo2016_corridor",
+        "scenes/papers/guo2016/guo2016_corridor.ron",
+        &[],
+    );
 }
 
 #[test]
 fn golden_xu2015_accm() {
-    check("xu2015_accm", "scenes/xu2015_accm.ron", &[]);
+    check("xu2015_accm", "scenes/papers/xu2015/xu2015_accm.ron", &[]);
 }
 
 #[test]
 fn golden_xu2015_pd() {
-    check("xu2015_pd", "scenes/xu2015_pd.ron", &[]);
+    check("xu2015_pd", "scenes/papers/xu2015/xu2015_pd.ron", &[]);
 }
 
 #[test]
 fn golden_xu2019_simulation_20s() {
     check(
         "xu2019_simulation_20s",
-        "scenes/xu2019_simulation.ron",
+        "scenes/papers/xu2019/xu2019_simulation.ron",
         &["--duration", "20"],
     );
 }
@@ -201,21 +205,25 @@ fn golden_xu2019_simulation_20s() {
 fn golden_xu2019_experiment_20s() {
     check(
         "xu2019_experiment_20s",
-        "scenes/xu2019_experiment.ron",
+        "scenes/papers/xu2019/xu2019_experiment.ron",
         &["--duration", "20"],
     );
 }
 
 #[test]
 fn golden_zhang2018_pair() {
-    check("zhang2018_pair", "scenes/zhang2018_pair.ron", &[]);
+    check(
+        "zhang2018_pair",
+        "scenes/papers/zhang2018/zhang2018_pair.ron",
+        &[],
+    );
 }
 
 #[test]
 fn golden_zhang2018_reconfiguration() {
     check(
         "zhang2018_reconfiguration",
-        "scenes/zhang2018_reconfiguration.ron",
+        "scenes/papers/zhang2018/zhang2018_reconfiguration.ron",
         &[],
     );
 }
@@ -224,7 +232,7 @@ fn golden_zhang2018_reconfiguration() {
 fn golden_geng2015_m1_linear_10s() {
     check(
         "geng2015_m1_linear_10s",
-        "scenes/geng2015_m1_linear.ron",
+        "scenes/papers/geng2015/geng2015_m1_linear.ron",
         &["--duration", "10"],
     );
 }
@@ -233,7 +241,7 @@ fn golden_geng2015_m1_linear_10s() {
 fn golden_geng2015_t1_linear_10s() {
     check(
         "geng2015_t1_linear_10s",
-        "scenes/geng2015_t1_linear.ron",
+        "scenes/papers/geng2015/geng2015_t1_linear.ron",
         &["--duration", "10"],
     );
 }

@@ -269,11 +269,11 @@ fn regress_fifo_scene_and_path_as_paper_name_are_refused_without_waiting() {
 fn invariant_no_nan_or_infinity_in_any_output() {
     for scene in [
         "docking_aligned",
-        "xu2019_simulation",
-        "zhang2018_pair",
-        "geng2015_m1_linear",
+        "papers/xu2019/xu2019_simulation",
+        "papers/zhang2018/zhang2018_pair",
+        "papers/geng2015/geng2015_m1_linear",
     ] {
-        let d = tmp(scene);
+        let d = tmp(&scene.replace('/', "_"));
         let r = rpod()
             .args([
                 "run",

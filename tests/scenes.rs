@@ -13,8 +13,28 @@ use std::process::Command;
 #[test]
 fn every_bundled_scene_passes_check() {
     let mut n = 0;
-    for entry in std::fs::read_dir("scenes").unwrap() {
-        let path = entry.unwrap().path();
+    // The examples at the top of scenes/, the papers' scenes under scenes/papers/PAPER/ (the
+    // trials files in scenes/trials/ are campaigns, checked by their own tests).
+    let mut paths: Vec<std::path::PathBuf> = Vec::new();
+    let mut dirs = vec![std::path::PathBuf::from("scenes")];
+    while let Some(d) = dirs.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let p = entry.unwrap().path();
+            if p.is_dir() && p.file_name().is_some_and(|n| n != "trials") {
+                dirs.push(p);
+            } else {
+                paths.push(p);
+            }
+        }
+    }
+    paths.sort();
+    assert!(
+        paths
+            .iter()
+            .any(|p| p.starts_with("scenes/papers/geng2015")),
+        "the papers' folders are walked"
+    );
+    for path in paths {
         if path.extension().is_some_and(|e| e == "ron") {
             let loaded = load_scene_file(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
             rpod::sim::Simulation::new(&loaded).unwrap_or_else(|e| panic!("{e}"));

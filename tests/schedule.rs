@@ -20,9 +20,9 @@ fn regress_schedule_has_no_ambiguities() {
         "scenes/orbit_approach_latch.ron", // controllers (Sequencer), docking, orbit, J2
         "scenes/docking_aligned.ron",      // docking mechanism, compliant contact
         "scenes/free_drift.ron",           // no controllers
-        "scenes/xu2019_simulation.ron",    // air-bearing table, sensor
-        "scenes/zhang2018_pair.ron",       // Sun–Earth L2 frame
-        "scenes/guo2016_corridor.ron",     // a paper law's guarantees (post-step diagnostics)
+        "scenes/papers/xu2019/xu2019_simulation.ron", // air-bearing table, sensor
+        "scenes/papers/zhang2018/zhang2018_pair.ron", // Sun–Earth L2 frame
+        "scenes/papers/guo2016/guo2016_corridor.ron", // a paper law's guarantees (post-step diagnostics)
     ];
     let mut found = Vec::new();
     for s in scenes {

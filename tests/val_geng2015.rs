@@ -61,7 +61,7 @@ fn val_geng2015_table1_initial_states() {
     for law in ["t1", "t2", "m1", "m2"] {
         for form in ["linear", "cosine", "sine", "periodic"] {
             let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join(format!("scenes/geng2015_{law}_{form}.ron"));
+                .join(format!("scenes/papers/geng2015/geng2015_{law}_{form}.ron"));
             let loaded = load_scene_file(&path, &[]).unwrap();
             let sim = Simulation::new(&loaded).unwrap();
             let (r0, v0) = sim.reference_state().unwrap();

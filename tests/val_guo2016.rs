@@ -33,7 +33,7 @@ fn sim_of(file: &str) -> Simulation {
 
 #[test]
 fn val_guo2016_section5_initial_state() {
-    let mut sim = sim_of("scenes/guo2016_corridor.ron");
+    let mut sim = sim_of("scenes/papers/guo2016/guo2016_corridor.ron");
     sim.step(1);
     let c = sim.law::<Guo2016Instance>(0).unwrap().clone();
     let d = c.diagnostics.unwrap();
@@ -126,7 +126,7 @@ fn val_guo2016_paper_gains_corridor_holds_errors_do_not_converge() {
     // k2 = 0.02, the paper's gains, the full 100 s.
     let p = Guo2016Params::paper();
     let horizon = rep::PAPER_DURATION_S;
-    let mut sim = sim_of("scenes/guo2016_corridor.ron");
+    let mut sim = sim_of("scenes/papers/guo2016/guo2016_corridor.ron");
     let steps = sim.steps_for(horizon);
     let t = trace(&mut sim, steps);
     // Claim "corridor holds": h > 0 at every control step, and the monitor's guarantee
@@ -166,8 +166,8 @@ fn val_guo2016_k2_zero_does_not_leave_corridor() {
     // The paper's comparison run (k2 = 0) against k2 = 0.02, 100 s each. The barrier changes
     // β = k2/h² + k3 by the relative amount δ = k2/h_min²; a relative change δ of the ẋ
     // coefficient moves the state by at most δ·(max|r_e| + max|ṙ_e|·T).
-    let mut a = sim_of("scenes/guo2016_corridor.ron");
-    let mut b = sim_of("scenes/guo2016_no_avoidance.ron");
+    let mut a = sim_of("scenes/papers/guo2016/guo2016_corridor.ron");
+    let mut b = sim_of("scenes/papers/guo2016/guo2016_no_avoidance.ron");
     let steps = a.steps_for(rep::PAPER_DURATION_S);
     let ta = trace(&mut a, steps);
     let tb = trace(&mut b, steps);
@@ -209,8 +209,8 @@ fn val_guo2016_reaching_variant_sampled_at_100hz_leaves_corridor() {
     let mid = (Vector3::new(14.9, 17.1, 37.7) + Vector3::new(2.0, 0.0, 0.0)) * 0.5;
     assert!(h_closed_form(&mid, 25.0, 5.0) < 0.0);
     for file in [
-        "scenes/guo2016_corridor.ron",
-        "scenes/guo2016_no_avoidance.ron",
+        "scenes/papers/guo2016/guo2016_corridor.ron",
+        "scenes/papers/guo2016/guo2016_no_avoidance.ron",
     ] {
         let l = rep::reaching_variant(file).unwrap();
         assert_eq!(l.scene.dt_s, 0.01, "the law runs every step");
@@ -266,7 +266,7 @@ fn val_guo2016_continuous_time_barrier() {
     use rpod::control::guo2016::q_d0_to_target;
     use rpod::math::mrp::{mrp_g_inv, quat_from_mrp};
     use rpod::reproduce::guo2016_ct::{CtSetup, run_continuous, run_sampled};
-    let mut fixed = rep::reaching_variant("scenes/guo2016_corridor.ron").unwrap();
+    let mut fixed = rep::reaching_variant("scenes/papers/guo2016/guo2016_corridor.ron").unwrap();
     *rep::spec_mut(&mut fixed).unwrap().sigma_d_amplitude = [0.0; 3];
     let sf = CtSetup::from_scene(&fixed).unwrap();
     let z = run_sampled(&sf, "100 Hz", 0.01, 0.6, 0.01);
@@ -284,7 +284,7 @@ fn val_guo2016_continuous_time_barrier() {
     assert!(c.min_h_m2 < 1e-2, "{}", c.min_h_m2);
     assert!(c.peak_force_n.is_finite() && c.peak_force_n < 1e8);
 
-    let paper = rep::reaching_variant("scenes/guo2016_corridor.ron").unwrap();
+    let paper = rep::reaching_variant("scenes/papers/guo2016/guo2016_corridor.ron").unwrap();
     let sp = CtSetup::from_scene(&paper).unwrap();
     let r = run_continuous(&sp, "continuous", 0.6, 0.001);
     let last = *r.samples.last().unwrap();
@@ -455,7 +455,7 @@ fn val_guo2016_command_reaches_the_chaser_in_world_axes() {
     // rate by q₀·J⁻¹(τ + d_τ)·dt up to three terms second order in ω̇·dt, each bounded by
     // ‖J‖‖J⁻¹‖|ω̇dt|²·dt: the gyroscopic term, the torque held in world axes while the body
     // turns, and q₁ vs q₀ in the conversion to world axes.
-    let mut sim = sim_of("scenes/guo2016_corridor.ron");
+    let mut sim = sim_of("scenes/papers/guo2016/guo2016_corridor.ron");
     let s0 = sim.body("chaser").unwrap();
     sim.step(1);
     let s1 = sim.body("chaser").unwrap();

@@ -1,5 +1,5 @@
 //! Xu & Hu (2015) in the ECS: ACCM vs PD against a maneuvering target on an e = 0.7 orbit
-//! (scenes `scenes/xu2015_*.ron`, run through `rpod::reproduce::xu2015::run_case`).
+//! (scenes `scenes/papers/xu2015/xu2015_*.ron`, run through `rpod::reproduce::xu2015::run_case`).
 //!
 //! Independent references:
 //! - an f64 integration written here of the paper's relative model in the target orbital

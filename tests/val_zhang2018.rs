@@ -49,8 +49,8 @@ use rpod::reproduce::zhang2018::{Trace, refined_min_separation, run_scene};
 use rpod::reproduce::zhang2018_sim::{boundary_value_history, simulate_reconfiguration};
 use std::path::Path;
 
-const PAIR: &str = "scenes/zhang2018_pair.ron";
-const RECONF: &str = "scenes/zhang2018_reconfiguration.ron";
+const PAIR: &str = "scenes/papers/zhang2018/zhang2018_pair.ron";
+const RECONF: &str = "scenes/papers/zhang2018/zhang2018_reconfiguration.ron";
 
 fn status<'a>(tr: &'a Trace, name: &str) -> &'a rpod::guarantee::GuaranteeStatus {
     tr.guarantees

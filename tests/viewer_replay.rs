@@ -442,7 +442,10 @@ fn shift(on: &Png, off: &Png, c: [f64; 2], r: f64) -> ([f64; 3], f64) {
 #[test]
 fn val_viewer_draws_constraint_surfaces() {
     let dir = display_and_dir("rpod_viewer_surfaces");
-    let cmd = ["view".as_ref(), "scenes/xu2019_simulation.ron".as_ref()];
+    let cmd = [
+        "view".as_ref(),
+        "scenes/papers/xu2019/xu2019_simulation.ron".as_ref(),
+    ];
     let (on, side) = screenshot_with(&cmd, &dir.join("on.png"), &["--layers", "surfaces"]);
     let (off, _) = screenshot(&cmd, &dir.join("off.png"));
     assert_eq!(side["layers"]["surfaces"], true);

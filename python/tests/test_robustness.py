@@ -223,9 +223,12 @@ def test_failing_law_stops_the_run_and_no_summary_is_written(law, err, tmp_path)
 # -- 6. bundled scenes ---------------------------------------------------------------------------
 def test_bundled_scenes_are_the_repository_scenes():
     names = rpod.scenes.names()
-    assert names == sorted(p.stem for p in SCENES.glob("*.ron"))
+    # Every scene of the repository (examples at the top, papers under papers/PAPER/), not the
+    # trials files.
+    files = {p.stem: p for p in SCENES.rglob("*.ron") if "trials" not in p.relative_to(SCENES).parts}
+    assert names == sorted(files)
     for n in names:
-        assert pathlib.Path(rpod.scenes.path(n)).read_bytes() == (SCENES / f"{n}.ron").read_bytes()
+        assert pathlib.Path(rpod.scenes.path(n)).read_bytes() == files[n].read_bytes()
     with pytest.raises(KeyError, match="orbit_approach_latch"):
         rpod.scenes.path("../scenes/orbit_approach_latch")
     assert rpod.scenes.path("free_drift.ron") == rpod.scenes.path("free_drift")

@@ -1,7 +1,7 @@
 //! `rpod reproduce geng2015`: Geng, Chen, Liang (2015), twisting (T1, T2) and modified twisting
 //! (M1, M2) on the coupled docking-port dynamics, run in the full testbed (Bevy pipeline, f64
 //! truth, rapier contacts, full-geometry monitor) from the bundled scenes
-//! `scenes/geng2015_<law>_<form>[_<inertia>].ron`.
+//! `scenes/papers/geng2015/geng2015_<law>_<form>[_<inertia>].ron`.
 //!
 //! Measured per run, sampled at the 50 ms controller period: ρ, ρ̇ in the target's Hill frame,
 //! the relative attitude angles 2·q_rv (deg; φ, θ, ψ about the chaser axes, small-angle),
@@ -38,9 +38,9 @@ pub fn paper_model_overrides() -> Vec<String> {
         .collect()
 }
 
-/// Directory of the bundled scenes.
+/// Directory of the bundled scenes of the paper.
 pub fn scenes_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/papers/geng2015")
 }
 
 /// Scene file of a case: `geng2015_<law>_<form>[_<tag>].ron`.
@@ -524,7 +524,7 @@ pub fn run(out: &Path) -> Result<(), String> {
     let _ = writeln!(
         md,
         "Full testbed runs (Bevy pipeline, f64 rigid-body truth, rapier contacts, full-geometry \
-         monitor) of the bundled scenes `scenes/geng2015_*.ron`: Table 1 orbits (the target's \
+         monitor) of the bundled scenes `scenes/papers/geng2015/geng2015_*.ron`: Table 1 orbits (the target's \
          orbit is the reference orbit; the chaser's own elements put it 36.6 m away), target \
          tumbling at [−3, 2, 3] °/s, point-mass gravity, environment gravity-gradient torque, the \
          paper's a_d and T_d on both bodies, dt = 0.01 s, controller period 50 ms (command held), \

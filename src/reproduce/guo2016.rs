@@ -1,7 +1,7 @@
 //! `rpod reproduce guo2016`: Guo, Song, Li (2016), Section 5, in the full simulation
 //! (f64 truth, rapier contacts, full-geometry monitor), and a campaign beyond the paper.
 //!
-//! Cases (scenes `scenes/guo2016_corridor.ron` and `scenes/guo2016_no_avoidance.ron`, bundled
+//! Cases (scenes `scenes/papers/guo2016/guo2016_corridor.ron` and `scenes/papers/guo2016/guo2016_no_avoidance.ron`, bundled
 //! into the binary so the reproduction runs from any directory):
 //! - **paper, k2 = 0.02** and **paper, k2 = 0**: the paper's gains, 100 s;
 //! - **extra, not in the paper**: the same with a linear reaching term `k_r = 1/s`
@@ -30,9 +30,10 @@ use nalgebra::{Isometry3, Vector3};
 use std::path::Path;
 
 /// The k2 = 0.02 scene text.
-pub const CORRIDOR_SCENE: &str = include_str!("../../scenes/guo2016_corridor.ron");
+pub const CORRIDOR_SCENE: &str = include_str!("../../scenes/papers/guo2016/guo2016_corridor.ron");
 /// The k2 = 0 scene text.
-pub const NO_AVOIDANCE_SCENE: &str = include_str!("../../scenes/guo2016_no_avoidance.ron");
+pub const NO_AVOIDANCE_SCENE: &str =
+    include_str!("../../scenes/papers/guo2016/guo2016_no_avoidance.ron");
 /// Horizon of the paper-gain cases, s (the paper's is in its lost figures).
 pub const PAPER_DURATION_S: f64 = 100.0;
 /// Horizon of the reaching-variant cases, s.
@@ -53,8 +54,8 @@ pub const CAMPAIGN_SEED: u64 = 2016;
 /// Loads one of the bundled scenes by its file name.
 pub fn load_bundled(file: &str) -> Result<LoadedScene, String> {
     let text = match file {
-        "scenes/guo2016_corridor.ron" => CORRIDOR_SCENE,
-        "scenes/guo2016_no_avoidance.ron" => NO_AVOIDANCE_SCENE,
+        "scenes/papers/guo2016/guo2016_corridor.ron" => CORRIDOR_SCENE,
+        "scenes/papers/guo2016/guo2016_no_avoidance.ron" => NO_AVOIDANCE_SCENE,
         other => return Err(format!("no bundled scene {other}")),
     };
     load_scene_str(text, file, &[]).map_err(|e| e.to_string())
@@ -414,7 +415,7 @@ pub const CATEGORIES: [&str; 5] = [
 /// Runs the campaign (reaching variant, k2 = 0.02; the bundled target is at rest with the
 /// identity attitude, so target frame = world axes).
 pub fn campaign(n: usize, seed: u64, duration_s: f64) -> Result<Vec<CampaignRun>, String> {
-    let base = reaching_variant("scenes/guo2016_corridor.ron")?;
+    let base = reaching_variant("scenes/papers/guo2016/guo2016_corridor.ron")?;
     let corridor = spec_of(&base)
         .params(1.0, nalgebra::Matrix3::identity())
         .corridor();
@@ -531,25 +532,25 @@ pub fn barrier_layer_m(c: &Cissoid, k2_m4: f64, r1: &Vector3<f64>) -> f64 {
 /// Runs every case and the campaign.
 pub fn compute() -> Result<Results, String> {
     let corridor = run_case(
-        &load_bundled("scenes/guo2016_corridor.ron")?,
+        &load_bundled("scenes/papers/guo2016/guo2016_corridor.ron")?,
         "paper gains, k2 = 0.02",
         PAPER_DURATION_S,
         10,
     )?;
     let no_avoidance = run_case(
-        &load_bundled("scenes/guo2016_no_avoidance.ron")?,
+        &load_bundled("scenes/papers/guo2016/guo2016_no_avoidance.ron")?,
         "paper gains, k2 = 0",
         PAPER_DURATION_S,
         10,
     )?;
     let reaching = run_case(
-        &reaching_variant("scenes/guo2016_corridor.ron")?,
+        &reaching_variant("scenes/papers/guo2016/guo2016_corridor.ron")?,
         "k_r = 1/s (not in the paper), k2 = 0.02",
         REACHING_DURATION_S,
         1,
     )?;
     let reaching_no_avoidance = run_case(
-        &reaching_variant("scenes/guo2016_no_avoidance.ron")?,
+        &reaching_variant("scenes/papers/guo2016/guo2016_no_avoidance.ron")?,
         "k_r = 1/s (not in the paper), k2 = 0",
         REACHING_DURATION_S,
         1,
@@ -561,13 +562,17 @@ pub fn compute() -> Result<Results, String> {
         .map(|(a, b)| (a.r1_target_m - b.r1_target_m).norm())
         .fold(0.0, f64::max);
     let campaign = campaign(CAMPAIGN_RUNS, CAMPAIGN_SEED, CAMPAIGN_DURATION_S)?;
-    let corridor_shape = spec_of(&load_bundled("scenes/guo2016_corridor.ron")?)
+    let corridor_shape = spec_of(&load_bundled("scenes/papers/guo2016/guo2016_corridor.ron")?)
         .params(1.0, nalgebra::Matrix3::identity())
         .corridor();
     let setup = |l: &LoadedScene| CtSetup::from_scene(l);
-    let paper_setup = setup(&load_bundled("scenes/guo2016_corridor.ron")?)?;
-    let reach = setup(&reaching_variant("scenes/guo2016_corridor.ron")?)?;
-    let reach0 = setup(&reaching_variant("scenes/guo2016_no_avoidance.ron")?)?;
+    let paper_setup = setup(&load_bundled("scenes/papers/guo2016/guo2016_corridor.ron")?)?;
+    let reach = setup(&reaching_variant(
+        "scenes/papers/guo2016/guo2016_corridor.ron",
+    )?)?;
+    let reach0 = setup(&reaching_variant(
+        "scenes/papers/guo2016/guo2016_no_avoidance.ron",
+    )?)?;
     let clock = std::time::Instant::now();
     let tick = |what: &str| eprintln!("guo2016: {what} ({:.1} s)", clock.elapsed().as_secs_f64());
     let ct_paper = run_continuous(
@@ -611,13 +616,13 @@ pub fn compute() -> Result<Results, String> {
     };
     let ct_narrow = (
         run_continuous(
-            &narrow("scenes/guo2016_corridor.ron")?,
+            &narrow("scenes/papers/guo2016/guo2016_corridor.ron")?,
             "continuous time, tan θ = 4.3, k2 = 0.02",
             PAPER_DURATION_S,
             0.05,
         ),
         run_continuous(
-            &narrow("scenes/guo2016_no_avoidance.ron")?,
+            &narrow("scenes/papers/guo2016/guo2016_no_avoidance.ron")?,
             "continuous time, tan θ = 4.3, k2 = 0",
             PAPER_DURATION_S,
             0.05,
@@ -625,7 +630,7 @@ pub fn compute() -> Result<Results, String> {
     );
     tick("narrow corridor");
     let fixed = {
-        let mut l = reaching_variant("scenes/guo2016_corridor.ron")?;
+        let mut l = reaching_variant("scenes/papers/guo2016/guo2016_corridor.ron")?;
         *spec_mut(&mut l)
             .ok_or("no Guo2016 controller")?
             .sigma_d_amplitude = [0.0; 3];
@@ -1025,7 +1030,7 @@ fn build_report(
          k4 = 0.005, corridor a = 25 m; dt = 0.01 s. The monitor checks every step the \
          corridor guarantee (signed distance of the chaser centre of mass to the cissoid wall) \
          and the exact distance between every chaser part and every target part. \
-         Scenes: `scenes/guo2016_corridor.ron`, `scenes/guo2016_no_avoidance.ron`.",
+         Scenes: `scenes/papers/guo2016/guo2016_corridor.ron`, `scenes/papers/guo2016/guo2016_no_avoidance.ron`.",
     );
     rep.heading("Claims");
     rep.claims(claims);
@@ -1571,8 +1576,8 @@ fn build_report(
     rep.heading("How to rerun");
     rep.code(format!(
         "rpod reproduce guo2016 --out DIR      # this report ({wall_s:.1} s of wall time here)\n\
-         rpod run scenes/guo2016_corridor.ron   # trajectory.csv with guo2016.* columns\n\
-         rpod run scenes/guo2016_corridor.ron --set controllers.0.0.reaching_gain_per_s=1.0  # the extra case (σ(0) as in the scene)\n\
+         rpod run scenes/papers/guo2016/guo2016_corridor.ron   # trajectory.csv with guo2016.* columns\n\
+         rpod run scenes/papers/guo2016/guo2016_corridor.ron --set controllers.0.0.reaching_gain_per_s=1.0  # the extra case (σ(0) as in the scene)\n\
          cargo test --release --test val_guo2016"
     ));
     rep

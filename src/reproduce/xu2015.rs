@@ -1,5 +1,5 @@
 //! `rpod reproduce xu2015`: Xu & Hu (2015) §3 in the ECS — ACCM against PD, chaser 90/100/110 kg,
-//! the target maneuvering on its e = 0.7 orbit (scenes `scenes/xu2015_*.ron`, embedded here).
+//! the target maneuvering on its e = 0.7 orbit (scenes `scenes/papers/xu2015/xu2015_*.ron`, embedded here).
 //!
 //! Cases: the six scenes as written (real geometry, 3 m stand-off of the aim point behind the
 //! target); and, for 110 kg, the same control problem with the aim point also displaced 10 m
@@ -26,24 +26,27 @@ use std::path::Path;
 pub const SCENES: [(&str, &str); 6] = [
     (
         "xu2015_accm.ron",
-        include_str!("../../scenes/xu2015_accm.ron"),
+        include_str!("../../scenes/papers/xu2015/xu2015_accm.ron"),
     ),
-    ("xu2015_pd.ron", include_str!("../../scenes/xu2015_pd.ron")),
+    (
+        "xu2015_pd.ron",
+        include_str!("../../scenes/papers/xu2015/xu2015_pd.ron"),
+    ),
     (
         "xu2015_accm_m90.ron",
-        include_str!("../../scenes/xu2015_accm_m90.ron"),
+        include_str!("../../scenes/papers/xu2015/xu2015_accm_m90.ron"),
     ),
     (
         "xu2015_pd_m90.ron",
-        include_str!("../../scenes/xu2015_pd_m90.ron"),
+        include_str!("../../scenes/papers/xu2015/xu2015_pd_m90.ron"),
     ),
     (
         "xu2015_accm_m110.ron",
-        include_str!("../../scenes/xu2015_accm_m110.ron"),
+        include_str!("../../scenes/papers/xu2015/xu2015_accm_m110.ron"),
     ),
     (
         "xu2015_pd_m110.ron",
-        include_str!("../../scenes/xu2015_pd_m110.ron"),
+        include_str!("../../scenes/papers/xu2015/xu2015_pd_m110.ron"),
     ),
 ];
 
@@ -169,7 +172,7 @@ pub fn run_case(
 ) -> Result<CaseRun, String> {
     let text = scene_text(file).ok_or_else(|| format!("no bundled scene {file}"))?;
     let ov: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    let loaded = load_scene_str(text, &format!("scenes/{file}"), &ov)
+    let loaded = load_scene_str(text, &format!("scenes/papers/xu2015/{file}"), &ov)
         .map_err(|e: SceneError| e.to_string())?;
     run_loaded(&loaded, record_dir)
 }
@@ -1208,7 +1211,7 @@ in the claims table), after which the run is a contact problem the paper does no
     s.push_str(&noise_text());
     s.push_str(
         "\n## Reproduce\n\n```sh\nrpod reproduce xu2015 --out out/reproduce\n\
-rpod run scenes/xu2015_accm.ron   # or xu2015_pd, xu2015_{accm,pd}_m90, xu2015_{accm,pd}_m110\n\
+rpod run scenes/papers/xu2015/xu2015_accm.ron   # or xu2015_pd, xu2015_{accm,pd}_m90, xu2015_{accm,pd}_m110\n\
 cargo test --release --test val_xu2015\n```\n\
 Each case's `trajectory.csv`, `events.jsonl` and `summary.json` are in `cases/<case>/`.\n",
     );

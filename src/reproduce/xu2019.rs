@@ -2,9 +2,9 @@
 //!
 //! Two cases, each a bundled scene run through the whole pipeline (table, vision, actuators,
 //! monitor, docking mechanism):
-//! - **simulation** (`scenes/xu2019_simulation.ron`): ideal continuous force and torque, ideal
+//! - **simulation** (`scenes/papers/xu2019/xu2019_simulation.ron`): ideal continuous force and torque, ideal
 //!   sensor, I_z = 0.05 kg·m²;
-//! - **experiment** (`scenes/xu2019_experiment.ron`): eight 0.05 N on/off nozzles through PWPF,
+//! - **experiment** (`scenes/papers/xu2019/xu2019_experiment.ron`): eight 0.05 N on/off nozzles through PWPF,
 //!   25 Hz vision with noise and one frame of latency, differenced velocity, true
 //!   I_z = 0.055 kg·m² (the paper says its measured 0.05 is slightly low).
 //!
@@ -30,9 +30,9 @@ use nalgebra::{Vector2, Vector3};
 use std::path::Path;
 
 /// The simulation case scene.
-pub const SIMULATION_SCENE: &str = include_str!("../../scenes/xu2019_simulation.ron");
+pub const SIMULATION_SCENE: &str = include_str!("../../scenes/papers/xu2019/xu2019_simulation.ron");
 /// The experiment case scene.
-pub const EXPERIMENT_SCENE: &str = include_str!("../../scenes/xu2019_experiment.ron");
+pub const EXPERIMENT_SCENE: &str = include_str!("../../scenes/papers/xu2019/xu2019_experiment.ron");
 
 /// Goal tolerance of the claims: position, m.
 pub const GOAL_POS_TOL_M: f64 = 0.01;
@@ -399,14 +399,14 @@ pub fn compute(out: Option<&Path>) -> Result<Results, String> {
     let simulation = run_case(
         "simulation",
         SIMULATION_SCENE,
-        "scenes/xu2019_simulation.ron",
+        "scenes/papers/xu2019/xu2019_simulation.ron",
         None,
         out.map(|o| o.join("simulation")).as_deref(),
     )?;
     let experiment = run_case(
         "experiment",
         EXPERIMENT_SCENE,
-        "scenes/xu2019_experiment.ron",
+        "scenes/papers/xu2019/xu2019_experiment.ron",
         None,
         out.map(|o| o.join("experiment")).as_deref(),
     )?;
@@ -422,7 +422,7 @@ pub fn compute(out: Option<&Path>) -> Result<Results, String> {
             let mut r = run_case_with(
                 "simulation-restart",
                 SIMULATION_SCENE,
-                "scenes/xu2019_simulation.ron",
+                "scenes/papers/xu2019/xu2019_simulation.ron",
                 &restart_overrides(&simulation, i),
                 Some(loaded.scene.duration_s - t0),
                 None,
@@ -441,8 +441,8 @@ pub fn compute(out: Option<&Path>) -> Result<Results, String> {
         run_loaded(name, &ghost_obstacle(&loaded), None, None)
     };
     let (sf, ef) = (
-        "scenes/xu2019_simulation.ron",
-        "scenes/xu2019_experiment.ron",
+        "scenes/papers/xu2019/xu2019_simulation.ron",
+        "scenes/papers/xu2019/xu2019_experiment.ron",
     );
     let active = [LAW_KEPT_ACTIVE.to_string()];
     Ok(Results {

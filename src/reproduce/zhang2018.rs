@@ -3,9 +3,9 @@
 //!
 //! Cases: Fig. 2 (eq (12) along the paper's thrust-free scenario, Bevy-free RK4 and the ECS
 //! world), Fig. 3 (P's optimal thrust over backward time on the barrier path from the BUP, L2
-//! model), and the closed loop in the ECS world: `scenes/zhang2018_pair.ron` (the paper's
+//! model), and the closed loop in the ECS world: `scenes/papers/zhang2018/zhang2018_pair.ron` (the paper's
 //! initial states; P flies a reconfiguration through E) and
-//! `scenes/zhang2018_reconfiguration.ron` (three spacecraft), each with and without the
+//! `scenes/papers/zhang2018/zhang2018_reconfiguration.ron` (three spacecraft), each with and without the
 //! avoidance law.
 //!
 //! [`run_scene`] steps a scene one step at a time and keeps every step's states, so the
@@ -163,15 +163,15 @@ pub fn refined_min_separation(tr: &Trace, a: usize, b: usize) -> (f64, f64) {
     best
 }
 
-/// Path of a bundled scene: `scenes/NAME` under the working directory if it exists, else
-/// under the crate's source directory.
+/// Path of a bundled scene of the paper: `scenes/papers/zhang2018/NAME` under the working
+/// directory if it exists, else under the crate's source directory.
 pub fn scene_path(name: &str) -> PathBuf {
-    let local = Path::new("scenes").join(name);
+    let local = Path::new("scenes/papers/zhang2018").join(name);
     if local.exists() {
         local
     } else {
         Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("scenes")
+            .join("scenes/papers/zhang2018")
             .join(name)
     }
 }
@@ -954,7 +954,7 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
     );
     rep.heading("Avoidance on the paper's initial states (ECS world)");
     rep.paragraph(
-        "`scenes/zhang2018_pair.ron`: P flies a bang-bang reconfiguration aimed at E (92.76° \
+        "`scenes/papers/zhang2018/zhang2018_pair.ron`: P flies a bang-bang reconfiguration aimed at E (92.76° \
          in `rot` for 75 380 s, then reversed); E flies no plan and the barrier law: when the \
          predicted miss distance (force-free relative line) falls below l + 1 km with the \
          closest approach ahead, E thrusts along u* of eq (8) with γ the normal of ∂D at the \
@@ -1015,7 +1015,7 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
     );
     rep.heading("Three-spacecraft reconfiguration (ECS world)");
     rep.paragraph(
-        "`scenes/zhang2018_reconfiguration.ron`: chief at the formation centre, deputy1 20 km \
+        "`scenes/papers/zhang2018/zhang2018_reconfiguration.ron`: chief at the formation centre, deputy1 20 km \
          along −Y, deputy2 25 km along +X, all at rest in `rot`. deputy1 transfers to \
          (4 km, +20 km) (bang-bang, 1 N, 2 × 8 970 s), a straight path 2 km from the chief; the \
          chief and deputy2 run the avoidance law against every other body.",

@@ -3,7 +3,7 @@
 //! avoidance ([`simulate_reconfiguration`]), the collision-course plan that is the premise of
 //! the avoidance test ([`collision_course_plan`]), and Fig. 2's history of eq (12) along the
 //! thrust-free motion ([`boundary_value_history`]). The law itself is
-//! [`crate::control::zhang2018`]; the ECS run of the same scene is `scenes/zhang2018_pair.ron`.
+//! [`crate::control::zhang2018`]; the ECS run of the same scene is `scenes/papers/zhang2018/zhang2018_pair.ron`.
 
 use crate::control::zhang2018::{
     AvoidanceController, BoundaryValue, GameState, PlannedManeuver, PursuerRole, ThrustSegment,

@@ -302,7 +302,7 @@ mod tests {
 
     #[test]
     fn invariant_viewer_xu2019_prisms_on_the_laws_boundaries() {
-        let scene = load("xu2019_simulation.ron");
+        let scene = load("papers/xu2019/xu2019_simulation.ron");
         let surfaces = scene_surfaces(&scene);
         let Some(spec) = scene.controllers[0].spec::<crate::control::xu2019::SceneSpec>() else {
             panic!("xu2019 scene has an Xu2019 controller");
@@ -377,7 +377,7 @@ mod tests {
     #[test]
     fn invariant_viewer_capture_and_keep_out_spheres() {
         // Zhang 2018: a sphere of radius l about every body.
-        let scene = load("zhang2018_pair.ron");
+        let scene = load("papers/zhang2018/zhang2018_pair.ron");
         let Some(spec) = scene.controllers[0].spec::<crate::control::zhang2018::SceneSpec>() else {
             panic!("zhang2018 scene has a Zhang2018 controller");
         };
@@ -420,7 +420,7 @@ mod tests {
     fn invariant_viewer_guo2016_corridor_on_the_cissoid() {
         // The corridor a Guo 2016 entry draws: every vertex at the cissoid's radius for its x,
         // to 1e-9 m, in the target's body frame, out to r = a.
-        let scene = load("guo2016_corridor.ron");
+        let scene = load("papers/guo2016/guo2016_corridor.ron");
         let Some(spec) = scene.controllers[0].spec::<crate::control::guo2016::SceneSpec>() else {
             panic!("guo2016 scene has a Guo2016 controller");
         };

@@ -77,7 +77,7 @@
 //! [`SceneSpec`] (in `scene.rs`) is how a scene flies either law; the ECS wiring
 //! (the controller in `scene.rs`) measures ξ in the reference orbit's target orbital frame,
 //! applies the target's maneuver and registers the thrust-authority margins. The bundled
-//! scenes `scenes/xu2015_*.ron` reproduce the numbers above to a few 1e−6 (relative) at 90
+//! scenes `scenes/papers/xu2015/xu2015_*.ron` reproduce the numbers above to a few 1e−6 (relative) at 90
 //! and 100 kg (`tests/val_xu2015.rs`, `rpod reproduce xu2015`).
 
 use nalgebra::{Matrix3, Vector3};
