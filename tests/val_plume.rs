@@ -23,6 +23,9 @@
 //! plate's edge crosses whole or not at all: the tolerance is the flux of the cells the edge
 //! crosses, counted in the test from the cells' arcs (exact classification of the others).
 //!
+//! Culling (`sim::plume::plume_loads`): the same loads, bit for bit, as the plain cast of every
+//! ray against every part (`plume_loads_all_rays`, the reference), on random layouts.
+//!
 //! Impingement load in a run (`sim::plume::PlumeLoadState`): a plate covering the whole
 //! section of a jet firing for T takes the momentum F(1 + cos α)/2·T (the closed form above,
 //! exact for the grid), the chaser none (the reaction is not applied: its opposed thrusts
@@ -429,6 +432,102 @@ fn val_plume_load_on_a_plate_matches_the_closed_form() {
         rp::SharedShape::cuboid(5.0, 5.0, 0.0005),
     )];
     assert!(plume_loads(&load_jet(), f, &id, &beyond, &rays, &com).is_empty());
+}
+
+/// The culled load (`plume_loads`: bounding-sphere culling per part and per ray) equals the
+/// plain cast of every ray against every part (`plume_loads_all_rays`, the reference) bit for
+/// bit, on 300 random layouts of 12 parts of every shape kind the runs use (boxes, thin
+/// panels, balls, cylinders, convex hulls, an open triangle mesh), some overlapping (ties),
+/// some around the nozzle (a ray starting inside a part), some beyond the plume's length,
+/// under random jet frames.
+#[test]
+fn val_plume_load_culled_equals_all_rays_on_random_layouts() {
+    use bevy_rapier3d::rapier::math::Vector as P;
+    use bevy_rapier3d::rapier::prelude as rp;
+    use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+    use rpod::actuation::plume_load::{DEFAULT_RINGS, DEFAULT_SECTORS, cone_rays};
+    use rpod::sim::plume::{plume_loads, plume_loads_all_rays};
+    // xorshift64*: a fixed sequence in [0, 1).
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut u = move || {
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let rays = cone_rays(ALPHA_DEG.to_radians(), DEFAULT_RINGS, DEFAULT_SECTORS);
+    let hull = rp::SharedShape::convex_hull(&[
+        P::new(-0.3, -0.2, -0.1),
+        P::new(0.4, -0.1, 0.0),
+        P::new(0.0, 0.5, 0.1),
+        P::new(0.1, 0.0, 0.6),
+        P::new(-0.2, 0.3, -0.4),
+    ])
+    .expect("hull");
+    let mesh = rp::SharedShape::trimesh(
+        vec![
+            P::new(-0.5, -0.5, 0.0),
+            P::new(0.5, -0.5, 0.1),
+            P::new(0.5, 0.5, -0.1),
+            P::new(-0.5, 0.5, 0.0),
+            P::new(0.0, 0.0, 0.4),
+        ],
+        vec![[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]],
+    )
+    .expect("mesh");
+    let shapes = [
+        rp::SharedShape::cuboid(0.8, 0.75, 0.75),
+        rp::SharedShape::cuboid(0.6, 0.5, 0.01),
+        rp::SharedShape::ball(0.3),
+        rp::SharedShape::cylinder(0.4, 0.15),
+        hull,
+        mesh,
+    ];
+    let (mut struck, mut multi) = (0usize, 0usize);
+    for trial in 0..300 {
+        let rot = |u: &mut dyn FnMut() -> f64| {
+            UnitQuaternion::from_scaled_axis(Vector3::new(u() - 0.5, u() - 0.5, u() - 0.5) * 6.0)
+        };
+        let jet_frame = Isometry3::from_parts(
+            Translation3::new(u() * 4.0 - 2.0, u() * 4.0 - 2.0, u() * 4.0 - 2.0),
+            rot(&mut u),
+        );
+        let mut parts = Vec::new();
+        for k in 0..12 {
+            // Along the plume (z from −1 m to 1.1 L), within its radius and a little beyond,
+            // in the nozzle's frame; every fourth layout puts part 0 around the nozzle and
+            // part 1 on top of part 2 (equal strike distances).
+            let z = -1.0 + u() * (1.1 * LEN_M + 1.0);
+            let w = 0.35 * z.abs() + 0.5;
+            let mut local = Isometry3::from_parts(
+                Translation3::new((u() - 0.5) * 2.0 * w, (u() - 0.5) * 2.0 * w, z),
+                rot(&mut u),
+            );
+            if trial % 4 == 0 && k == 0 {
+                local.translation = Translation3::new(0.1, -0.05, 0.2);
+            }
+            parts.push((
+                jet_frame * local,
+                shapes[(k + trial) % shapes.len()].clone(),
+            ));
+        }
+        if trial % 4 == 0 {
+            parts[1] = parts[2].clone();
+        }
+        let about = Vector3::new(u(), u(), u()) * 3.0;
+        let f = 0.5 + 3.5 * u();
+        let want = plume_loads_all_rays(&load_jet(), f, &jet_frame, &parts, &rays, &about);
+        let got = plume_loads(&load_jet(), f, &jet_frame, &parts, &rays, &about);
+        assert_eq!(got, want, "layout {trial}");
+        struck += usize::from(!want.is_empty());
+        multi += usize::from(want.len() >= 2);
+    }
+    // The layouts are not trivial: most are struck, many on several parts (this sequence:
+    // all 300 struck, 147 on several parts).
+    assert!(
+        struck > 250 && multi > 100,
+        "struck {struck}, on several parts {multi}"
+    );
 }
 
 /// The load scene: the chaser `sc` at rest at the origin with the two opposed jets of

@@ -165,8 +165,18 @@ pub fn plume_hits(
 /// (pose, shape; any frame, the jet's `jet_frame` in the same one) at thrust `thrust_n`, with
 /// moments about `about`: parry ray casts (solid shapes, so a ray starting inside a part
 /// strikes it at 0) from the nozzle along each ray of `rays`, the nearest part within the
-/// plume's length taking the ray's flux. `PartLoad::part` indexes `parts`. Nothing without a
-/// plume or thrust.
+/// plume's length taking the ray's flux (the lowest index on a tie). `PartLoad::part` indexes
+/// `parts`. Nothing without a plume or thrust.
+///
+/// **Culling** (the same loads as [`plume_loads_all_rays`], which casts every ray against
+/// every part: `tests/val_plume.rs` compares the two on random poses). Each part is enclosed in
+/// its shape's bounding sphere (parry's, inflated by [`CULL_REL`] of its radius plus
+/// [`CULL_ABS_M`], far above the f32 rounding of the pose, ray and shape). A part whose sphere
+/// lies wholly outside the cone or beyond the plume's length is never cast against; for the
+/// others, a ray is cast against a part only when it meets the part's sphere within the
+/// plume's length and no nearer than the nearest strike found so far. A ray that misses a
+/// part's bounding sphere misses the part, and a strike is never nearer than the sphere's
+/// entry point, so no strike the plain cast would find is skipped.
 pub fn plume_loads(
     jet: &JetSpec,
     thrust_n: f64,
@@ -175,8 +185,129 @@ pub fn plume_loads(
     rays: &[crate::actuation::plume_load::PlumeRay],
     about: &Vector3<f64>,
 ) -> Vec<crate::actuation::plume_load::PartLoad> {
+    let Some((apex, axis, alpha, len)) = plume_cone(jet) else {
+        return Vec::new();
+    };
+    if thrust_n <= 0.0 {
+        return Vec::new();
+    }
+    let apex = (jet_frame * nalgebra::Point3::from(apex)).coords;
+    // As `plume_loads_all_rays` passes it (the grid's frame is built from it, bit for bit).
+    let axis = jet_frame.rotation * axis;
+    let unit_axis = axis.normalize();
+    // The parts whose inflated bounding sphere (centre, radius) meets the cone.
+    let mut cand: Vec<(usize, Vector3<f64>, f64)> = Vec::new();
+    for (k, (pose, shape)) in parts.iter().enumerate() {
+        let bs = shape.compute_local_bounding_sphere();
+        let c = pose
+            * nalgebra::Point3::new(
+                f64::from(bs.center.x),
+                f64::from(bs.center.y),
+                f64::from(bs.center.z),
+            );
+        let r = f64::from(bs.radius) * (1.0 + CULL_REL) + CULL_ABS_M;
+        if sphere_meets_cone(&(c.coords - apex), r, &unit_axis, alpha, len) {
+            cand.push((k, c.coords, r));
+        }
+    }
+    if cand.is_empty() {
+        return Vec::new();
+    }
+    crate::actuation::plume_load::impingement(
+        thrust_n,
+        &apex,
+        &axis,
+        rays,
+        len,
+        about,
+        |o, d, max| {
+            // Candidates in index order: on a tie the lowest index keeps the ray.
+            let mut best: Option<(f64, usize)> = None;
+            for (k, c, r) in &cand {
+                // The ray's entry into the sphere: o + d·t, |o + d·t − c| = r.
+                let oc = c - o;
+                let b = oc.dot(d);
+                let q = oc.norm_squared() - b * b;
+                if q > r * r {
+                    continue;
+                }
+                let h = (r * r - q).sqrt();
+                let (entry, exit) = (b - h, b + h);
+                if exit < 0.0 || entry > max || best.is_some_and(|x| entry > x.0) {
+                    continue;
+                }
+                let (pose, shape) = &parts[*k];
+                if let Some(t) = cast_part(pose, &**shape, o, d, max)
+                    && best.is_none_or(|x| t < x.0)
+                {
+                    best = Some((t, *k));
+                }
+            }
+            best
+        },
+    )
+}
+
+/// Relative inflation of a part's bounding sphere in [`plume_loads`]'s culling (f32 rounding
+/// of the shape, pose and ray is ~1e-7 relative; this is 1e4 times that).
+pub const CULL_REL: f64 = 1e-3;
+/// Absolute inflation of a part's bounding sphere in [`plume_loads`]'s culling, m.
+pub const CULL_ABS_M: f64 = 1e-3;
+
+/// Whether the sphere of radius `r_m` centred at `c` (relative to the apex) meets the cone
+/// of unit axis `axis`, half-angle `alpha_rad` and slant reach `len_m` (the points within
+/// `len_m` of the apex at most `alpha_rad` off the axis): false only when it cannot.
+fn sphere_meets_cone(
+    c: &Vector3<f64>,
+    r_m: f64,
+    axis: &Vector3<f64>,
+    alpha_rad: f64,
+    len_m: f64,
+) -> bool {
+    let dist = c.norm();
+    if dist <= r_m {
+        return true;
+    }
+    if dist - r_m > len_m {
+        return false;
+    }
+    // The angle of the centre off the axis less the sphere's angular radius.
+    let theta = (c.dot(axis) / dist).clamp(-1.0, 1.0).acos();
+    theta - (r_m / dist).asin() <= alpha_rad
+}
+
+/// parry's ray cast (solid) of the ray from `o` along unit `d` (the frame of `pose`) against
+/// `shape` at `pose`, within `max_m`: the distance, m.
+fn cast_part(
+    pose: &Isometry3<f64>,
+    shape: &dyn rp::Shape,
+    o: &Vector3<f64>,
+    d: &Vector3<f64>,
+    max_m: f64,
+) -> Option<f64> {
     use bevy_rapier3d::parry::query::Ray;
     use bevy_rapier3d::rapier::math::Vector as V;
+    let lo = pose.inverse_transform_point(&nalgebra::Point3::from(*o));
+    let ld = pose.rotation.inverse() * d;
+    let ray = Ray::new(
+        V::new(lo.x as f32, lo.y as f32, lo.z as f32),
+        V::new(ld.x as f32, ld.y as f32, ld.z as f32),
+    );
+    shape
+        .cast_local_ray(&ray, max_m as f32, true)
+        .map(f64::from)
+}
+
+/// The reference for [`plume_loads`]: the same loads with every ray cast against every part
+/// (no culling). Slow; for tests.
+pub fn plume_loads_all_rays(
+    jet: &JetSpec,
+    thrust_n: f64,
+    jet_frame: &Isometry3<f64>,
+    parts: &[(Isometry3<f64>, rp::SharedShape)],
+    rays: &[crate::actuation::plume_load::PlumeRay],
+    about: &Vector3<f64>,
+) -> Vec<crate::actuation::plume_load::PartLoad> {
     let Some((apex, axis, _, len)) = plume_cone(jet) else {
         return Vec::new();
     };
@@ -195,17 +326,10 @@ pub fn plume_loads(
         |o, d, max| {
             let mut best: Option<(f64, usize)> = None;
             for (k, (pose, shape)) in parts.iter().enumerate() {
-                let lo = pose.inverse_transform_point(&nalgebra::Point3::from(*o));
-                let ld = pose.rotation.inverse() * d;
-                let ray = Ray::new(
-                    V::new(lo.x as f32, lo.y as f32, lo.z as f32),
-                    V::new(ld.x as f32, ld.y as f32, ld.z as f32),
-                );
-                if let Some(t) = shape.cast_local_ray(&ray, max as f32, true) {
-                    let t = f64::from(t);
-                    if best.is_none_or(|b| t < b.0) {
-                        best = Some((t, k));
-                    }
+                if let Some(t) = cast_part(pose, &**shape, o, d, max)
+                    && best.is_none_or(|b| t < b.0)
+                {
+                    best = Some((t, k));
                 }
             }
             best
