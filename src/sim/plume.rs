@@ -842,6 +842,11 @@ mod tests {
 ///   the step and the jets' mean thrust over it, and held over the step like every other
 ///   force (zero-order hold); a part entering or leaving the plume within a step is counted
 ///   from the start-of-step geometry.
+/// - **On an air-bearing table** a simulator floating on it takes the in-plane force and the
+///   torque about the table's normal only ([`super::airbearing::add_planar`], as with the
+///   controllers' forces); the air film carries the rest. A body that has run off the table
+///   takes the whole load; an anchored one none (the table clears its wrench). The columns and
+///   the summary report the whole load the plume puts on the part.
 /// - **Switch.** An `Rcs` actuator with `plume_loads: false` applies none (default true).
 /// - **No cost while nothing fires.** A step without a firing plumed jet only clears the
 ///   columns; a scene without plumed jets has no [`PlumeLoadState`] and no columns at all.
@@ -1004,6 +1009,7 @@ pub fn plume_forces(
     host: Option<bevy::prelude::Res<super::controllers::ControllerHost>>,
     state: Option<bevy::prelude::ResMut<PlumeLoadState>>,
     mut diag: bevy::prelude::ResMut<super::output::Diagnostics>,
+    table: Option<bevy::prelude::Res<super::airbearing::AirBearing>>,
     mut q: bevy::prelude::Query<(&super::BodyState, &mut super::Wrench)>,
 ) {
     let (Some(host), Some(mut state)) = (host, state) else {
@@ -1120,7 +1126,13 @@ pub fn plume_forces(
         if force[b] == Vector3::zeros() && torque[b] == Vector3::zeros() {
             continue;
         }
-        if let Ok((_, mut w)) = q.get_mut(*e) {
+        let Ok((_, mut w)) = q.get_mut(*e) else {
+            continue;
+        };
+        // A simulator floating on an air-bearing table takes the in-plane part only.
+        if table.as_ref().is_some_and(|t| t.supported[b]) {
+            super::airbearing::add_planar(&mut w, &force[b], &torque[b]);
+        } else {
             w.force_n += force[b];
             w.torque_nm += torque[b];
         }
