@@ -439,7 +439,7 @@ fn val_plume_load_on_a_plate_matches_the_closed_form() {
 /// bit, on 300 random layouts of 12 parts of every shape kind the runs use (boxes, thin
 /// panels, balls, cylinders, convex hulls, an open triangle mesh), some overlapping (ties),
 /// some around the nozzle (a ray starting inside a part), some beyond the plume's length,
-/// under random jet frames.
+/// under random jet frames; and one layout of 130 balls (more parts than a mask word holds).
 #[test]
 fn val_plume_load_culled_equals_all_rays_on_random_layouts() {
     use bevy_rapier3d::rapier::math::Vector as P;
@@ -522,6 +522,23 @@ fn val_plume_load_culled_equals_all_rays_on_random_layouts() {
         struck += usize::from(!want.is_empty());
         multi += usize::from(want.len() >= 2);
     }
+    // More parts than a 64-bit mask word holds: 130 small balls strewn through the cone.
+    let jet_frame = Isometry3::translation(0.3, -0.2, 0.1);
+    let parts: Vec<_> = (0..130)
+        .map(|_| {
+            let z = 0.5 + u() * LEN_M;
+            let w = 0.3 * z;
+            (
+                jet_frame * Isometry3::translation((u() - 0.5) * 2.0 * w, (u() - 0.5) * 2.0 * w, z),
+                rp::SharedShape::ball(0.05 + 0.2 * u() as f32),
+            )
+        })
+        .collect();
+    let about = Vector3::zeros();
+    let want = plume_loads_all_rays(&load_jet(), 4.0, &jet_frame, &parts, &rays, &about);
+    let got = plume_loads(&load_jet(), 4.0, &jet_frame, &parts, &rays, &about);
+    assert_eq!(got, want, "130 balls");
+    assert!(want.iter().any(|l| l.part >= 64), "{}", want.len());
     // The layouts are not trivial: most are struck, many on several parts (this sequence:
     // all 300 struck, 147 on several parts).
     assert!(

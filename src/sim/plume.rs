@@ -174,7 +174,8 @@ pub fn plume_hits(
 /// [`CULL_ABS_M`], far above the f32 rounding of the pose, ray and shape). A part whose sphere
 /// lies wholly outside the cone or beyond the plume's length is never cast against; for the
 /// others, a ray is cast against a part only when it meets the part's sphere within the
-/// plume's length and no nearer than the nearest strike found so far. A ray that misses a
+/// plume's length and no nearer than the nearest strike found so far (found from the rays
+/// within each part's angular cap seen from the nozzle, [`ray_masks`]). A ray that misses a
 /// part's bounding sphere misses the part, and a strike is never nearer than the sphere's
 /// entry point, so no strike the plain cast would find is skipped.
 pub fn plume_loads(
@@ -213,6 +214,8 @@ pub fn plume_loads(
     if cand.is_empty() {
         return Vec::new();
     }
+    let masks = ray_masks(rays, &cand, &apex, &unit_axis);
+    let words = cand.len().div_ceil(64);
     crate::actuation::plume_load::impingement(
         thrust_n,
         &apex,
@@ -220,32 +223,89 @@ pub fn plume_loads(
         rays,
         len,
         about,
-        |o, d, max| {
+        |i, o, d, max| {
             // Candidates in index order: on a tie the lowest index keeps the ray.
             let mut best: Option<(f64, usize)> = None;
-            for (k, c, r) in &cand {
-                // The ray's entry into the sphere: o + d·t, |o + d·t − c| = r.
-                let oc = c - o;
-                let b = oc.dot(d);
-                let q = oc.norm_squared() - b * b;
-                if q > r * r {
-                    continue;
-                }
-                let h = (r * r - q).sqrt();
-                let (entry, exit) = (b - h, b + h);
-                if exit < 0.0 || entry > max || best.is_some_and(|x| entry > x.0) {
-                    continue;
-                }
-                let (pose, shape) = &parts[*k];
-                if let Some(t) = cast_part(pose, &**shape, o, d, max)
-                    && best.is_none_or(|x| t < x.0)
-                {
-                    best = Some((t, *k));
+            for (w, bits) in masks[i * words..(i + 1) * words].iter().enumerate() {
+                let mut m = *bits;
+                while m != 0 {
+                    let (k, c, r) = &cand[w * 64 + m.trailing_zeros() as usize];
+                    m &= m - 1;
+                    // The ray's entry into the sphere: o + d·t, |o + d·t − c| = r.
+                    let oc = c - o;
+                    let b = oc.dot(d);
+                    let q = oc.norm_squared() - b * b;
+                    if q > r * r {
+                        continue;
+                    }
+                    let h = (r * r - q).sqrt();
+                    let (entry, exit) = (b - h, b + h);
+                    if exit < 0.0 || entry > max || best.is_some_and(|x| entry > x.0) {
+                        continue;
+                    }
+                    let (pose, shape) = &parts[*k];
+                    if let Some(t) = cast_part(pose, &**shape, o, d, max)
+                        && best.is_none_or(|x| t < x.0)
+                    {
+                        best = Some((t, *k));
+                    }
                 }
             }
             best
         },
     )
+}
+
+/// Per ray of `rays` (cone frame, axis +z), a bit per candidate part (`cand`: index, sphere
+/// centre and radius in the frame of `apex` and the unit `axis`), `cand.len().div_ceil(64)`
+/// words a ray: set when the ray's direction lies within the part's angular cap seen from the
+/// nozzle (the cone of directions that can meet its sphere, widened by 1e-6 rad for the
+/// rounding of the ray's direction), or for every ray when the nozzle is inside the sphere.
+/// Rays ordered by decreasing cos θ (as [`cone_rays`](crate::actuation::plume_load::cone_rays)
+/// makes them) are only scanned over the band of cos θ the cap spans.
+fn ray_masks(
+    rays: &[crate::actuation::plume_load::PlumeRay],
+    cand: &[(usize, Vector3<f64>, f64)],
+    apex: &Vector3<f64>,
+    axis: &Vector3<f64>,
+) -> Vec<u64> {
+    const WIDEN_RAD: f64 = 1e-6;
+    let words = cand.len().div_ceil(64);
+    let mut masks = vec![0u64; rays.len() * words];
+    let (x, y) = crate::scene::parts::perpendicular_basis(axis);
+    let sorted = rays.windows(2).all(|w| w[0].dir.z >= w[1].dir.z);
+    for (n, (_, c, r)) in cand.iter().enumerate() {
+        let (word, bit) = (n / 64, 1u64 << (n % 64));
+        let v = c - apex;
+        let dist = v.norm();
+        if dist <= *r {
+            for i in 0..rays.len() {
+                masks[i * words + word] |= bit;
+            }
+            continue;
+        }
+        // The cap's centre in the cone frame, its angular radius β and the band of θ.
+        let u = Vector3::new(v.dot(&x), v.dot(&y), v.dot(axis)) / dist;
+        let beta = (r / dist).asin() + WIDEN_RAD;
+        let cos_beta = beta.cos();
+        let theta = u.z.clamp(-1.0, 1.0).acos();
+        let (lo, hi) = if sorted {
+            let z_max = (theta - beta).max(0.0).cos();
+            let z_min = (theta + beta).min(std::f64::consts::PI).cos();
+            (
+                rays.partition_point(|p| p.dir.z > z_max),
+                rays.partition_point(|p| p.dir.z >= z_min),
+            )
+        } else {
+            (0, rays.len())
+        };
+        for (i, p) in rays.iter().enumerate().take(hi).skip(lo) {
+            if p.dir.dot(&u) >= cos_beta {
+                masks[i * words + word] |= bit;
+            }
+        }
+    }
+    masks
 }
 
 /// Relative inflation of a part's bounding sphere in [`plume_loads`]'s culling (f32 rounding
@@ -323,7 +383,7 @@ pub fn plume_loads_all_rays(
         rays,
         len,
         about,
-        |o, d, max| {
+        |_, o, d, max| {
             let mut best: Option<(f64, usize)> = None;
             for (k, (pose, shape)) in parts.iter().enumerate() {
                 if let Some(t) = cast_part(pose, &**shape, o, d, max)
