@@ -129,8 +129,9 @@ enum Cmd {
         /// Instead of the scene: the mesh and guarantee costs of issues 26 and 27, each as a
         /// ratio to its plain case in the same run — fly-bys of generated 100 000-triangle
         /// targets at 20 m and 1.9 m against the Box and Sphere primitives, the flagship with
-        /// the example mesh vehicle against the flagship, and each guarantee kind against the
-        /// run without it, with the bare rapier and parry floors (about 2 minutes); SCENE's
+        /// the example mesh vehicle against the flagship, each guarantee kind against the run
+        /// without it, and the plume impingement loads against the run without them, with the
+        /// bare rapier and parry floors (about 2 minutes); SCENE's
         /// folder must hold orbit_approach_latch.ron, orbit_approach_latch_truss.ron,
         /// requirements_approach.ron and orbit_approach_plume.ron. The generated meshes are
         /// written to temporary folders that are removed afterwards.

@@ -75,9 +75,10 @@ pub struct PartLoad {
 }
 
 /// The load of one jet's plume on the parts it strikes: thrust `thrust_n`, nozzle `apex`,
-/// unit exhaust `axis` (any frame), plume length `length_m`; `cast(origin, dir, max_m)` returns
-/// the first part a ray from `origin` along unit `dir` strikes within `max_m` (distance m,
-/// part index). Moments are about `about`. Parts in index order, each once.
+/// unit exhaust `axis` (any frame), plume length `length_m`; `cast(k, origin, dir, max_m)`
+/// returns the first part ray `k` of `rays` (from `origin` along unit `dir`, the ray's
+/// direction in the frame of `axis`) strikes within `max_m` (distance m, part index); it is
+/// called once per ray, in order. Moments are about `about`. Parts in index order, each once.
 #[allow(clippy::too_many_arguments)] // the jet, its cone, the grid and the ray cast
 pub fn impingement(
     thrust_n: f64,
@@ -86,14 +87,14 @@ pub fn impingement(
     rays: &[PlumeRay],
     length_m: f64,
     about: &Vector3<f64>,
-    mut cast: impl FnMut(&Vector3<f64>, &Vector3<f64>, f64) -> Option<(f64, usize)>,
+    mut cast: impl FnMut(usize, &Vector3<f64>, &Vector3<f64>, f64) -> Option<(f64, usize)>,
 ) -> Vec<PartLoad> {
     let z = axis.normalize();
     let (x, y) = crate::scene::parts::perpendicular_basis(&z);
     let mut out: Vec<PartLoad> = Vec::new();
-    for r in rays {
+    for (k, r) in rays.iter().enumerate() {
         let d = x * r.dir.x + y * r.dir.y + z * r.dir.z;
-        let Some((toi, part)) = cast(apex, &d, length_m) else {
+        let Some((toi, part)) = cast(k, apex, &d, length_m) else {
             continue;
         };
         let f = d * (thrust_n * r.share);
@@ -135,7 +136,7 @@ mod tests {
             &rays,
             5.0,
             &Vector3::new(0.0, 0.0, 2.0),
-            |o, d, max| {
+            |_, o, d, max| {
                 let t = (2.0 - o.z) / d.z;
                 (t > 0.0 && t <= max).then_some((t, 0))
             },

@@ -11,6 +11,9 @@
 //!    chaser held 100 m, 10 m and 1 m out (goal ≤ 2×);
 //! 4. the cost per step of each guarantee kind, as the ratio of a run with it alone to the same
 //!    run with no guarantee.
+//! 5. the cost per step of the plume impingement loads (issue 26 §6) on
+//!    `orbit_approach_plume.ron` held 10 m out, as the ratio of the run with them to the same
+//!    run with `plume_loads: false`.
 //!
 //! The 100 000-triangle target ([`tessellated_box`]) is generated here at run time and written
 //! as an OBJ file into a fresh temporary folder that is removed afterwards; nothing else is
@@ -462,7 +465,7 @@ fn guarantee_cases() -> Vec<(&'static str, &'static str, bool)> {
     ]
 }
 
-/// Runs the four measurements and returns the report (Markdown tables). `scenes` is the folder
+/// Runs the five measurements and returns the report (Markdown tables). `scenes` is the folder
 /// holding `orbit_approach_latch.ron`, `orbit_approach_latch_truss.ron`,
 /// `requirements_approach.ron` and `orbit_approach_plume.ron`; `steps` the most steps per case
 /// (a mesh case is cut to [`CASE_BUDGET_S`] of wall time).
@@ -580,6 +583,36 @@ pub fn run_meshes(scenes: &Path, steps: u64) -> Result<String, SceneError> {
             x / b
         );
     }
+    // 5. The plume impingement loads.
+    let _ = writeln!(
+        r,
+        "\nPlume impingement loads: `orbit_approach_plume.ron` held 10 m out as above with no \
+         guarantee, the loads on (the default) against `plume_loads: false` (the base of \
+         `PlumeKeepOff` above); the forward jets exhaust at the target's bus, slot and arrays \
+         whenever the hold brakes. The same steps after 100 untimed ones, the faster of two runs \
+         each.\n"
+    );
+    let _ = writeln!(
+        r,
+        "| base | steps | loads off µs/step | loads on µs/step | added µs/step | ratio to the run without them |"
+    );
+    let _ = writeln!(r, "|---|---|---|---|---|---|");
+    let mut sets = held_at(10.0);
+    sets.push("guarantees=[]".into());
+    let loads_on = load_scene_file(&plume, &sets)?;
+    let n = steps_within(&loads_on, steps, CASE_BUDGET_S / 8.0)?;
+    let b = best_window_s(&base_plume, 100, n, 2)?;
+    let x = best_window_s(&loads_on, 100, n, 2)?;
+    progress(&format!("plume loads: {n} steps"));
+    let us = |s: f64| s / n as f64 * 1e6;
+    let _ = writeln!(
+        r,
+        "| orbit_approach_plume | {n} | {:.1} | {:.1} | {:+.1} | **{:.2}** |",
+        us(b),
+        us(x),
+        us(x) - us(b),
+        x / b
+    );
     let floor = measure(&base_req, steps)?;
     let per = |s: f64| s / floor.steps as f64 * 1e6;
     let _ = writeln!(

@@ -18,7 +18,11 @@
 //!   would reverse the velocity (or hold a body at rest) and the force needed to stop it
 //!   exactly is within μ·N, that force is applied instead (the body stops at the step's end,
 //!   no chatter). The friction sees the forces added before the Environment stage (control,
-//!   thrusters, magnet).
+//!   thrusters, magnet, plume loads).
+//! - **Other forces on a simulator** act in the plane only ([`add_planar`]): the controllers'
+//!   forces and the plume impingement loads ([`super::plume::PlumeLoadState`]) give their
+//!   in-plane force and their torque about z; the air film carries the out-of-plane force and
+//!   the locks the roll/pitch torque.
 //! - **The table** is a fixed rapier collider (the top at z = 0, `table_thickness_m` thick) in
 //!   an interaction group no simulator belongs to: the air film is a gap, so rapier never
 //!   creates a table contact (which would wrongly add friction while rapier is the truth).
@@ -179,6 +183,17 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
             .before(super::monitor::distances),
     );
     Ok(())
+}
+
+/// Adds to a planar simulator's wrench the part of (`force_n`, `torque_nm`) (world = lab
+/// frame, N and N·m about the centre of mass) that the table lets act: the in-plane force
+/// (x, y) and the torque about the table's normal (z). The air film and the locks carry the
+/// rest (the out-of-plane force and the roll/pitch torque). Used for the controllers' forces
+/// and the plume loads.
+pub fn add_planar(w: &mut Wrench, force_n: &Vector3<f64>, torque_nm: &Vector3<f64>) {
+    w.force_n.x += force_n.x;
+    w.force_n.y += force_n.y;
+    w.torque_nm.z += torque_nm.z;
 }
 
 /// The air film's in-plane friction force on a body over one held step, N.

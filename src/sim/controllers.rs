@@ -770,9 +770,7 @@ pub fn host_actuate(
         if let Ok(mut w) = wrenches.get_mut(roster.bodies[slot.body]) {
             let (f, t) = (slot.report.force_world_n, slot.report.torque_world_nm);
             if *planar {
-                w.force_n.x += f.x;
-                w.force_n.y += f.y;
-                w.torque_nm.z += t.z;
+                super::airbearing::add_planar(&mut w, &f, &t);
             } else {
                 w.force_n += f;
                 w.torque_nm += t;

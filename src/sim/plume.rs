@@ -165,8 +165,19 @@ pub fn plume_hits(
 /// (pose, shape; any frame, the jet's `jet_frame` in the same one) at thrust `thrust_n`, with
 /// moments about `about`: parry ray casts (solid shapes, so a ray starting inside a part
 /// strikes it at 0) from the nozzle along each ray of `rays`, the nearest part within the
-/// plume's length taking the ray's flux. `PartLoad::part` indexes `parts`. Nothing without a
-/// plume or thrust.
+/// plume's length taking the ray's flux (the lowest index on a tie). `PartLoad::part` indexes
+/// `parts`. Nothing without a plume or thrust.
+///
+/// **Culling** (the same loads as [`plume_loads_all_rays`], which casts every ray against
+/// every part: `tests/val_plume.rs` compares the two on random poses). Each part is enclosed in
+/// its shape's bounding sphere (parry's, inflated by [`CULL_REL`] of its radius plus
+/// [`CULL_ABS_M`], far above the f32 rounding of the pose, ray and shape). A part whose sphere
+/// lies wholly outside the cone or beyond the plume's length is never cast against; for the
+/// others, a ray is cast against a part only when it meets the part's sphere within the
+/// plume's length and no nearer than the nearest strike found so far (found from the rays
+/// within each part's angular cap seen from the nozzle, [`ray_masks`]). A ray that misses a
+/// part's bounding sphere misses the part, and a strike is never nearer than the sphere's
+/// entry point, so no strike the plain cast would find is skipped.
 pub fn plume_loads(
     jet: &JetSpec,
     thrust_n: f64,
@@ -175,8 +186,188 @@ pub fn plume_loads(
     rays: &[crate::actuation::plume_load::PlumeRay],
     about: &Vector3<f64>,
 ) -> Vec<crate::actuation::plume_load::PartLoad> {
+    let Some((apex, axis, alpha, len)) = plume_cone(jet) else {
+        return Vec::new();
+    };
+    if thrust_n <= 0.0 {
+        return Vec::new();
+    }
+    let apex = (jet_frame * nalgebra::Point3::from(apex)).coords;
+    // As `plume_loads_all_rays` passes it (the grid's frame is built from it, bit for bit).
+    let axis = jet_frame.rotation * axis;
+    let unit_axis = axis.normalize();
+    // The parts whose inflated bounding sphere (centre, radius) meets the cone.
+    let mut cand: Vec<(usize, Vector3<f64>, f64)> = Vec::new();
+    for (k, (pose, shape)) in parts.iter().enumerate() {
+        let bs = shape.compute_local_bounding_sphere();
+        let c = pose
+            * nalgebra::Point3::new(
+                f64::from(bs.center.x),
+                f64::from(bs.center.y),
+                f64::from(bs.center.z),
+            );
+        let r = f64::from(bs.radius) * (1.0 + CULL_REL) + CULL_ABS_M;
+        if sphere_meets_cone(&(c.coords - apex), r, &unit_axis, alpha, len) {
+            cand.push((k, c.coords, r));
+        }
+    }
+    if cand.is_empty() {
+        return Vec::new();
+    }
+    let masks = ray_masks(rays, &cand, &apex, &unit_axis);
+    let words = cand.len().div_ceil(64);
+    crate::actuation::plume_load::impingement(
+        thrust_n,
+        &apex,
+        &axis,
+        rays,
+        len,
+        about,
+        |i, o, d, max| {
+            // Candidates in index order: on a tie the lowest index keeps the ray.
+            let mut best: Option<(f64, usize)> = None;
+            for (w, bits) in masks[i * words..(i + 1) * words].iter().enumerate() {
+                let mut m = *bits;
+                while m != 0 {
+                    let (k, c, r) = &cand[w * 64 + m.trailing_zeros() as usize];
+                    m &= m - 1;
+                    // The ray's entry into the sphere: o + d·t, |o + d·t − c| = r.
+                    let oc = c - o;
+                    let b = oc.dot(d);
+                    let q = oc.norm_squared() - b * b;
+                    if q > r * r {
+                        continue;
+                    }
+                    let h = (r * r - q).sqrt();
+                    let (entry, exit) = (b - h, b + h);
+                    if exit < 0.0 || entry > max || best.is_some_and(|x| entry > x.0) {
+                        continue;
+                    }
+                    let (pose, shape) = &parts[*k];
+                    if let Some(t) = cast_part(pose, &**shape, o, d, max)
+                        && best.is_none_or(|x| t < x.0)
+                    {
+                        best = Some((t, *k));
+                    }
+                }
+            }
+            best
+        },
+    )
+}
+
+/// Per ray of `rays` (cone frame, axis +z), a bit per candidate part (`cand`: index, sphere
+/// centre and radius in the frame of `apex` and the unit `axis`), `cand.len().div_ceil(64)`
+/// words a ray: set when the ray's direction lies within the part's angular cap seen from the
+/// nozzle (the cone of directions that can meet its sphere, widened by 1e-6 rad for the
+/// rounding of the ray's direction), or for every ray when the nozzle is inside the sphere.
+/// Rays ordered by decreasing cos θ (as [`cone_rays`](crate::actuation::plume_load::cone_rays)
+/// makes them) are only scanned over the band of cos θ the cap spans.
+fn ray_masks(
+    rays: &[crate::actuation::plume_load::PlumeRay],
+    cand: &[(usize, Vector3<f64>, f64)],
+    apex: &Vector3<f64>,
+    axis: &Vector3<f64>,
+) -> Vec<u64> {
+    const WIDEN_RAD: f64 = 1e-6;
+    let words = cand.len().div_ceil(64);
+    let mut masks = vec![0u64; rays.len() * words];
+    let (x, y) = crate::scene::parts::perpendicular_basis(axis);
+    let sorted = rays.windows(2).all(|w| w[0].dir.z >= w[1].dir.z);
+    for (n, (_, c, r)) in cand.iter().enumerate() {
+        let (word, bit) = (n / 64, 1u64 << (n % 64));
+        let v = c - apex;
+        let dist = v.norm();
+        if dist <= *r {
+            for i in 0..rays.len() {
+                masks[i * words + word] |= bit;
+            }
+            continue;
+        }
+        // The cap's centre in the cone frame, its angular radius β and the band of θ.
+        let u = Vector3::new(v.dot(&x), v.dot(&y), v.dot(axis)) / dist;
+        let beta = (r / dist).asin() + WIDEN_RAD;
+        let cos_beta = beta.cos();
+        let theta = u.z.clamp(-1.0, 1.0).acos();
+        let (lo, hi) = if sorted {
+            let z_max = (theta - beta).max(0.0).cos();
+            let z_min = (theta + beta).min(std::f64::consts::PI).cos();
+            (
+                rays.partition_point(|p| p.dir.z > z_max),
+                rays.partition_point(|p| p.dir.z >= z_min),
+            )
+        } else {
+            (0, rays.len())
+        };
+        for (i, p) in rays.iter().enumerate().take(hi).skip(lo) {
+            if p.dir.dot(&u) >= cos_beta {
+                masks[i * words + word] |= bit;
+            }
+        }
+    }
+    masks
+}
+
+/// Relative inflation of a part's bounding sphere in [`plume_loads`]'s culling (f32 rounding
+/// of the shape, pose and ray is ~1e-7 relative; this is 1e4 times that).
+pub const CULL_REL: f64 = 1e-3;
+/// Absolute inflation of a part's bounding sphere in [`plume_loads`]'s culling, m.
+pub const CULL_ABS_M: f64 = 1e-3;
+
+/// Whether the sphere of radius `r_m` centred at `c` (relative to the apex) meets the cone
+/// of unit axis `axis`, half-angle `alpha_rad` and slant reach `len_m` (the points within
+/// `len_m` of the apex at most `alpha_rad` off the axis): false only when it cannot.
+fn sphere_meets_cone(
+    c: &Vector3<f64>,
+    r_m: f64,
+    axis: &Vector3<f64>,
+    alpha_rad: f64,
+    len_m: f64,
+) -> bool {
+    let dist = c.norm();
+    if dist <= r_m {
+        return true;
+    }
+    if dist - r_m > len_m {
+        return false;
+    }
+    // The angle of the centre off the axis less the sphere's angular radius.
+    let theta = (c.dot(axis) / dist).clamp(-1.0, 1.0).acos();
+    theta - (r_m / dist).asin() <= alpha_rad
+}
+
+/// parry's ray cast (solid) of the ray from `o` along unit `d` (the frame of `pose`) against
+/// `shape` at `pose`, within `max_m`: the distance, m.
+fn cast_part(
+    pose: &Isometry3<f64>,
+    shape: &dyn rp::Shape,
+    o: &Vector3<f64>,
+    d: &Vector3<f64>,
+    max_m: f64,
+) -> Option<f64> {
     use bevy_rapier3d::parry::query::Ray;
     use bevy_rapier3d::rapier::math::Vector as V;
+    let lo = pose.inverse_transform_point(&nalgebra::Point3::from(*o));
+    let ld = pose.rotation.inverse() * d;
+    let ray = Ray::new(
+        V::new(lo.x as f32, lo.y as f32, lo.z as f32),
+        V::new(ld.x as f32, ld.y as f32, ld.z as f32),
+    );
+    shape
+        .cast_local_ray(&ray, max_m as f32, true)
+        .map(f64::from)
+}
+
+/// The reference for [`plume_loads`]: the same loads with every ray cast against every part
+/// (no culling). Slow; for tests.
+pub fn plume_loads_all_rays(
+    jet: &JetSpec,
+    thrust_n: f64,
+    jet_frame: &Isometry3<f64>,
+    parts: &[(Isometry3<f64>, rp::SharedShape)],
+    rays: &[crate::actuation::plume_load::PlumeRay],
+    about: &Vector3<f64>,
+) -> Vec<crate::actuation::plume_load::PartLoad> {
     let Some((apex, axis, _, len)) = plume_cone(jet) else {
         return Vec::new();
     };
@@ -192,20 +383,13 @@ pub fn plume_loads(
         rays,
         len,
         about,
-        |o, d, max| {
+        |_, o, d, max| {
             let mut best: Option<(f64, usize)> = None;
             for (k, (pose, shape)) in parts.iter().enumerate() {
-                let lo = pose.inverse_transform_point(&nalgebra::Point3::from(*o));
-                let ld = pose.rotation.inverse() * d;
-                let ray = Ray::new(
-                    V::new(lo.x as f32, lo.y as f32, lo.z as f32),
-                    V::new(ld.x as f32, ld.y as f32, ld.z as f32),
-                );
-                if let Some(t) = shape.cast_local_ray(&ray, max as f32, true) {
-                    let t = f64::from(t);
-                    if best.is_none_or(|b| t < b.0) {
-                        best = Some((t, k));
-                    }
+                if let Some(t) = cast_part(pose, &**shape, o, d, max)
+                    && best.is_none_or(|b| t < b.0)
+                {
+                    best = Some((t, k));
                 }
             }
             best
@@ -718,6 +902,11 @@ mod tests {
 ///   the step and the jets' mean thrust over it, and held over the step like every other
 ///   force (zero-order hold); a part entering or leaving the plume within a step is counted
 ///   from the start-of-step geometry.
+/// - **On an air-bearing table** a simulator floating on it takes the in-plane force and the
+///   torque about the table's normal only ([`super::airbearing::add_planar`], as with the
+///   controllers' forces); the air film carries the rest. A body that has run off the table
+///   takes the whole load; an anchored one none (the table clears its wrench). The columns and
+///   the summary report the whole load the plume puts on the part.
 /// - **Switch.** An `Rcs` actuator with `plume_loads: false` applies none (default true).
 /// - **No cost while nothing fires.** A step without a firing plumed jet only clears the
 ///   columns; a scene without plumed jets has no [`PlumeLoadState`] and no columns at all.
@@ -880,6 +1069,7 @@ pub fn plume_forces(
     host: Option<bevy::prelude::Res<super::controllers::ControllerHost>>,
     state: Option<bevy::prelude::ResMut<PlumeLoadState>>,
     mut diag: bevy::prelude::ResMut<super::output::Diagnostics>,
+    table: Option<bevy::prelude::Res<super::airbearing::AirBearing>>,
     mut q: bevy::prelude::Query<(&super::BodyState, &mut super::Wrench)>,
 ) {
     let (Some(host), Some(mut state)) = (host, state) else {
@@ -996,7 +1186,13 @@ pub fn plume_forces(
         if force[b] == Vector3::zeros() && torque[b] == Vector3::zeros() {
             continue;
         }
-        if let Ok((_, mut w)) = q.get_mut(*e) {
+        let Ok((_, mut w)) = q.get_mut(*e) else {
+            continue;
+        };
+        // A simulator floating on an air-bearing table takes the in-plane part only.
+        if table.as_ref().is_some_and(|t| t.supported[b]) {
+            super::airbearing::add_planar(&mut w, &force[b], &torque[b]);
+        } else {
             w.force_n += force[b];
             w.torque_nm += torque[b];
         }
