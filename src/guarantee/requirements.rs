@@ -383,7 +383,7 @@ impl Guarantee for ClosingSpeedGate {
 /// intervals covering [τ, τ + H] less Δ_body + Δ_around: that certified value is reported while
 /// Δ ≤ [`REUSE_SLACK_FRACTION`] of the kept window's margin (and the window is positive and
 /// fits); otherwise the drift is propagated afresh. A reused margin is therefore a lower bound
-/// of a fresh evaluation's, at most 10 % below the kept drift's over the same window, never
+/// of a fresh evaluation's, at most 25 % below the kept drift's over the same window, never
 /// negative (a violation is always found
 /// by a fresh evaluation), and the verdict at each step is the fresh evaluation's. An ellipsoid
 /// (whose axes follow `around`'s own Hill frame) or an `eval_period_s` is not reused.
@@ -1084,8 +1084,10 @@ impl DriftTrack {
 pub const REUSE_MAX_DEVIATION_M: f64 = 1000.0;
 
 /// A kept drift is reused while its deviation bound is at most this fraction of the window
-/// margin (so a reused margin is at least 90 % of the kept drift's over the same window).
-pub const REUSE_SLACK_FRACTION: f64 = 0.1;
+/// margin (so a reused margin is at least 75 % of the kept drift's over the same window). It
+/// sets how conservative a reused margin may be, never a verdict (a reused margin is > 0); on
+/// the flagship's first 120 s, 0.25 needs 363 fresh propagations in 12 000 steps, 0.1 needs 818.
+pub const REUSE_SLACK_FRACTION: f64 = 0.25;
 
 /// Extra grid intervals a reusable drift is propagated beyond the horizon, as a fraction of the
 /// horizon's intervals (it can then be reused for up to that fraction of the horizon).
