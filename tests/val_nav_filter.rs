@@ -8,7 +8,8 @@
 //!   raw-measurement run by more than 1 mm: with a 0.5 m noise the PD's command differs by
 //!   ω²·0.5 m ≈ 1.25 mm/s², which over 300 s moves the chaser by metres);
 //! - its position error RMS is below the raw measurement's over the run after its first 100 s
-//!   (a CW filter with q = 1e-8 m²/s³ and σ = 0.5 m every 0.5 s: the steady σ is centimetres
+//!   (the flagship's orbit has e = 0.01: the Yamanaka–Ankersen filter, q = 1e-8 m²/s³ and
+//!   σ = 0.5 m every 0.5 s: the steady σ is centimetres
 //!   to decimetres against the raw 0.5 m plus the latency's drift — the assertion is only the
 //!   ordering, the numbers are printed);
 //! - its covariance columns exist, are finite and positive, and carry the unit suffix;

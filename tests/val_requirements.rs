@@ -21,6 +21,12 @@
 //!   integration written in the test from Vallado's J2 acceleration; both sampled finely. The
 //!   margin must be at most the sampled closest approach less R and at least that less the
 //!   grid bound's own slack Δτ·V/2.
+//! * `PassiveSafety`, a propagated drift kept and reused (`DriftTrack::reuse`): on the eccentric
+//!   orbit above, against the Kepler closed form of both bodies from the later state: after a
+//!   coast (the reused margin is sound and as tight as a fresh evaluation's grid slack, its
+//!   deviation bound only the integration allowance) and after a velocity kick to the chaser
+//!   (the reused margin is still at most the kicked drift's sampled closest approach less R, and
+//!   the deviation bound covers the sampled deviation between the kicked and unkicked drifts).
 //! * `LineOfSight`: a sensor at x = 0.2 m looking along +x at a point 9.4 m away; a box panel
 //!   (half-width 0.2 m in y) crossing the line at 1 m/s from y₀ = −1.205 m blocks it from
 //!   t = 1.005 s (margin = |y| − 0.2 m, the segment's signed distance to the panel), deepest
@@ -397,6 +403,141 @@ fn val_passive_safety_propagated_elliptic_against_kepler() {
     assert!(found.margin_m <= want + 1e-6, "unsound: {found:?}");
     assert!(found.margin_m >= want - slack, "loose: {found:?}");
     assert!(found.cw_error_m < 1e-4, "{found:?}");
+}
+
+/// A kept drift reused 137.3 s later (between grid points), see the header.
+#[test]
+fn val_passive_safety_reused_drift_is_sound_after_a_coast_and_a_kick() {
+    use rpod::guarantee::ReferenceView;
+    use rpod::guarantee::requirements::{DriftSetup, Zone, propagate_drift_track};
+    use rpod::orbit::kepler::{ClassicalElements, kepler_propagate};
+    use rpod::orbit::lvlh::{LocalFrame, LocalFrameKind};
+    let el = ClassicalElements {
+        a_m: 7.5e6,
+        e: 0.1,
+        i_rad: 30f64.to_radians(),
+        raan_rad: 0.4,
+        argp_rad: 1.0,
+        true_anomaly_rad: 0.3,
+    };
+    let (r_ref, v_ref) = el.to_state(MU_EARTH_M3_S2);
+    let hill = LocalFrame::new(LocalFrameKind::Hill, &r_ref, &v_ref);
+    let (pc, vc) = hill.from_local(
+        &nalgebra::Vector3::new(20.0, 60.0, 3.0),
+        &nalgebra::Vector3::new(0.0, -0.04, 0.0),
+    );
+    let zero = nalgebra::Vector3::zeros();
+    let (radius, horizon, k, extra) = (5.0, 3000.0, 300usize, 30usize);
+    let track = propagate_drift_track(
+        &DriftSetup {
+            zone: Zone::Sphere(radius),
+            j2: false,
+            horizon_s: horizon,
+            intervals: k,
+        },
+        &ReferenceView {
+            pos_eci_m: r_ref,
+            vel_eci_m_s: v_ref,
+        },
+        (&pc, &vc),
+        (&zero, &zero),
+        extra,
+    );
+    let kepler = |x: &[f64; 6], _t: f64, h: f64| {
+        let (r, v) = kepler_propagate(
+            &nalgebra::Vector3::new(x[0], x[1], x[2]),
+            &nalgebra::Vector3::new(x[3], x[4], x[5]),
+            h,
+            MU_EARTH_M3_S2,
+        );
+        [r.x, r.y, r.z, v.x, v.y, v.z]
+    };
+    let v3 = |x: &[f64; 6], o: usize| nalgebra::Vector3::new(x[o], x[o + 1], x[o + 2]);
+    let tau = 137.3;
+    let body0 = [
+        r_ref.x + pc.x,
+        r_ref.y + pc.y,
+        r_ref.z + pc.z,
+        v_ref.x + vc.x,
+        v_ref.y + vc.y,
+        v_ref.z + vc.z,
+    ];
+    let around0 = [r_ref.x, r_ref.y, r_ref.z, v_ref.x, v_ref.y, v_ref.z];
+    let (b1, a1) = (kepler(&body0, 0.0, tau), kepler(&around0, 0.0, tau));
+    // Coast.
+    let (m, dev) = track
+        .reuse(
+            tau,
+            horizon,
+            (&v3(&b1, 0), &v3(&b1, 3)),
+            (&v3(&a1, 0), &v3(&a1, 3)),
+        )
+        .expect("reusable after a coast");
+    let want = sampled_min_distance(b1, a1, horizon, 0.05, &kepler) - radius;
+    let slack = horizon / k as f64 * track.window(0, k).speed_bound_m_s * 1.01 / 2.0 + 1e-6;
+    println!("coast: reused {m} m (deviation bound {dev} m), Kepler {want} m, slack {slack} m");
+    assert!(m <= want + 1e-6, "unsound after a coast: {m} vs {want}");
+    assert!(
+        m >= want - slack - dev,
+        "loose after a coast: {m} vs {want}"
+    );
+    assert!(
+        dev < 1e-2,
+        "a coast's deviation bound is the integration allowance: {dev}"
+    );
+    // A 3 mm/s kick to the chaser.
+    let mut kicked = b1;
+    kicked[3] += 0.002;
+    kicked[4] -= 0.002;
+    kicked[5] += 0.001;
+    let (mk, devk) = track
+        .reuse(
+            tau,
+            horizon,
+            (&v3(&kicked, 0), &v3(&kicked, 3)),
+            (&v3(&a1, 0), &v3(&a1, 3)),
+        )
+        .expect("reusable after a small kick");
+    let want_k = sampled_min_distance(kicked, a1, horizon, 0.05, &kepler) - radius;
+    // The sampled deviation of the kicked drift from the unkicked one over the horizon.
+    let (mut x, mut y, mut dmax) = (kicked, b1, 0.0f64);
+    for i in 0..(horizon / 1.0) as usize {
+        x = kepler(&x, i as f64, 1.0);
+        y = kepler(&y, i as f64, 1.0);
+        dmax = dmax.max((v3(&x, 0) - v3(&y, 0)).norm());
+    }
+    println!(
+        "kick: reused {mk} m (deviation bound {devk} m, sampled deviation {dmax} m), Kepler {want_k} m"
+    );
+    assert!(
+        mk <= want_k + 1e-6,
+        "unsound after a kick: {mk} vs {want_k}"
+    );
+    assert!(
+        devk >= dmax,
+        "deviation bound {devk} below the sampled {dmax}"
+    );
+    // Beyond the kept window (30 intervals of 10 s) nothing is reused.
+    assert!(
+        track
+            .reuse(
+                301.0,
+                horizon,
+                (&v3(&b1, 0), &v3(&b1, 3)),
+                (&v3(&a1, 0), &v3(&a1, 3))
+            )
+            .is_none()
+    );
+    // At τ = 0 with the initial states the window is the fresh evaluation.
+    let (m0, d0) = track
+        .reuse(
+            0.0,
+            horizon,
+            (&v3(&body0, 0), &v3(&body0, 3)),
+            (&v3(&around0, 0), &v3(&around0, 3)),
+        )
+        .expect("τ = 0");
+    assert!((m0 + d0 - track.window(0, k).margin_m).abs() < 1e-12);
 }
 
 /// With J2: the same fly-by on a LEO reference (a = 7000 km, e = 0.001, i = 51.6°) against an

@@ -122,7 +122,7 @@ impl SensorSpec {
                 .map_err(|(g, m)| (format!("filter.0.{g}"), m))?;
             let why = if self.frame != MeasuredFrame::Hill {
                 Some(
-                    "the filter runs on the CW model in the target's Hill frame: give the sensor `frame: Hill`",
+                    "the filter runs on the CW or Yamanaka–Ankersen relative model in the target's Hill frame: give the sensor `frame: Hill`",
                 )
             } else if self.planar {
                 Some("the filter estimates the 3-D relative state: a planar sensor cannot feed it")

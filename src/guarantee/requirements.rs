@@ -369,6 +369,25 @@ impl Guarantee for ClosingSpeedGate {
 /// 8th-order method) — see [`propagate_drift`]. The ellipsoid's axes are `around`'s own Hill
 /// frame at each grid time (the reference's, to the angle |ρ_around|/r, in the CW model).
 ///
+/// Reuse (a propagated drift about a sphere, evaluated every step — the default): a drift is
+/// propagated [`REUSE_WINDOW_FRACTION`] of the horizon further and kept ([`DriftTrack`]). At a
+/// later step, τ after it, the kept drift's state at τ (one 8th-order stretch from the grid
+/// point before τ, with its step-doubling estimate) is compared with the bodies' current
+/// absolute states: for each body, with position and velocity deviations δr, δv (plus the
+/// step-doubling differences of the kept run and 16ε rounding per sub-step), the drift from the
+/// current state stays within Δ = δr·cosh(√G s) + δv·sinh(√G s)/√G of the kept one over the
+/// s ≤ H + Δτ ahead (Grönwall for ÿ = g(x + y) − g(x), |∇g| ≤ G =
+/// [`gravity_gradient_bound`] at [`REUSE_MAX_DEVIATION_M`] below the kept drift's lowest
+/// radius; valid while Δ ≤ that distance). The sphere margin being 1-Lipschitz in the relative
+/// position, the current drift's margin is at least the kept drift's margin over the grid
+/// intervals covering [τ, τ + H] less Δ_body + Δ_around: that certified value is reported while
+/// Δ ≤ [`REUSE_SLACK_FRACTION`] of the kept window's margin (and the window is positive and
+/// fits); otherwise the drift is propagated afresh. A reused margin is therefore a lower bound
+/// of a fresh evaluation's, at most 25 % below the kept drift's over the same window, never
+/// negative (a violation is always found
+/// by a fresh evaluation), and the verdict at each step is the fresh evaluation's. An ellipsoid
+/// (whose axes follow `around`'s own Hill frame) or an `eval_period_s` is not reused.
+///
 /// Judged at the samples only: thrust changes the state, and so the drift, between samples.
 /// Every step by default; with `eval_period_s: Some(P)` the drift is evaluated every P seconds
 /// of simulated time over a horizon of `horizon_s + P`, and the margin of the last evaluation
@@ -562,6 +581,18 @@ impl GuaranteeParams for PassiveSafetyParams {
             },
             ModelKind::Propagated { j2 } => DriftModel::Propagated { j2, intervals: k },
         };
+        // A propagated drift about a sphere, evaluated every step, is kept and reused: it is
+        // propagated REUSE_WINDOW_FRACTION further, within the sub-step budget.
+        let reuse_intervals = match (kind, self.radius_m, self.eval_period_s) {
+            (ModelKind::Propagated { .. }, Some(_), None) => {
+                let extra = (k as f64 * REUSE_WINDOW_FRACTION).ceil() as usize;
+                let fits = reference_substep_s(ctx.scene).is_some_and(|h_max| {
+                    (k + extra) as f64 * (dtau / h_max).ceil().max(1.0) <= MAX_PROPAGATED_SUBSTEPS
+                });
+                if fits { extra } else { 0 }
+            }
+            _ => 0,
+        };
         Ok(Box::new(PassiveSafety {
             name: self.name.clone(),
             body: ctx.body("body", &self.body)?,
@@ -577,6 +608,9 @@ impl GuaranteeParams for PassiveSafetyParams {
             model,
             eval_period_s: self.eval_period_s,
             last_eval: std::sync::Mutex::new(None),
+            reuse_intervals,
+            track: std::sync::Mutex::new(None),
+            counts: std::sync::Mutex::new((0, 0)),
         }))
     }
 }
@@ -644,6 +678,13 @@ pub struct PassiveSafety {
     pub eval_period_s: Option<f64>,
     /// (time s, drift margin m) of the last evaluation, with an evaluation period.
     last_eval: std::sync::Mutex<Option<(f64, f64)>>,
+    /// Extra grid intervals a propagated drift is kept for reuse (0: no reuse), see
+    /// [`PassiveSafetyParams`].
+    pub reuse_intervals: usize,
+    /// (time s, drift) of the last propagated evaluation kept for reuse.
+    track: std::sync::Mutex<Option<(f64, DriftTrack)>>,
+    /// (fresh propagations, reused steps) so far.
+    pub counts: std::sync::Mutex<(u64, u64)>,
 }
 
 /// What [`PassiveSafety::drift`] finds.
@@ -744,18 +785,57 @@ impl PassiveSafety {
             }
             DriftModel::Propagated { j2, intervals } => {
                 let (b, a) = (&v.bodies[self.body], &v.bodies[self.around]);
-                propagate_drift(
-                    &DriftSetup {
-                        zone: self.zone,
-                        j2: *j2,
-                        horizon_s: self.horizon_s,
-                        intervals: *intervals,
-                    },
+                let setup = DriftSetup {
+                    zone: self.zone,
+                    j2: *j2,
+                    horizon_s: self.horizon_s,
+                    intervals: *intervals,
+                };
+                let mut counts = self
+                    .counts
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner);
+                if self.reuse_intervals == 0 {
+                    counts.0 += 1;
+                    return propagate_drift(
+                        &setup,
+                        reference,
+                        (&b.pos_m, &b.vel_m_s),
+                        (&a.pos_m, &a.vel_m_s),
+                    )
+                    .margin_m;
+                }
+                let mut kept = self
+                    .track
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner);
+                if let Some((t0, track)) = kept.as_ref() {
+                    let abs = |x: &super::BodyView| {
+                        (
+                            reference.pos_eci_m + x.pos_m,
+                            reference.vel_eci_m_s + x.vel_m_s,
+                        )
+                    };
+                    let (bb, aa) = (abs(b), abs(a));
+                    if let Some((m, dev)) =
+                        track.reuse(v.t_s - t0, self.horizon_s, (&bb.0, &bb.1), (&aa.0, &aa.1))
+                        && dev <= REUSE_SLACK_FRACTION * (m + dev)
+                    {
+                        counts.1 += 1;
+                        return m;
+                    }
+                }
+                counts.0 += 1;
+                let track = propagate_drift_track(
+                    &setup,
                     reference,
                     (&b.pos_m, &b.vel_m_s),
                     (&a.pos_m, &a.vel_m_s),
-                )
-                .margin_m
+                    self.reuse_intervals,
+                );
+                let m = track.window(0, *intervals).margin_m;
+                *kept = Some((v.t_s, track));
+                m
             }
         }
     }
@@ -827,25 +907,228 @@ pub fn propagate_drift(
     body: (&Vector3<f64>, &Vector3<f64>),
     around: (&Vector3<f64>, &Vector3<f64>),
 ) -> DriftFinding {
-    use crate::orbit::constants::R_EARTH_M;
+    let k = setup.intervals.max(1);
+    propagate_drift_track(setup, reference, body, around, 0).window(0, k)
+}
+
+/// The finding when nothing can be certified.
+const BAD_FINDING: DriftFinding = DriftFinding {
+    margin_m: f64::NEG_INFINITY,
+    grid_min_m: f64::NEG_INFINITY,
+    speed_bound_m_s: f64::INFINITY,
+    cw_error_m: f64::INFINITY,
+};
+
+/// Time derivative of a drift state [R_a, V_a, p, v] (ECI axes: `around`'s absolute state,
+/// `body`'s relative one) under the scene's gravity.
+fn drift_rhs(y: &SVector<f64, 12>, j2: bool) -> SVector<f64, 12> {
     use crate::orbit::gravity::{accel_earth, differential_accel};
+    let r = Vector3::new(y[0], y[1], y[2]);
+    let p = Vector3::new(y[6], y[7], y[8]);
+    let mut d = SVector::<f64, 12>::zeros();
+    d.fixed_rows_mut::<3>(0).copy_from(&y.fixed_rows::<3>(3));
+    d.fixed_rows_mut::<3>(3).copy_from(&accel_earth(&r, j2));
+    d.fixed_rows_mut::<3>(6).copy_from(&y.fixed_rows::<3>(9));
+    d.fixed_rows_mut::<3>(9)
+        .copy_from(&differential_accel(&r, &p, j2));
+    d
+}
+
+/// A propagated drift ([`propagate_drift`]) kept so that the margin of any window of
+/// `horizon` within it can be read, and a later state compared with it.
+#[derive(Debug, Clone)]
+pub struct DriftTrack {
+    /// Grid spacing, s.
+    pub dtau_s: f64,
+    /// Sub-steps per grid interval of the finer run.
+    sub_fine: usize,
+    /// The reference orbit's sub-step rule, s.
+    h_max_s: f64,
+    /// J2 on.
+    j2: bool,
+    /// Finer-run states [R_a, V_a, p, v] at the grid points (ECI axes), m and m/s.
+    states: Vec<SVector<f64, 12>>,
+    /// Zone margin at each grid point, m.
+    grid_m: Vec<f64>,
+    /// Lower bound of the zone margin on each interval (−∞ where it cannot be bounded), m.
+    lows: Vec<f64>,
+    /// Step-doubling difference of p at each grid point, m.
+    diff_p: Vec<f64>,
+    /// |p| at each grid point, m.
+    p_norm: Vec<f64>,
+    /// |v| at each grid point, m/s.
+    v_norm: Vec<f64>,
+    /// Largest step-doubling difference of either body's absolute position (|ΔR_a| + |Δp|), m,
+    /// and velocity, m/s, over the grid.
+    err_abs: (f64, f64),
+    /// Lowest radius either body reaches on any interval (the bound of each interval), m.
+    r_min_m: f64,
+}
+
+impl DriftTrack {
+    /// Number of grid intervals.
+    pub fn intervals(&self) -> usize {
+        self.lows.len()
+    }
+
+    /// The certified margin over the grid intervals `i0 .. i1` (see [`propagate_drift`]): the
+    /// smallest grid value and interval bound there, less the largest step-doubling difference
+    /// at those grid points and the rounding allowance of the sub-steps integrated up to `i1`.
+    pub fn window(&self, i0: usize, i1: usize) -> DriftFinding {
+        let i1 = i1.min(self.intervals());
+        if i0 >= i1 {
+            return BAD_FINDING;
+        }
+        let pts = i0..=i1;
+        let fold_max = |v: &[f64]| v[pts.clone()].iter().copied().fold(0.0, f64::max);
+        let grid_min = self.grid_m[pts.clone()]
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        let lower = self.lows[i0..i1].iter().copied().fold(grid_min, f64::min);
+        let rounding = 16.0 * f64::EPSILON * fold_max(&self.p_norm) * (self.sub_fine * i1) as f64;
+        let err = fold_max(&self.diff_p) + rounding;
+        if !(lower.is_finite() && err.is_finite()) {
+            return BAD_FINDING;
+        }
+        DriftFinding {
+            margin_m: lower - err,
+            grid_min_m: grid_min,
+            speed_bound_m_s: fold_max(&self.v_norm),
+            cw_error_m: err,
+        }
+    }
+
+    /// The margin of the drift that starts `tau_s` after this track's start, over `horizon_s`,
+    /// from the bodies' current absolute ECI states (`body`, `around`: position m, velocity
+    /// m/s), if this track can certify it (see [`PassiveSafetyParams`], reuse): `Some((margin,
+    /// deviation bound))` with margin = the track's window margin − the deviation bound.
+    pub fn reuse(
+        &self,
+        tau_s: f64,
+        horizon_s: f64,
+        body: (&Vector3<f64>, &Vector3<f64>),
+        around: (&Vector3<f64>, &Vector3<f64>),
+    ) -> Option<(f64, f64)> {
+        use crate::orbit::constants::R_EARTH_M;
+        use crate::orbit::integrate::rk8_step;
+        let dt = self.dtau_s;
+        if !(tau_s >= 0.0 && tau_s.is_finite()) {
+            return None;
+        }
+        let i0 = (tau_s / dt).floor() as usize;
+        let i1 = ((tau_s + horizon_s) / dt - 1e-9).ceil().max(0.0) as usize;
+        if i1 > self.intervals() || i0 >= i1 {
+            return None;
+        }
+        let window = self.window(i0, i1).margin_m;
+        if !(window.is_finite() && window > 0.0) {
+            return None;
+        }
+        // The old drift at τ: from grid point i0, in n and 2n sub-steps (their difference is
+        // the estimate of this last stretch's error, as for the grid).
+        let sigma = tau_s - i0 as f64 * dt;
+        let y0 = self.states[i0];
+        let (y, step_err) = if sigma > 0.0 {
+            let n = (sigma / self.h_max_s).ceil().max(1.0) as usize;
+            let mut f = |_t: f64, y: &SVector<f64, 12>| drift_rhs(y, self.j2);
+            let mut run = |sub: usize| {
+                let h = sigma / sub as f64;
+                let mut y = y0;
+                for j in 0..sub {
+                    y = rk8_step(&mut f, j as f64 * h, &y, h);
+                }
+                y
+            };
+            let (c, fy) = (run(n), run(2 * n));
+            let d = c - fy;
+            let dp = d.fixed_rows::<3>(0).norm() + d.fixed_rows::<3>(6).norm();
+            let dv = d.fixed_rows::<3>(3).norm() + d.fixed_rows::<3>(9).norm();
+            (fy, (dp, dv))
+        } else {
+            (y0, (0.0, 0.0))
+        };
+        let r_a = Vector3::new(y[0], y[1], y[2]);
+        let v_a = Vector3::new(y[3], y[4], y[5]);
+        let p = Vector3::new(y[6], y[7], y[8]);
+        let v = Vector3::new(y[9], y[10], y[11]);
+        // Rounding of the absolute states over the sub-steps integrated (16ε per sub-step, as
+        // for p).
+        let substeps = (self.sub_fine * (i0 + 1)) as f64 * 2.0;
+        let eps_p = self.err_abs.0 + step_err.0 + 16.0 * f64::EPSILON * r_a.norm() * substeps;
+        let eps_v = self.err_abs.1 + step_err.1 + 16.0 * f64::EPSILON * v_a.norm() * substeps;
+        let da_p = (around.0 - r_a).norm() + eps_p;
+        let da_v = (around.1 - v_a).norm() + eps_v;
+        let db_p = ((body.0 - around.0) - p + (around.0 - r_a)).norm() + eps_p;
+        let db_v = ((body.1 - around.1) - v + (around.1 - v_a)).norm() + eps_v;
+        let r_lo = self.r_min_m - REUSE_MAX_DEVIATION_M;
+        if r_lo.is_nan() || r_lo <= R_EARTH_M {
+            return None;
+        }
+        let g = gravity_gradient_bound(r_lo, self.j2).sqrt();
+        let s = i1 as f64 * dt - tau_s;
+        let (ch, sh) = ((g * s).cosh(), (g * s).sinh() / g);
+        let dev_a = da_p * ch + da_v * sh;
+        let dev_b = db_p * ch + db_v * sh;
+        if !(dev_a <= REUSE_MAX_DEVIATION_M && dev_b <= REUSE_MAX_DEVIATION_M) {
+            return None;
+        }
+        let dev = dev_a + dev_b;
+        Some((window - dev, dev))
+    }
+}
+
+/// Largest deviation of either body from a kept drift under which [`DriftTrack::reuse`]
+/// certifies a margin (the gravity-gradient bound is taken 1 km below the drift's lowest
+/// radius), m.
+pub const REUSE_MAX_DEVIATION_M: f64 = 1000.0;
+
+/// A kept drift is reused while its deviation bound is at most this fraction of the window
+/// margin (so a reused margin is at least 75 % of the kept drift's over the same window). It
+/// sets how conservative a reused margin may be, never a verdict (a reused margin is > 0); on
+/// the flagship's first 120 s, 0.25 needs 363 fresh propagations in 12 000 steps, 0.1 needs 818.
+pub const REUSE_SLACK_FRACTION: f64 = 0.25;
+
+/// Extra grid intervals a reusable drift is propagated beyond the horizon, as a fraction of the
+/// horizon's intervals (it can then be reused for up to that fraction of the horizon).
+pub const REUSE_WINDOW_FRACTION: f64 = 0.1;
+
+/// [`propagate_drift`] over `setup.intervals + extra` grid intervals, kept ([`DriftTrack`]).
+pub fn propagate_drift_track(
+    setup: &DriftSetup,
+    reference: &super::ReferenceView,
+    body: (&Vector3<f64>, &Vector3<f64>),
+    around: (&Vector3<f64>, &Vector3<f64>),
+    extra: usize,
+) -> DriftTrack {
+    use crate::orbit::constants::R_EARTH_M;
     use crate::orbit::integrate::{ReferenceOrbit, rk8_step};
     type S = SVector<f64, 12>;
     let j2 = setup.j2;
-    let k = setup.intervals.max(1);
-    let dtau = setup.horizon_s / k as f64;
-    let bad = DriftFinding {
-        margin_m: f64::NEG_INFINITY,
-        grid_min_m: f64::NEG_INFINITY,
-        speed_bound_m_s: f64::INFINITY,
-        cw_error_m: f64::INFINITY,
-    };
+    let k0 = setup.intervals.max(1);
+    let dtau = setup.horizon_s / k0 as f64;
+    let k = k0 + extra;
     let h_max =
         ReferenceOrbit::from_state(reference.pos_eci_m, reference.vel_eci_m_s, j2).max_substep_s();
+    let mut track = DriftTrack {
+        dtau_s: dtau,
+        sub_fine: 2,
+        h_max_s: h_max,
+        j2,
+        states: Vec::new(),
+        grid_m: vec![f64::NEG_INFINITY; k + 1],
+        lows: vec![f64::NEG_INFINITY; k],
+        diff_p: vec![f64::INFINITY; k + 1],
+        p_norm: vec![0.0; k + 1],
+        v_norm: vec![f64::INFINITY; k + 1],
+        err_abs: (f64::INFINITY, f64::INFINITY),
+        r_min_m: f64::NEG_INFINITY,
+    };
     if !(h_max.is_finite() && h_max > 0.0 && dtau.is_finite() && dtau > 0.0) {
-        return bad;
+        return track;
     }
     let m = (dtau / h_max).ceil().max(1.0) as usize;
+    track.sub_fine = 2 * m;
     // [R_a, V_a]: `around`'s ECI state; [p, v]: `body` from `around` (ECI axes).
     let mut y0 = S::zeros();
     for (off, v) in [
@@ -856,17 +1139,7 @@ pub fn propagate_drift(
     ] {
         y0.fixed_rows_mut::<3>(off).copy_from(&v);
     }
-    let mut f = |_t: f64, y: &S| -> S {
-        let r = Vector3::new(y[0], y[1], y[2]);
-        let p = Vector3::new(y[6], y[7], y[8]);
-        let mut d = S::zeros();
-        d.fixed_rows_mut::<3>(0).copy_from(&y.fixed_rows::<3>(3));
-        d.fixed_rows_mut::<3>(3).copy_from(&accel_earth(&r, j2));
-        d.fixed_rows_mut::<3>(6).copy_from(&y.fixed_rows::<3>(9));
-        d.fixed_rows_mut::<3>(9)
-            .copy_from(&differential_accel(&r, &p, j2));
-        d
-    };
+    let mut f = |_t: f64, y: &S| -> S { drift_rhs(y, j2) };
     // Grid states of both runs.
     let mut run = |sub: usize| -> Vec<S> {
         let h = dtau / sub as f64;
@@ -889,11 +1162,6 @@ pub fn propagate_drift(
             Vector3::new(y[9], y[10], y[11]),
         )
     };
-    let mut err_doubling: f64 = 0.0;
-    let mut p_max: f64 = 0.0;
-    let mut grid_min = f64::INFINITY;
-    let mut lower = f64::INFINITY;
-    let mut v_max: f64 = 0.0;
     // (zone margin, relative position, relative velocity, lowest radius, fastest speed).
     struct Grid {
         m: f64,
@@ -903,11 +1171,16 @@ pub fn propagate_drift(
         v_hi: f64,
     }
     let mut prev: Option<Grid> = None;
-    for (yc, yf) in coarse.iter().zip(&fine) {
+    let (mut err_abs_p, mut err_abs_v): (f64, f64) = (0.0, 0.0);
+    let mut r_min = f64::INFINITY;
+    for (i, (yc, yf)) in coarse.iter().zip(&fine).enumerate() {
         let (p, v) = rel(yf);
-        err_doubling = err_doubling.max((rel(yc).0 - p).norm());
-        p_max = p_max.max(p.norm());
-        v_max = v_max.max(v.norm());
+        let d = yc - yf;
+        track.diff_p[i] = d.fixed_rows::<3>(6).norm();
+        err_abs_p = err_abs_p.max(d.fixed_rows::<3>(0).norm() + d.fixed_rows::<3>(6).norm());
+        err_abs_v = err_abs_v.max(d.fixed_rows::<3>(3).norm() + d.fixed_rows::<3>(9).norm());
+        track.p_norm[i] = p.norm();
+        track.v_norm[i] = v.norm();
         let (r_a, v_a) = (
             Vector3::new(yf[0], yf[1], yf[2]),
             Vector3::new(yf[3], yf[4], yf[5]),
@@ -919,11 +1192,10 @@ pub fn propagate_drift(
         .hill();
         let (p_hill, _) = hill.to_local(&p, &Vector3::zeros());
         let mk = setup.zone.margin(&p_hill);
+        track.grid_m[i] = mk;
         // Lowest radius of either body and fastest absolute speed at this grid point.
         let r_lo = r_a.norm().min((r_a + p).norm());
         let v_hi = v_a.norm().max((v_a + v).norm());
-        grid_min = grid_min.min(mk);
-        lower = lower.min(mk);
         if let Some(Grid {
             m: m0,
             p: p0,
@@ -935,17 +1207,19 @@ pub fn propagate_drift(
             let p_seg0 = (p0.norm() + v0.norm() * dtau).max(p.norm() + v.norm() * dtau);
             let r_seg =
                 r0.min(r_lo) - (vh0.max(v_hi) + G_SURFACE_BOUND_M_S2 * dtau) * dtau * 0.5 - p_seg0;
-            if r_seg.is_nan() || r_seg <= R_EARTH_M {
-                return bad;
+            if !r_seg.is_nan() && r_seg > R_EARTH_M {
+                let g = gravity_gradient_bound(r_seg, j2);
+                if g * dtau * dtau <= 1.0 {
+                    let p_seg = p_seg0 * (1.0 + g * dtau * dtau);
+                    let a = g * p_seg;
+                    let travel = dtau * 0.5 * (v0.norm() + v.norm() + a * dtau);
+                    track.lows[i - 1] = 0.5 * (m0 + mk - travel);
+                    r_min = r_min.min(r_seg);
+                }
             }
-            let g = gravity_gradient_bound(r_seg, j2);
-            if g * dtau * dtau > 1.0 {
-                return bad;
+            if track.lows[i - 1] == f64::NEG_INFINITY {
+                r_min = f64::NEG_INFINITY;
             }
-            let p_seg = p_seg0 * (1.0 + g * dtau * dtau);
-            let a = g * p_seg;
-            let travel = dtau * 0.5 * (v0.norm() + v.norm() + a * dtau);
-            lower = lower.min(0.5 * (m0 + mk - travel));
         }
         prev = Some(Grid {
             m: mk,
@@ -955,17 +1229,10 @@ pub fn propagate_drift(
             v_hi,
         });
     }
-    let rounding = 16.0 * f64::EPSILON * p_max * (2 * m * k) as f64;
-    let err = err_doubling + rounding;
-    if !(lower.is_finite() && err.is_finite()) {
-        return bad;
-    }
-    DriftFinding {
-        margin_m: lower - err,
-        grid_min_m: grid_min,
-        speed_bound_m_s: v_max,
-        cw_error_m: err,
-    }
+    track.err_abs = (err_abs_p, err_abs_v);
+    track.r_min_m = r_min;
+    track.states = fine;
+    track
 }
 
 impl Guarantee for PassiveSafety {

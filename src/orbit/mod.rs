@@ -10,3 +10,4 @@ pub mod integrate;
 pub mod kepler;
 pub mod l2;
 pub mod lvlh;
+pub mod ya;

@@ -30,7 +30,7 @@ use crate::control::interface::{
     GuaranteeObs, MeasuredFrame, Measurement, Needs, Observation, PortsObs, RelativeObs, port_pose,
     ports_obs, relative_obs,
 };
-use crate::control::navfilter::CwKalman;
+use crate::control::navfilter::RelKalman;
 use crate::control::registry::{BuildContext, BuildError, Disturbance, DisturbanceContext, Slot};
 use crate::control::sensor::{Sensor, SensorTruth};
 use crate::environment::EnvObs;
@@ -88,7 +88,7 @@ pub struct HostedSlot {
 /// A slot's navigation filter ([`crate::control::navfilter`]) and its columns.
 pub struct NavSlot {
     /// The filter.
-    pub filter: CwKalman,
+    pub filter: RelKalman,
     /// First of its [`NAV_COLUMNS`] columns.
     first_col: usize,
     /// Hill-from-world rotation at the start of the current step (for the applied force).
@@ -988,17 +988,20 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
         .and_then(|s| s.filter.as_ref().map(|f| (s, f)))
     {
         Some((s, f)) => {
-            let n = env_of_world(world)
-                .reference()
-                .map(|(r, v)| crate::control::generic::mean_motion_rad_s(&r, &v))
-                .filter(|n| *n > 0.0)
-                .ok_or_else(|| {
-                    format!("controller `{kind}`: the sensor's filter runs on the CW model and needs an orbit environment (a bound reference orbit)")
-                })?;
             let dt = world.resource::<Clock>().dt_s;
+            // The reference's state at its own time (the filter's step k is at k·dt).
+            let filter = world
+                .get_resource::<OrbitEnv>()
+                .and_then(|o| {
+                    let (r, v) = o.reference.state();
+                    RelKalman::for_reference(f, &r, &v, o.reference.t_s(), dt, s.position_noise_m)
+                })
+                .ok_or_else(|| {
+                    format!("controller `{kind}`: the sensor's filter runs on the CW or Yamanaka–Ankersen model and needs an orbit environment (a bound, elliptic reference orbit)")
+                })?;
             let first_col = column_of(world, &nav_names)?.first().copied().unwrap_or(0);
             Some(NavSlot {
-                filter: CwKalman::new(f, n, dt, s.position_noise_m),
+                filter,
                 first_col,
                 hill_from_world: UnitQuaternion::identity(),
             })
