@@ -381,36 +381,62 @@ pub fn hull_bracket(
         Some(m) => m.project_local_point(w, false).point,
         None => s.project_local_point(w, true).point,
     };
+    use bevy_rapier3d::rapier::math::Vector;
     let near_a = |w| near(a, ma, w);
     let near_b = |w| rel32 * near(b, mb, rel32.inverse_transform_point(w));
-    let (q1, q2) = (on(ma, p1), rel32 * on(mb, p2));
-    let (r2, r1) = (near_b(q1), near_a(q2));
-    let (d1, d2) = ((r2 - q1).length(), (q2 - r1).length());
-    let (mut upper, mut from, mut to) = if d1 <= d2 { (d1, q1, r2) } else { (d2, r1, q2) };
-    // Alternating projections (x ← the point of A nearest y, y ← the point of B nearest x)
-    // never increase |x − y| and walk a witness that GJK left off the true closest point (on a
-    // curved part) towards it: a few, while they gain.
-    for _ in 0..HULL_UPPER_SWEEPS {
-        let x = near_a(to);
-        let y = near_b(x);
-        let d = (y - x).length();
-        let gains = d < upper * (1.0 - 1e-7);
-        if d < upper {
-            (upper, from, to) = (d, x, y);
+    // The gap along the direction of a point pair (from ∈ A, to ∈ B, |to − from| = d), often
+    // nearer the true direction than GJK's on a curved part (any direction's gap is a lower
+    // bound).
+    let along = |from: Vector, to: Vector, d: f32, gap: f64| {
+        let n = (to - from) / d;
+        if d > 0.0 && n.is_finite() {
+            gap.max(gap_along(n))
+        } else {
+            gap
         }
-        if !gains {
-            break;
+    };
+    // Done once the bracket is down to the rounding (as exact as parry's own f32 queries).
+    let settled = |upper: f32, gap: f64| f64::from(upper) - gap <= eps;
+    let q1 = on(ma, p1);
+    let r2 = near_b(q1);
+    let (mut upper, mut from, mut to) = ((r2 - q1).length(), q1, r2);
+    let mut gap = if settled(upper, gap) {
+        gap
+    } else {
+        along(from, to, upper, gap)
+    };
+    if !settled(upper, gap) {
+        let q2 = rel32 * on(mb, p2);
+        let r1 = near_a(q2);
+        let d2 = (q2 - r1).length();
+        if d2 < upper {
+            (upper, from, to) = (d2, r1, q2);
+            gap = along(from, to, upper, gap);
+        }
+        // Alternating projections (x ← the point of A nearest y, y ← the point of B nearest
+        // x) never increase |x − y| and walk a witness that GJK left off the true closest
+        // point (on a curved part) towards it: a few, while they gain.
+        for _ in 0..HULL_UPPER_SWEEPS {
+            if settled(upper, gap) {
+                break;
+            }
+            let x = near_a(to);
+            let y = near_b(x);
+            let d = (y - x).length();
+            let gains = d < upper * (1.0 - 1e-7);
+            if d < upper {
+                (upper, from, to) = (d, x, y);
+                gap = along(from, to, upper, gap);
+            }
+            if !gains {
+                break;
+            }
         }
     }
-    // The pair achieving the upper bound gives a second direction, often nearer the true one
-    // than GJK's on a curved part (any direction's gap is a lower bound).
-    let n2 = (to - from) / upper;
+    if !upper.is_finite() {
+        return HullEval::None;
+    }
     let upper = f64::from(upper);
-    let gap = if upper > 0.0 && n2.is_finite() {
-        gap.max(gap_along(n2))
-    } else {
-        gap
-    };
     let lower = (gap - eps).max(0.0);
     HullEval::Bracket {
         lower: lower.min(upper),
