@@ -121,6 +121,8 @@ fn geometry(bodies: &[Vec<PartDef>]) -> MonitorGeometry {
                 .map(|p| PartPiece::of(&*p.0, &p.1, p.2))
                 .collect(),
         );
+        g.hulls
+            .push(parts.iter().map(|p| monitor::mesh_hull(&*p.0)).collect());
     }
     g
 }

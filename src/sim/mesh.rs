@@ -147,6 +147,192 @@ fn deviation(m: &MeshComponent, hulls: &[crate::geometry::mesh::ConvexPiece]) ->
     worst
 }
 
+/// Most vertices in a leaf of [`HullSupport`]'s tree.
+const HULL_LEAF: usize = 8;
+
+/// The support map of the convex hull of a mesh part's vertices, for the monitor's hull bracket
+/// (`sim::monitor::hull_bracket`).
+///
+/// The hull H of the vertices contains every triangle, so it contains the mesh M, whether M is
+/// closed or not; its support function h_H(n) = max over the vertices v of n·v. No hull is
+/// built (nothing to fail on a flat or degenerate mesh, and no vertex a hull algorithm's
+/// tolerance could drop): the vertices are kept in a median-split tree of axis-aligned boxes,
+/// and the maximum is found by branch and bound — a node whose box's bound
+/// Σ_k max(n_k·lo_k, n_k·hi_k) (the maximum of n·x over the box) is at or below the best vertex
+/// found is skipped, so the answer is the exact maximising vertex (to f64 rounding, at most
+/// [`HULL_SUPPORT_REL_TOL`] of the vertices' distance from the part origin) at a cost near the
+/// tree's depth where the mesh is smooth — where parry's `ConvexPolyhedron` scans every vertex.
+#[derive(Debug, Clone)]
+pub struct HullSupport {
+    /// Vertices, part frame, in tree order (f32, as parry's `TriMesh` holds them), m.
+    points: Vec<Vector>,
+    /// The same in f64, m.
+    points_f64: Vec<[f64; 3]>,
+    /// The tree (node 0 the root).
+    nodes: Vec<HullNode>,
+    /// Largest distance of a vertex from the part origin, m.
+    radius_m: f64,
+}
+
+/// A node of [`HullSupport`]'s tree: the box of its vertices `start..end`, and its children
+/// (`left == 0` for a leaf).
+#[derive(Debug, Clone, Copy)]
+struct HullNode {
+    lo: [f64; 3],
+    hi: [f64; 3],
+    start: u32,
+    end: u32,
+    left: u32,
+    right: u32,
+}
+
+/// Relative bound on the f64 rounding of [`HullSupport`]'s maximum (1e-12 of the vertices'
+/// largest distance from the part origin, against an actual ≤ 4·2⁻⁵³·√3 ≈ 8e-16 for the
+/// three-term dot products and box bounds): the hull bracket subtracts it from its lower bound.
+pub const HULL_SUPPORT_REL_TOL: f64 = 1e-12;
+
+impl HullSupport {
+    /// The support map of the hull of `vertices` (part frame); `None` without a finite vertex.
+    pub fn new(vertices: &[Vector]) -> Option<Self> {
+        let p64: Vec<[f64; 3]> = vertices
+            .iter()
+            .map(|v| [f64::from(v.x), f64::from(v.y), f64::from(v.z)])
+            .filter(|p| p.iter().all(|c| c.is_finite()))
+            .collect();
+        if p64.is_empty() || p64.len() > u32::MAX as usize / 2 {
+            return None;
+        }
+        let mut idx: Vec<usize> = (0..p64.len()).collect();
+        let mut nodes = Vec::with_capacity(2 * p64.len() / HULL_LEAF + 1);
+        Self::build(&p64, &mut idx, 0, &mut nodes);
+        let points_f64: Vec<[f64; 3]> = idx.iter().map(|&k| p64[k]).collect();
+        let points = points_f64
+            .iter()
+            .map(|p| Vector::new(p[0] as f32, p[1] as f32, p[2] as f32))
+            .collect();
+        let radius_m = points_f64
+            .iter()
+            .map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt())
+            .fold(0.0, f64::max);
+        Some(Self {
+            points,
+            points_f64,
+            nodes,
+            radius_m,
+        })
+    }
+
+    /// Builds the subtree of the vertices `idx` (at `offset` in tree order); returns its node.
+    fn build(p: &[[f64; 3]], idx: &mut [usize], offset: usize, nodes: &mut Vec<HullNode>) -> u32 {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for &k in idx.iter() {
+            for c in 0..3 {
+                lo[c] = lo[c].min(p[k][c]);
+                hi[c] = hi[c].max(p[k][c]);
+            }
+        }
+        let me = nodes.len();
+        nodes.push(HullNode {
+            lo,
+            hi,
+            start: offset as u32,
+            end: (offset + idx.len()) as u32,
+            left: 0,
+            right: 0,
+        });
+        if idx.len() > HULL_LEAF {
+            let axis = (0..3)
+                .max_by(|a, b| (hi[*a] - lo[*a]).total_cmp(&(hi[*b] - lo[*b])))
+                .unwrap_or(0);
+            let mid = idx.len() / 2;
+            idx.select_nth_unstable_by(mid, |a, b| p[*a][axis].total_cmp(&p[*b][axis]));
+            let (l, r) = idx.split_at_mut(mid);
+            let left = Self::build(p, l, offset, nodes);
+            let right = Self::build(p, r, offset + mid, nodes);
+            nodes[me].left = left;
+            nodes[me].right = right;
+        }
+        me as u32
+    }
+
+    /// Largest distance of a vertex from the part origin, m.
+    pub fn radius_m(&self) -> f64 {
+        self.radius_m
+    }
+
+    /// Vertices held.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// No vertex (never: [`HullSupport::new`] refuses that).
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Index (tree order) of a vertex maximising d·v.
+    fn support_index(&self, d: [f64; 3]) -> usize {
+        let bound = |n: &HullNode| {
+            (0..3)
+                .map(|k| (d[k] * n.lo[k]).max(d[k] * n.hi[k]))
+                .sum::<f64>()
+        };
+        let mut best = f64::NEG_INFINITY;
+        let mut arg = 0;
+        // Depth-first, the child with the higher bound first; the tree is at most
+        // log2(vertices) + 1 deep and each level leaves at most one node pending.
+        let mut stack = [0u32; 80];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let n = &self.nodes[stack[top] as usize];
+            if n.left == 0 {
+                for k in n.start as usize..n.end as usize {
+                    let p = &self.points_f64[k];
+                    let v = d[0] * p[0] + d[1] * p[1] + d[2] * p[2];
+                    if v > best {
+                        best = v;
+                        arg = k;
+                    }
+                }
+                continue;
+            }
+            let (l, r) = (n.left, n.right);
+            let (bl, br) = (
+                bound(&self.nodes[l as usize]),
+                bound(&self.nodes[r as usize]),
+            );
+            let (first, bf, second, bs) = if bl >= br {
+                (l, bl, r, br)
+            } else {
+                (r, br, l, bl)
+            };
+            if bs > best {
+                stack[top] = second;
+                top += 1;
+            }
+            if bf > best {
+                stack[top] = first;
+                top += 1;
+            }
+        }
+        arg
+    }
+
+    /// A vertex maximising d·v (part frame, f64), m.
+    pub fn support_f64(&self, d: &nalgebra::Vector3<f64>) -> nalgebra::Vector3<f64> {
+        let p = self.points_f64[self.support_index([d.x, d.y, d.z])];
+        nalgebra::Vector3::new(p[0], p[1], p[2])
+    }
+}
+
+impl bevy_rapier3d::parry::shape::SupportMap for HullSupport {
+    fn local_support_point(&self, dir: Vector) -> Vector {
+        self.points[self.support_index([f64::from(dir.x), f64::from(dir.y), f64::from(dir.z)])]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     //! Reference: a convex mesh is its own decomposition (deviation at f32 rounding); a

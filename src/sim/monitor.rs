@@ -270,6 +270,189 @@ pub fn shape_bracket(
     }
 }
 
+/// Most alternating-projection sweeps [`hull_bracket`] makes to tighten its upper bound.
+pub const HULL_UPPER_SWEEPS: usize = 4;
+
+/// What [`hull_bracket`] found for a part pair with a mesh part.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum HullEval {
+    /// The hulls' certified gap is at least the caller's `clear_at`: the pair is at least that
+    /// far apart (this certified lower bound, m); no point query was made.
+    Clear(f64),
+    /// A certified lower bound and an achieved upper bound of the pair's distance, m.
+    Bracket {
+        /// The hulls' certified gap (a lower bound of the mesh distance), m.
+        lower: f64,
+        /// The distance of a point of one part to the other part (an upper bound), m.
+        upper: f64,
+    },
+    /// The hulls overlap (or a side has no support map): no bound from them.
+    None,
+}
+
+/// A certified bracket of the distance between two parts, at least one of them a triangle mesh
+/// M (parry `TriMesh`, no support map) with the support map of its vertices' convex hull H
+/// ([`super::mesh::HullSupport`]), without a triangle-by-triangle query.
+///
+/// Lower bound: M ⊂ H (every triangle is a convex combination of its corners), so
+/// d(A, M) ≥ d(A, H) for any A, closed mesh or not; GJK between the two support maps (the
+/// other part's own, or its hull's when it is a mesh too) gives witnesses p₁, p₂ and the
+/// direction n = (p₂ − p₁)/|p₂ − p₁|, and the gap n·(s₂(−n) − s₁(n)) is a lower bound of the
+/// hulls' distance (any axis's gap is, as in [`shape_bracket`]) — and so is the gap along the
+/// direction of the point pair of the upper bound below, nearer the true direction than GJK's
+/// on a curved part; the larger, less the f32 rounding of the relative pose ([`F32_REL_TOL`])
+/// and of the hulls' maxima ([`super::mesh::HULL_SUPPORT_REL_TOL`]).
+///
+/// Upper bound: each side's point near its witness — for a mesh, the point of its triangles
+/// closest to its hull's witness (parry's point projection on the `TriMesh`, which its BVH
+/// prunes well); for a primitive, its witness itself (a convex combination of its support
+/// points, so in it) — is a point w of that part, and the distance from w to the other part
+/// (its triangles, or the solid primitive: parry's point query) is at least their distance;
+/// the smaller of the two is the upper bound. Where the hull's closest point lies on the mesh
+/// (a convex part, or the convex side of a concave one) it agrees with the lower bound to
+/// rounding; in a concavity, or inside the hull, it does not, and the caller falls back to the
+/// exact mesh query.
+///
+/// With `clear_at`, a lower bound at or above it is returned as [`HullEval::Clear`] before the
+/// point query.
+#[allow(clippy::too_many_arguments)]
+pub fn hull_bracket(
+    pose_a: &Isometry3<f64>,
+    (a, ha, ra): (&dyn rp::Shape, Option<&super::mesh::HullSupport>, f64),
+    pose_b: &Isometry3<f64>,
+    (b, hb, rb): (&dyn rp::Shape, Option<&super::mesh::HullSupport>, f64),
+    clear_at: f64,
+) -> HullEval {
+    use bevy_rapier3d::parry::query::PointQuery;
+    use bevy_rapier3d::parry::shape::SupportMap;
+    fn side<'s>(
+        s: &'s dyn rp::Shape,
+        h: Option<&'s super::mesh::HullSupport>,
+    ) -> Option<&'s dyn SupportMap> {
+        match h {
+            Some(h) => Some(h as &dyn SupportMap),
+            None => s.as_support_map(),
+        }
+    }
+    let (Some(sa), Some(sb)) = (side(a, ha), side(b, hb)) else {
+        return HullEval::None;
+    };
+    let rel = pose_a.inv_mul(pose_b);
+    let scale = rel.translation.vector.norm() + ra + rb;
+    let hull_tol = super::mesh::HULL_SUPPORT_REL_TOL
+        * (ha.map_or(0.0, |h| h.radius_m()) + hb.map_or(0.0, |h| h.radius_m()));
+    let eps = F32_REL_TOL * scale + hull_tol;
+    let rel32 = conv::pose(&rel);
+    let (p1, p2) =
+        match query::details::closest_points_support_map_support_map(&rel32, sa, sb, f32::MAX) {
+            // p₁ in A's frame, p₂ in B's.
+            query::ClosestPoints::WithinMargin(p1, p2) => (p1, p2),
+            _ => return HullEval::None,
+        };
+    let p2a = rel32 * p2;
+    let d = (p2a - p1).length();
+    if d.is_nan() || d <= 0.0 {
+        return HullEval::None;
+    }
+    // The hulls' gap along a unit direction n (A's frame): n·(s_b(−n) − s_a(n)).
+    let gap_along = |n: bevy_rapier3d::rapier::math::Vector| {
+        let s1 = sa.local_support_point(n);
+        let s2 = rel32 * sb.local_support_point(rel32.rotation.inverse() * -n);
+        f64::from(n.dot(s2 - s1))
+    };
+    let gap = gap_along((p2a - p1) / d).min(f64::from(d));
+    if gap - eps >= clear_at {
+        return HullEval::Clear(gap - eps);
+    }
+    // A point of each part near its witness: a mesh's point closest to its hull's witness,
+    // or a primitive's own witness (in it: a convex combination of its support points); the
+    // upper bound is the smaller distance of either to the other part.
+    let (ma, mb) = (ha.and(a.as_trimesh()), hb.and(b.as_trimesh()));
+    if ma.is_none() && mb.is_none() {
+        return HullEval::None;
+    }
+    let on = |m: Option<&bevy_rapier3d::parry::shape::TriMesh>, p| match m {
+        Some(m) => m.project_local_point(p, false).point,
+        None => p,
+    };
+    // The point of a part closest to w (its frame): the mesh's triangles (its surface, as the
+    // exact query judges it), or the solid primitive.
+    let near = |s: &dyn rp::Shape, m: Option<&bevy_rapier3d::parry::shape::TriMesh>, w| match m {
+        Some(m) => m.project_local_point(w, false).point,
+        None => s.project_local_point(w, true).point,
+    };
+    use bevy_rapier3d::rapier::math::Vector;
+    let near_a = |w| near(a, ma, w);
+    let near_b = |w| rel32 * near(b, mb, rel32.inverse_transform_point(w));
+    // The gap along the direction of a point pair (from ∈ A, to ∈ B, |to − from| = d), often
+    // nearer the true direction than GJK's on a curved part (any direction's gap is a lower
+    // bound).
+    let along = |from: Vector, to: Vector, d: f32, gap: f64| {
+        let n = (to - from) / d;
+        if d > 0.0 && n.is_finite() {
+            gap.max(gap_along(n))
+        } else {
+            gap
+        }
+    };
+    // Done once the bracket is down to the rounding (as exact as parry's own f32 queries).
+    let settled = |upper: f32, gap: f64| f64::from(upper) - gap <= eps;
+    let q1 = on(ma, p1);
+    let r2 = near_b(q1);
+    let (mut upper, mut from, mut to) = ((r2 - q1).length(), q1, r2);
+    let mut gap = if settled(upper, gap) {
+        gap
+    } else {
+        along(from, to, upper, gap)
+    };
+    if !settled(upper, gap) {
+        let q2 = rel32 * on(mb, p2);
+        let r1 = near_a(q2);
+        let d2 = (q2 - r1).length();
+        if d2 < upper {
+            (upper, from, to) = (d2, r1, q2);
+            gap = along(from, to, upper, gap);
+        }
+        // Alternating projections (x ← the point of A nearest y, y ← the point of B nearest
+        // x) never increase |x − y| and walk a witness that GJK left off the true closest
+        // point (on a curved part) towards it: a few, while they gain.
+        for _ in 0..HULL_UPPER_SWEEPS {
+            if settled(upper, gap) {
+                break;
+            }
+            let x = near_a(to);
+            let y = near_b(x);
+            let d = (y - x).length();
+            let gains = d < upper * (1.0 - 1e-7);
+            if d < upper {
+                (upper, from, to) = (d, x, y);
+                gap = along(from, to, upper, gap);
+            }
+            if !gains {
+                break;
+            }
+        }
+    }
+    if !upper.is_finite() {
+        return HullEval::None;
+    }
+    let upper = f64::from(upper);
+    let lower = (gap - eps).max(0.0);
+    HullEval::Bracket {
+        lower: lower.min(upper),
+        upper,
+    }
+}
+
+/// The hull support map of a triangle-mesh shape ([`MonitorGeometry::hulls`]); `None` for any
+/// other shape.
+pub fn mesh_hull(shape: &dyn rp::Shape) -> Option<std::sync::Arc<super::mesh::HullSupport>> {
+    shape
+        .as_trimesh()
+        .and_then(|m| super::mesh::HullSupport::new(m.vertices()))
+        .map(std::sync::Arc::new)
+}
+
 /// The parts of every body as the monitor uses them (fetched from the ECS once).
 #[derive(Resource, Debug, Clone, Default)]
 pub struct MonitorGeometry {
@@ -292,6 +475,10 @@ pub struct MonitorGeometry {
     pub aabb_extent_m: Vec<f64>,
     /// Per body, per collider: the part as its own rate bound sees it ([`PartPiece`]).
     pub pieces: Vec<Vec<PartPiece>>,
+    /// Per body, per collider: for a triangle-mesh part, the support map of its vertices'
+    /// convex hull ([`super::mesh::HullSupport`], for [`hull_bracket`]); `None` for the other
+    /// parts. May be shorter than `shapes` (read as `None`).
+    pub hulls: Vec<Vec<Option<std::sync::Arc<super::mesh::HullSupport>>>>,
 }
 
 /// Symmetry of a part about an axis of its own, for the rotation-aware rate bound.
@@ -499,6 +686,8 @@ impl MonitorGeometry {
                     .map(|((sh, p), r)| PartPiece::of(&**sh, p, *r))
                     .collect(),
             );
+            g.hulls
+                .push(shapes.iter().map(|sh| mesh_hull(&**sh)).collect());
             g.aabb_extent_m.push(aabb_extent);
             g.has_docking.push(dock.iter().any(|d| *d));
             g.shapes.push(shapes);
@@ -509,6 +698,11 @@ impl MonitorGeometry {
             g.extent_m.push(extent);
         }
         g
+    }
+
+    /// The hull support map of part a of body i, if it is a triangle mesh.
+    pub fn hull(&self, i: usize, a: usize) -> Option<&super::mesh::HullSupport> {
+        self.hulls.get(i)?.get(a)?.as_deref()
     }
 
     /// World poses (and bounding radii) of body i's parts, its centre of mass at `pos` with
@@ -572,7 +766,7 @@ pub fn closest_parts(
     warm: Option<(usize, usize)>,
     certify: bool,
     candidates: &mut Vec<(f64, usize, usize)>,
-    evaluated: &mut Vec<(f64, usize, usize)>,
+    evaluated: &mut Vec<Evaluated>,
     count: &mut QueryCount,
 ) -> PartPairHit {
     let mut none = None;
@@ -596,7 +790,7 @@ pub fn closest_parts_lows(
     pj: &[(Isometry3<f64>, f64)],
     warm: Option<(usize, usize)>,
     candidates: &mut Vec<(f64, usize, usize)>,
-    evaluated: &mut Vec<(f64, usize, usize)>,
+    evaluated: &mut Vec<Evaluated>,
     count: &mut QueryCount,
     l: &mut Vec<f64>,
 ) -> PartPairHit {
@@ -619,10 +813,13 @@ pub fn closest_parts_lows(
         let scale = |a: usize, b: usize| {
             (pi[a].0.translation.vector - pj[b].0.translation.vector).norm() + pi[a].1 + pj[b].1
         };
-        for &(d, a, b) in evaluated.iter() {
+        for &(d, known, a, b) in evaluated.iter() {
             let loose = d * (1.0 - GJK_REL_TOL) - F32_REL_TOL * scale(a, b);
             let k = a * nj + b;
             l[k] = l[k].max(loose);
+            if !known.is_nan() {
+                l[k] = l[k].max(known);
+            }
         }
         if hit.d.value.is_finite() {
             let k = hit.a * nj + hit.b;
@@ -635,6 +832,93 @@ pub fn closest_parts_lows(
     hit
 }
 
+/// A part pair evaluated by [`pair_eval`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PairEval {
+    /// Certified to be at least this far apart (at or above the caller's `clear_at`), m.
+    Clear(f64),
+    /// The distance (parry's value, or a mesh pair's achieved upper bound, m) and, for a pair
+    /// with a mesh part, its certified lower bound (NaN for the other pairs: [`shape_bracket`]
+    /// gives theirs when it is needed), m.
+    Value(f64, f64),
+}
+
+/// The distance of part a (world pose and bounding radius `pa`) of body i and part b of body j.
+///
+/// A pair of parts with support maps is parry's exact query ([`shape_distance`]), as always. A
+/// pair with a triangle-mesh part is first bracketed by its convex hull ([`hull_bracket`]): a
+/// certified lower bound at or above `clear_at` prunes it ([`PairEval::Clear`]); a bracket as
+/// narrow as parry's own GJK distance — lower ≥ upper·(1 − [`GJK_REL_TOL`]) − the f32 rounding
+/// [`F32_REL_TOL`]·(|c_a − c_b| + r_a + r_b), the same bound every caller derives from an exact
+/// value — is the answer (value: the upper bound, achieved by a point of one part and its
+/// projection on the other's mesh); otherwise (a concavity, a part inside the other's hull) the
+/// exact triangle-mesh query, its lower bound the larger of its value less those tolerances and
+/// the hull's. Either way the value is within those tolerances of the true mesh distance.
+#[allow(clippy::too_many_arguments)]
+pub fn pair_eval(
+    geo: &MonitorGeometry,
+    i: usize,
+    a: usize,
+    pa: &(Isometry3<f64>, f64),
+    j: usize,
+    b: usize,
+    pb: &(Isometry3<f64>, f64),
+    clear_at: f64,
+) -> PairEval {
+    let (sa, sb) = (&*geo.shapes[i][a], &*geo.shapes[j][b]);
+    let (ha, hb) = (geo.hull(i, a), geo.hull(j, b));
+    if ha.is_none() && hb.is_none() {
+        return PairEval::Value(shape_distance(&pa.0, sa, &pb.0, sb), f64::NAN);
+    }
+    let scale = (pa.0.translation.vector - pb.0.translation.vector).norm() + pa.1 + pb.1;
+    let eps = F32_REL_TOL * scale;
+    let hull_lower = match hull_bracket(&pa.0, (sa, ha, pa.1), &pb.0, (sb, hb, pb.1), clear_at) {
+        HullEval::Clear(l) => return PairEval::Clear(l),
+        HullEval::Bracket { lower, upper } if lower >= upper * (1.0 - GJK_REL_TOL) - eps => {
+            return PairEval::Value(upper, lower);
+        }
+        HullEval::Bracket { lower, .. } => lower,
+        HullEval::None => 0.0,
+    };
+    let d = shape_distance(&pa.0, sa, &pb.0, sb);
+    let loose = d * (1.0 - GJK_REL_TOL) - eps;
+    PairEval::Value(d, loose.max(hull_lower).min(d).max(0.0))
+}
+
+/// The certified bracket of part a of body i and part b of body j at world poses (with bounding
+/// radii) `pa`, `pb`: [`shape_bracket`] for parts with support maps, [`pair_eval`] for a pair
+/// with a mesh part.
+#[allow(clippy::too_many_arguments)]
+pub fn part_bracket(
+    geo: &MonitorGeometry,
+    i: usize,
+    a: usize,
+    pa: &(Isometry3<f64>, f64),
+    j: usize,
+    b: usize,
+    pb: &(Isometry3<f64>, f64),
+) -> Bracket {
+    let (sa, sb) = (&*geo.shapes[i][a], &*geo.shapes[j][b]);
+    if geo.hull(i, a).is_none() && geo.hull(j, b).is_none() {
+        return shape_bracket(&pa.0, sa, pa.1, &pb.0, sb, pb.1);
+    }
+    match pair_eval(geo, i, a, pa, j, b, pb, f64::INFINITY) {
+        PairEval::Value(value, lower) => Bracket {
+            value,
+            lower: lower.min(value),
+        },
+        // (Not with an infinite `clear_at`.)
+        PairEval::Clear(lower) => Bracket {
+            value: lower,
+            lower,
+        },
+    }
+}
+
+/// An evaluated part pair: (value, certified lower bound or NaN — see [`PairEval::Value`] —,
+/// part a, part b).
+pub type Evaluated = (f64, f64, usize, usize);
+
 #[allow(clippy::too_many_arguments)]
 fn closest_parts_inner(
     geo: &MonitorGeometry,
@@ -646,11 +930,12 @@ fn closest_parts_inner(
     warm: Option<(usize, usize)>,
     certify: bool,
     candidates: &mut Vec<(f64, usize, usize)>,
-    evaluated: &mut Vec<(f64, usize, usize)>,
+    evaluated: &mut Vec<Evaluated>,
     count: &mut QueryCount,
     lows: &mut Option<&mut Vec<f64>>,
 ) -> PartPairHit {
     let (si, sj) = (&geo.shapes[i], &geo.shapes[j]);
+    let nj = pj.len();
     if let Some(l) = lows.as_deref_mut() {
         l.clear();
         for (pa, ra) in pi {
@@ -659,18 +944,27 @@ fn closest_parts_inner(
             }
         }
     }
-    let query = |a: usize, b: usize| shape_distance(&pi[a].0, &*si[a], &pj[b].0, &*sj[b]);
+    // A pair a hull cleared: its certified bound joins the lows.
+    let cleared = |a: usize, b: usize, l: f64, lows: &mut Option<&mut Vec<f64>>| {
+        if let Some(ls) = lows.as_deref_mut() {
+            ls[a * nj + b] = ls[a * nj + b].max(l);
+        }
+    };
+    let query =
+        |a: usize, b: usize, clear_at: f64| pair_eval(geo, i, a, &pi[a], j, b, &pj[b], clear_at);
     let warm = warm.filter(|(a, b)| keep(*a, *b));
     evaluated.clear();
-    let (mut best, mut ba, mut bb) = match warm {
-        Some((a, b)) => {
-            count.exact += 1;
-            let d = query(a, b);
-            evaluated.push((d, a, b));
-            (d, a, b)
+    let (mut best, mut ba, mut bb) = (f64::INFINITY, 0, 0);
+    if let Some((a, b)) = warm {
+        count.exact += 1;
+        match query(a, b, f64::INFINITY) {
+            PairEval::Value(d, l) => {
+                evaluated.push((d, l, a, b));
+                (best, ba, bb) = (d, a, b);
+            }
+            PairEval::Clear(l) => cleared(a, b, l, lows),
         }
-        None => (f64::INFINITY, 0, 0),
-    };
+    }
     candidates.clear();
     for (a, (pa, ra)) in pi.iter().enumerate() {
         for (b, (pb, rb)) in pj.iter().enumerate() {
@@ -693,11 +987,18 @@ fn closest_parts_inner(
             count.pruned += (candidates.len() - c) as u64;
             break;
         }
-        let d = query(a, b);
         count.exact += 1;
-        evaluated.push((d, a, b));
-        if d < best {
-            (best, ba, bb) = (d, a, b);
+        match query(a, b, best) {
+            PairEval::Value(d, l) => {
+                evaluated.push((d, l, a, b));
+                if d < best {
+                    (best, ba, bb) = (d, a, b);
+                }
+            }
+            PairEval::Clear(l) => {
+                count.pruned += 1;
+                cleared(a, b, l, lows);
+            }
         }
     }
     if !certify || !best.is_finite() || best <= 0.0 {
@@ -708,11 +1009,25 @@ fn closest_parts_inner(
             b: bb,
         };
     }
-    let bracket =
-        |a: usize, b: usize| shape_bracket(&pi[a].0, &*si[a], pi[a].1, &pj[b].0, &*sj[b], pj[b].1);
-    count.exact += 1;
-    let mut lower = bracket(ba, bb).lower;
-    for &(d, a, b) in evaluated.iter() {
+    // A pair's certified lower bound: the one its evaluation gave (mesh pairs), else its
+    // certified bracket.
+    let mut certified = |e: &Evaluated| {
+        if e.1.is_nan() {
+            count.exact += 1;
+            shape_bracket(
+                &pi[e.2].0, &*si[e.2], pi[e.2].1, &pj[e.3].0, &*sj[e.3], pj[e.3].1,
+            )
+            .lower
+        } else {
+            e.1
+        }
+    };
+    let mut lower = evaluated
+        .iter()
+        .find(|e| (e.2, e.3) == (ba, bb))
+        .map_or(0.0, &mut certified);
+    for e in evaluated.iter() {
+        let (d, _, a, b) = *e;
         if (a, b) == (ba, bb) {
             continue;
         }
@@ -720,8 +1035,7 @@ fn closest_parts_inner(
             (pi[a].0.translation.vector - pj[b].0.translation.vector).norm() + pi[a].1 + pj[b].1;
         let loose = d * (1.0 - GJK_REL_TOL) - F32_REL_TOL * scale;
         if loose < lower {
-            count.exact += 1;
-            lower = lower.min(bracket(a, b).lower);
+            lower = lower.min(certified(e));
         }
     }
     PartPairHit {
@@ -750,7 +1064,7 @@ pub struct DistanceScratch {
     /// (lower bound, part a, part b) for the current body pair.
     candidates: Vec<(f64, usize, usize)>,
     /// Part pairs evaluated for the current body pair.
-    evaluated: Vec<(f64, usize, usize)>,
+    evaluated: Vec<Evaluated>,
     /// Per-part rate terms of two bodies ([`part_terms`]).
     terms: [PartTerms; 2],
     /// Per part pair rate bounds of the current body pair ([`part_pair_rates`]).
@@ -1330,14 +1644,7 @@ pub fn touch_time(
             let [ti, tj] = &mut sc.tmp;
             geo.part_poses(i, &xi, &qi, ti);
             geo.part_poses(j, &xj, &qj, tj);
-            shape_bracket(
-                &ti[a].0,
-                &*geo.shapes[i][a],
-                ti[a].1,
-                &tj[b].0,
-                &*geo.shapes[j][b],
-                tj[b].1,
-            )
+            part_bracket(geo, i, a, &ti[a], j, b, &tj[b])
         };
         let (f0, f1) = (f(0.0), f(dt));
         first_below(dt, f0, f1, rate, TOUCH_DISTANCE_M, tol, 256, &mut f)
