@@ -18,7 +18,9 @@
 //! plate spinning at 100 rad/s sweeps through a ball between two samples that both show it
 //! clear: the search finds the contact inside the step; in a whole run, a `MinDistance`
 //! guarantee broken only between samples by such a sweep is found violated, inside the
-//! interval, with the closed-form worst margin.
+//! interval, with the closed-form worst margin. Over a step that turns a body more than
+//! 0.3 rad, a guarantee resting on the rotation is `unresolved`, never `held`, and its search
+//! only looks for a violation: its cost is the closed-form bisection depth to prove zero.
 //!
 //! Tolerances: parry works in f32 — a dense value is within 8 f32 ulps of the pose's scale
 //! (|translation| + both bounding radii, a few metres: ≈ 4e-6 m) of the true distance, and
@@ -815,4 +817,61 @@ fn val_guarantee_resting_on_an_under_resolved_rotation_is_not_held() {
     assert_eq!(n, 0);
     assert_eq!(d, "held");
     assert_eq!(k, "held");
+}
+
+/// On a step whose rotation is under-resolved the guarantee's interval search only looks for a
+/// violation: the plate of the scene above spinning at 100 rad/s (1 rad a step at dt = 10 ms)
+/// under a ball on its spin axis at 1.3 m, so the margin of `MinDistance(min_m: 1.0)` is
+/// 0.19 m at every angle, while the distance rate bound (≈ 100 m/s over the plate's 1 m reach)
+/// does not clear zero on the whole step. Reference: the geometry — the spin axis passes
+/// through the plate's inner edge, so the ball's centre is 1.29 m from the plate's top face at
+/// all angles, 1.19 m from its surface. The guarantee is `unresolved` (never `held`, never
+/// `violated`), its worst margin the closed-form 0.19 m (to parry's f32: 1e-5 m), and the
+/// search only proves the margin above zero (docs/verification.md; at most 32 evaluations,
+/// `UNRESOLVED_LOOK_EVALS`). Its cost, in closed form: the plate's per-part rate is
+/// L = Ω·(0.5 m + ρ) with ρ = |(0.5, 0.15, 0.01)| m = 0.522 m, so L·dt = 1.02 m; a piece of width
+/// w clears zero when (0.19 + 0.19 − L·w)/2 ≥ 0, i.e. at w = dt/4: two bisection levels, 3
+/// evaluations a step. Refining the worst margin to 10 % (threshold 0.171 m) as on a proven step
+/// needs L·w ≤ 0.038 m: five levels, 31 evaluations a step (main before this change: 310 over
+/// the 10 steps).
+#[test]
+fn val_under_resolved_step_only_looks_for_a_violation() {
+    let text = format!(
+        r#"Scene(name: "fast_spin_near", dt_s: 0.01, duration_s: 0.1, environment: FreeSpace,
+           bodies: [
+             (name: "spinner", role: Other, mass_kg: 50.0,
+              inertia_kg_m2: (xx: 20.0, yy: 30.0, zz: 45.0),
+              initial: (pos_m: (0.0, 0.0, 0.0), rate_body_deg_s: (0.0, 0.0, {})),
+              parts: [Bus(name: "plate", pos_m: (0.5, 0.0, 0.0), shape: Box(size_m: (1.0, 0.3, 0.02)))]),
+             (name: "ball", role: Other, mass_kg: 10.0,
+              inertia_kg_m2: (xx: 1.0, yy: 1.0, zz: 1.0),
+              initial: (pos_m: (0.0, 0.0, 1.3)),
+              parts: [Bus(name: "ball", shape: Sphere(radius_m: 0.1))]),
+           ],
+           guarantees: [MinDistance(name: "clear_1m", a: "spinner", b: "ball", min_m: 1.0)])"#,
+        100f64.to_degrees()
+    );
+    let loaded = load_scene_str(&text, "fast_spin_near", &[]).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = Simulation::new(&loaded).unwrap_or_else(|e| panic!("{e}"));
+    let n = sim.steps_for(sim.scene.duration_s);
+    sim.step(n);
+    let s = sim.summary();
+    let g = s["guarantees"]
+        .as_array()
+        .expect("guarantees")
+        .iter()
+        .find(|g| g["name"] == "clear_1m")
+        .expect("clear_1m")
+        .clone();
+    println!("{g}");
+    assert_eq!(s["monitor"]["rotation_under_resolved_steps"], n);
+    assert_eq!(g["verdict"], "unresolved", "{g}");
+    let worst = g["worst_margin"].as_f64().expect("worst");
+    assert!((worst - 0.19).abs() <= 1e-5, "worst margin {worst}");
+    let evals = g["interval_evaluations"].as_u64().expect("evals");
+    assert!(
+        evals > 0,
+        "the bound does not clear zero: the search must look"
+    );
+    assert!(evals <= 3 * n, "{evals} evaluations over {n} steps");
 }

@@ -1033,10 +1033,11 @@ const MAX_GUARANTEE_EVALS: u32 = 256;
 /// `tests/val_spin_bounds.rs` sweeping through a ball between two samples of a 100 rad/s spin
 /// (below zero ≈ 2.5 ms of the 10 ms step) is found at the first evaluation; on the
 /// `rpod bench --cliffs` spin (`docking_aligned`, 100 rad/s, 1 910 such steps) every search
-/// ended within 7 evaluations (clear of zero: 1, 3 or 7). Bisection to depth 5 (≤ 31
-/// evaluations) samples every 1/32 of the step where its bounds do not clear, so 32 leaves room
-/// for a violation lasting a few percent of the step, at 1/8 of the usual cost when it
-/// exhausts.
+/// ended within 7 evaluations (clear of zero: 1, 3 or 7; 1 306 of them at 3). 32 is over four
+/// times the most any of them needed — room for a bisection about five levels deep (31
+/// evaluations fill a step to 1/32 of its width when every piece needs splitting) — and 1/8 of
+/// the budget a proven step may spend. A violation the search does not land on is not missed
+/// silently: the step stays `unresolved`.
 const UNRESOLVED_LOOK_EVALS: u32 = 32;
 
 /// A positive worst margin is refined until its certified lower bound is within this fraction
@@ -1065,7 +1066,9 @@ const MAX_CROSSING_EVALS: u32 = 256;
 /// then located: the first time the margin is below zero, bracketed to
 /// [`EVENT_TIME_TOL`]·dt ([`crate::geometry::bounds::first_below`]), and, if it holds again by
 /// the end of the step, the time it came back. A guarantee without a rate bound is judged at
-/// the samples only.
+/// the samples only. On a step whose rotation is under-resolved, a guarantee whose rate bound
+/// reads the rotation cannot be held: its search only looks for a violation (threshold 0, at
+/// most [`UNRESOLVED_LOOK_EVALS`] evaluations) and refines as above only once it finds one.
 #[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource
 fn check_guarantees(
     clock: Res<Clock>,
