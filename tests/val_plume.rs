@@ -85,6 +85,17 @@ const LEN_M: f64 = 10.0;
 /// The scene: plate z range [z0, z0 + w], valves as given, the guarantee's part patterns.
 /// The plumes do not load the plate (`plume_loads: false`): the closed forms hold it fixed.
 fn scene(z0: f64, w: f64, open: [bool; 2], parts: &str) -> String {
+    scene_shape(
+        z0,
+        w,
+        open,
+        parts,
+        &format!("Box(size_m: (1.0, 0.5, {w:?}))"),
+    )
+}
+
+/// [`scene`] with the plate's shape given (centred on the plate's centre).
+fn scene_shape(z0: f64, w: f64, open: [bool; 2], parts: &str, shape: &str) -> String {
     format!(
         r#"Scene(name: "plume", dt_s: 0.01, duration_s: 12.0, environment: FreeSpace,
         bodies: [
@@ -93,7 +104,7 @@ fn scene(z0: f64, w: f64, open: [bool; 2], parts: &str) -> String {
            parts: [Bus(name: "bus", shape: Sphere(radius_m: 0.2))]),
           (name: "tg", role: Target, mass_kg: 100.0, inertia_kg_m2: (xx: 10.0, yy: 10.0, zz: 10.0),
            initial: (pos_m: (0.0, 0.0, 0.0)),
-           parts: [Bus(name: "plate", shape: Box(size_m: (1.0, 0.5, {w:?})),
+           parts: [Bus(name: "plate", shape: {shape},
                        pos_m: (5.5, 3.25, {zc:?}))]),
         ],
         guarantees: [PlumeKeepOff(name: "keep_off", body: "sc", around: "tg", parts: [{parts}])],
@@ -117,9 +128,50 @@ fn rho() -> f64 {
 }
 
 fn sim(text: &str) -> Simulation {
+    sim_at(text, "plume.ron")
+}
+
+/// [`sim`] with the scene file's path given (mesh files are found beside it).
+fn sim_at(text: &str, file: &str) -> Simulation {
     register();
-    let l = load_scene_str(text, "plume.ron", &[]).unwrap_or_else(|e| panic!("{e}"));
+    let l = load_scene_str(text, file, &[]).unwrap_or_else(|e| panic!("{e}"));
     Simulation::new(&l).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The plate as a 12-triangle OBJ box of the given size centred on its origin, written to a
+/// fresh folder under the test's temporary directory; returns the scene file's path there.
+fn mesh_plate(test: &str, size: [f64; 3]) -> String {
+    use std::fmt::Write as _;
+    let d = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join("val_plume")
+        .join(test);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    let mut o = String::new();
+    for i in 0..8 {
+        let c = |k: usize| {
+            if i & (1 << k) == 0 {
+                -size[k] / 2.0
+            } else {
+                size[k] / 2.0
+            }
+        };
+        writeln!(o, "v {} {} {}", c(0), c(1), c(2)).unwrap();
+    }
+    // Outward-facing quads (1-based corners), two triangles each.
+    for q in [
+        [1, 3, 4, 2],
+        [5, 6, 8, 7],
+        [1, 2, 6, 5],
+        [3, 7, 8, 4],
+        [1, 5, 7, 3],
+        [2, 4, 8, 6],
+    ] {
+        writeln!(o, "f {} {} {}", q[0], q[1], q[2]).unwrap();
+        writeln!(o, "f {} {} {}", q[0], q[2], q[3]).unwrap();
+    }
+    std::fs::write(d.join("plate.obj"), o).unwrap();
+    d.join("plume.ron").display().to_string()
 }
 
 #[test]
@@ -715,4 +767,130 @@ fn val_plume_load_on_an_air_bearing_table_acts_in_the_plane() {
     );
     // The chaser's opposed thrusts cancel: it stays.
     assert!(s.body("sc").unwrap().vel_m_s.norm() < 1e-12);
+}
+
+/// A mesh plate (the plate as a 12-triangle OBJ box: a triangle-mesh part, judged through the
+/// monitor's hull bracket, `sim::monitor::pair_eval_shapes`) against the same plate as a `Box`
+/// primitive: the closed-form margin (5 − v·t − ρ)·cos α to the same tolerance as the box,
+/// the same verdict, violation count, struck jet and part, and violation and restore times in
+/// overlapping brackets; the margins agree within the hull bracket's documented tolerance
+/// (`sim::monitor::pair_eval`: GJK_REL_TOL·d + F32_REL_TOL·(|c_a − c_b| + r_a + r_b)).
+#[test]
+fn val_plume_keep_off_on_a_mesh_plate_matches_the_box_plate() {
+    use rpod::sim::monitor::{F32_REL_TOL, GJK_REL_TOL};
+    let cos_a = ALPHA_DEG.to_radians().cos();
+    let file = mesh_plate("crossing", [1.0, 0.5, 1.0]);
+    let mesh_text = scene_shape(
+        -0.5,
+        1.0,
+        [true, true],
+        r#""plate""#,
+        r#"Mesh(path: "plate.obj")"#,
+    );
+    let mut m = sim_at(&mesh_text, &file);
+    let mut b = sim(&scene(-0.5, 1.0, [true, true], r#""plate""#));
+    // Scale of the f32 rounding: |c_a − c_b| ≤ 12 m here, the pyramid's bounding radius
+    // hypot(L/2, L·tan α) and the plate's √(0.5² + 0.25² + 0.5²).
+    let scale = 12.0 + (LEN_M / 2.0).hypot(LEN_M * ALPHA_DEG.to_radians().tan()) + 0.75;
+    for t in [1.0, 2.0, 3.0, 4.0] {
+        m.run_for(t - m.t_s());
+        b.run_for(t - b.t_s());
+        let (gm, gb) = (
+            m.guarantee("keep_off").unwrap(),
+            b.guarantee("keep_off").unwrap(),
+        );
+        let want = (5.0 - m.t_s() - rho()) * cos_a;
+        assert!(
+            (gm.last_margin - want).abs() < GJK_TOL_M + PYRAMID * rho(),
+            "t {}: mesh margin {} vs {want}",
+            m.t_s(),
+            gm.last_margin
+        );
+        let tol = GJK_REL_TOL * gb.last_margin + F32_REL_TOL * scale;
+        assert!(
+            (gm.last_margin - gb.last_margin).abs() <= tol,
+            "t {}: mesh {} vs box {} (tol {tol})",
+            m.t_s(),
+            gm.last_margin,
+            gb.last_margin
+        );
+        assert!(gm.held && gm.judged == "interval", "{gm:?}");
+    }
+    m.run_for(12.0 - m.t_s());
+    b.run_for(12.0 - b.t_s());
+    let (gm, gb) = (
+        m.guarantee("keep_off").unwrap(),
+        b.guarantee("keep_off").unwrap(),
+    );
+    assert_eq!(gm.verdict, "violated");
+    assert_eq!(gm.verdict, gb.verdict);
+    assert_eq!(gm.violations, gb.violations);
+    // Each violation time is certified within [t, t + tol]: both contain the true one (the
+    // closed form's, to the distances' error, as in the box test), so the brackets overlap.
+    let bracket = |g: &rpod::guarantee::GuaranteeStatus| {
+        let t = g.first_violation_s.expect("violated");
+        (t, t + g.first_violation_tol_s.expect("tolerance"))
+    };
+    let ((m0, m1), (b0, b1)) = (bracket(gm), bracket(gb));
+    let err = 4.9e-4 + 0.01 / 65536.0;
+    assert!(
+        m0 <= b1 + err && b0 <= m1 + err,
+        "mesh [{m0}, {m1}] vs box [{b0}, {b1}]"
+    );
+    let t_hit = 5.0 - rho();
+    assert!(
+        m0 <= t_hit + err && t_hit - err <= m1,
+        "mesh [{m0}, {m1}] vs {t_hit}"
+    );
+    let detail = |s: &Simulation| {
+        s.events()
+            .into_iter()
+            .find(|e| e.kind == "guarantee_violated")
+            .map(|e| e.data["detail"].clone())
+            .expect("violated")
+    };
+    let (dm, db) = (detail(&m), detail(&b));
+    assert_eq!(dm["jet"], db["jet"]);
+    assert_eq!(dm["part"], "tg/plate");
+    assert_eq!(dm["part"], db["part"]);
+    let restored = |s: &Simulation| {
+        let e = s
+            .events()
+            .into_iter()
+            .find(|e| e.kind == "guarantee_restored")
+            .expect("restored");
+        (e.t_s, e.t_s + e.data["t_tol_s"].as_f64().expect("t_tol_s"))
+    };
+    let ((m0, m1), (b0, b1)) = (restored(&m), restored(&b));
+    assert!(
+        m0 <= b1 + err && b0 <= m1 + err,
+        "restored: mesh [{m0}, {m1}] vs box [{b0}, {b1}]"
+    );
+    assert!(
+        (gm.last_margin - gb.last_margin).abs()
+            <= GJK_REL_TOL * gb.last_margin + F32_REL_TOL * scale
+    );
+
+    // Beside the path, 5 mm outside the cone: held on the mesh as on the box, the worst margin
+    // 5 mm·cos α to the box test's tolerance.
+    let file = mesh_plate("beside", [1.0, 0.5, 1.0]);
+    let text = scene_shape(
+        rho() + 5e-3,
+        1.0,
+        [true, true],
+        r#""tg/pl*""#,
+        r#"Mesh(path: "plate.obj")"#,
+    );
+    let mut m = sim_at(&text, &file);
+    m.run_for(12.0);
+    let gm = m.guarantee("keep_off").unwrap();
+    assert_eq!(gm.verdict, "held", "{gm:?}");
+    assert_eq!(gm.violations, 0);
+    assert!(
+        (gm.worst_margin - 5e-3 * cos_a).abs() < GJK_TOL_M + PYRAMID * rho(),
+        "worst margin {} vs {}",
+        gm.worst_margin,
+        5e-3 * cos_a
+    );
+    assert!((5.0..=6.0).contains(&gm.worst_margin_t_s), "{gm:?}");
 }

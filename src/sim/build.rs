@@ -53,6 +53,25 @@ pub(crate) fn primitive_shape(p: &Primitive) -> Option<rp::SharedShape> {
     })
 }
 
+/// Whether rapier's continuous collision pass could ever clamp a motion in `w`.
+///
+/// In rapier 0.35 every fast dynamic body is swept (`CCDSolver::solve_continuous`), and a
+/// sweep considers only the targets its tier allows (`ccd::sweeps::tier_allows`): a body
+/// without `ccd_enabled` sweeps against fixed targets (a fixed body's colliders, or a collider
+/// with no parent) and a body with it (a bullet) against every body but another bullet. So
+/// when there is no fixed target and the dynamic bodies are all bullets or all not, no sweep
+/// has a target: no motion is clamped and no event is sent, and the pass changes nothing but
+/// its cost. `true` (conservatively) also for any kinematic body.
+pub(crate) fn ccd_has_targets(w: &rp::PhysicsWorld) -> bool {
+    if w.colliders.iter().any(|(_, c)| c.parent().is_none())
+        || w.bodies.iter().any(|(_, b)| !b.is_dynamic())
+    {
+        return true;
+    }
+    let bullets = w.bodies.iter().filter(|(_, b)| b.is_ccd_enabled()).count();
+    bullets > 0 && bullets < w.bodies.len()
+}
+
 /// A mesh part as built: its name, triangles, convex pieces and the decomposition's measured
 /// deviation from the mesh (`summary.json`'s `meshes`).
 #[derive(Debug, Clone, serde::Serialize)]
@@ -359,6 +378,16 @@ impl Simulation {
         super::docking::install(&mut app, loaded)?;
         super::contact_model::install(&mut app, loaded)?;
         super::airbearing::install(&mut app, loaded)?;
+        // rapier's continuous pass (CCD) sweeps every fast dynamic body (the `ccd_enabled`
+        // flag only widens what it sweeps against); in a scene with a mesh body where no sweep
+        // can have a target ([`ccd_has_targets`]) it is pure cost — the convex pieces' mass
+        // properties recomputed every sweep — and cannot change a result: switch it off there.
+        if !meshes.is_empty() {
+            let mut phys = app.world_mut().resource_mut::<super::Physics>();
+            if !ccd_has_targets(&phys.world) {
+                phys.world.integration_parameters.max_ccd_substeps = 0;
+            }
+        }
         super::controllers::install(&mut app, loaded)?;
         super::plume::install_loads(&mut app);
         app.finish();
@@ -854,5 +883,73 @@ impl Simulation {
             files.finish(&summary)?;
         }
         Ok(summary)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! [`ccd_has_targets`] against rapier itself: a thin plate (1 cm) flying at 200 m/s (2 m
+    //! per 10 ms step: a tunnelling speed, so it is CCD-active) through another plate 1.2 m
+    //! ahead, stepped with the continuous pass on (`max_ccd_substeps` 1) and off (0).
+    //! Reference: where `ccd_has_targets` says no sweep has a target (both plates bullets, or
+    //! neither), the two runs' poses are bit-identical; with the second plate fixed (a target
+    //! of every fast body) the pass clamps the motion and the poses differ, so the comparison
+    //! can see a difference.
+    use super::*;
+
+    /// The plates' x positions (f32 bits) after each of `steps` rapier steps; `bullet` per
+    /// plate, the second one `fixed` or dynamic.
+    fn run(
+        bullet: [bool; 2],
+        fixed: bool,
+        ccd: bool,
+        steps: usize,
+    ) -> (rp::PhysicsWorld, Vec<[u32; 2]>) {
+        let mut w = rp::PhysicsWorld::new();
+        w.gravity = rp::Vector::ZERO;
+        w.integration_parameters.normalized_max_linear_velocity = f32::MAX;
+        w.integration_parameters.dt = 0.01;
+        w.integration_parameters.max_ccd_substeps = usize::from(ccd);
+        let mut hs = Vec::new();
+        for (k, b) in bullet.iter().enumerate() {
+            let rb = if k == 0 {
+                rp::RigidBodyBuilder::dynamic()
+                    .translation(rp::Vector::new(-0.6, 0.0, 0.0))
+                    .linvel(rp::Vector::new(200.0, 0.0, 0.0))
+            } else if fixed {
+                rp::RigidBodyBuilder::fixed().translation(rp::Vector::new(0.6, 0.0, 0.0))
+            } else {
+                rp::RigidBodyBuilder::dynamic().translation(rp::Vector::new(0.6, 0.0, 0.0))
+            };
+            let h = w.insert_body(rb.ccd_enabled(*b).build());
+            w.insert_collider(
+                rp::ColliderBuilder::cuboid(0.005, 1.0, 1.0).build(),
+                Some(h),
+            );
+            hs.push(h);
+        }
+        let mut out = Vec::new();
+        for _ in 0..steps {
+            w.step();
+            out.push([
+                w.bodies[hs[0]].translation().x.to_bits(),
+                w.bodies[hs[1]].translation().x.to_bits(),
+            ]);
+        }
+        (w, out)
+    }
+
+    #[test]
+    fn invariant_ccd_off_changes_nothing_where_no_sweep_has_a_target() {
+        for bullet in [[true, true], [false, false]] {
+            let (w, on) = run(bullet, false, true, 4);
+            assert!(!ccd_has_targets(&w), "{bullet:?}");
+            let (_, off) = run(bullet, false, false, 4);
+            assert_eq!(on, off, "{bullet:?}");
+        }
+        let (w, on) = run([false, false], true, true, 4);
+        assert!(ccd_has_targets(&w));
+        let (_, off) = run([false, false], true, false, 4);
+        assert_ne!(on, off, "a fast body is swept against a fixed one");
     }
 }

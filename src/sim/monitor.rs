@@ -867,6 +867,20 @@ pub fn pair_eval(
 ) -> PairEval {
     let (sa, sb) = (&*geo.shapes[i][a], &*geo.shapes[j][b]);
     let (ha, hb) = (geo.hull(i, a), geo.hull(j, b));
+    pair_eval_shapes(pa, (sa, ha), pb, (sb, hb), clear_at)
+}
+
+/// [`pair_eval`] for two shapes given directly (world pose and bounding radius, the shape, its
+/// hull support map when it is a triangle mesh: [`mesh_hull`]); the same evaluation, for
+/// callers whose shapes are not in [`MonitorGeometry`] (the plume keep-off's pyramid,
+/// `super::plume`).
+pub fn pair_eval_shapes(
+    pa: &(Isometry3<f64>, f64),
+    (sa, ha): (&dyn rp::Shape, Option<&super::mesh::HullSupport>),
+    pb: &(Isometry3<f64>, f64),
+    (sb, hb): (&dyn rp::Shape, Option<&super::mesh::HullSupport>),
+    clear_at: f64,
+) -> PairEval {
     if ha.is_none() && hb.is_none() {
         return PairEval::Value(shape_distance(&pa.0, sa, &pb.0, sb), f64::NAN);
     }

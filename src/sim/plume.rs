@@ -11,7 +11,7 @@
 //! [`crate::guarantee::registry`]), judged on every step interval (see its docs and
 //! `docs/guarantees.md`).
 
-use super::monitor::{F32_REL_TOL, shape_bracket, shape_distance};
+use super::monitor::{F32_REL_TOL, PairEval, pair_eval_shapes, shape_bracket, shape_distance};
 use crate::actuation::actuator::ActuatorSpec;
 use crate::actuation::rcs::{JetSpec, plume_cone};
 use crate::control::ControllerSpec;
@@ -530,6 +530,7 @@ impl GuaranteeParams for PlumeKeepOffParams {
                     UnitQuaternion::identity(),
                 ) * c.pose_body,
                 radius_m: c.shape.bounding_radius_m(),
+                hull: super::monitor::mesh_hull(&*shape),
                 shape,
             });
         }
@@ -558,6 +559,10 @@ pub struct PlumePart {
     pub radius_m: f64,
     /// The judged shape.
     pub shape: rp::SharedShape,
+    /// For a triangle-mesh part, the support map of its vertices' convex hull
+    /// ([`super::monitor::mesh_hull`]): its distances go through the monitor's hull bracket
+    /// ([`pair_eval_shapes`]) before any triangle-by-triangle query.
+    pub hull: Option<std::sync::Arc<super::mesh::HullSupport>>,
 }
 
 /// [`PlumeKeepOffParams`] as the monitor checks it.
@@ -642,7 +647,25 @@ impl PlumeKeepOff {
                 break;
             }
             let (jet, cone, pose, r, firing) = &cones[c];
-            let m = signed_bracket(pose, &**cone, *r, pp, &*p.shape, p.radius_m);
+            // A mesh pair whose hull bracket proves it apart by at least the best margin so
+            // far (when that is positive) cannot change the margin: its certified lower bound
+            // is at least the best value, which is at least the best lower bound. Skip it.
+            let clear_at = best
+                .as_ref()
+                .map(|b| b.margin.value)
+                .filter(|v| *v > 0.0)
+                .unwrap_or(f64::INFINITY);
+            let Some(m) = signed_bracket(
+                pose,
+                &**cone,
+                *r,
+                pp,
+                (&*p.shape, p.hull.as_deref()),
+                p.radius_m,
+                clear_at,
+            ) else {
+                continue;
+            };
             let m = if *firing {
                 m
             } else {
@@ -678,25 +701,44 @@ impl PlumeKeepOff {
 /// Signed distance between two shapes at f64 poses with a certified lower bound: parry's
 /// distance bracket while apart ([`shape_bracket`]: GJK's distance, and the gap between the
 /// shapes along its witness direction less the f32 resolution of the pose, which any axis
-/// gives as a lower bound whatever GJK's accuracy); when they overlap, minus
+/// gives as a lower bound whatever GJK's accuracy; for a triangle-mesh `b` with its hull
+/// support map `hb`, the monitor's evaluation [`pair_eval_shapes`]: the hull bracket where it
+/// is as narrow as parry's exact query, else that query); when they overlap, minus
 /// parry's penetration depth, at least that resolution (a touch within the precision is
-/// counted as overlap: never reported clear).
+/// counted as overlap: never reported clear). `None` when the hull bracket proves the pair at
+/// least `clear_at` apart (only for a mesh `b`; never with an infinite `clear_at`).
 fn signed_bracket(
     pose_a: &Isometry3<f64>,
     a: &dyn rp::Shape,
     ra: f64,
     pose_b: &Isometry3<f64>,
-    b: &dyn rp::Shape,
+    (b, hb): (&dyn rp::Shape, Option<&super::mesh::HullSupport>),
     rb: f64,
-) -> Bracket {
+    clear_at: f64,
+) -> Option<Bracket> {
     let rel = pose_a.inv_mul(pose_b);
     let eps = F32_REL_TOL * (rel.translation.vector.norm() + ra + rb);
-    let d = shape_bracket(pose_a, a, ra, pose_b, b, rb);
+    let d = match hb {
+        None => shape_bracket(pose_a, a, ra, pose_b, b, rb),
+        Some(h) => match pair_eval_shapes(
+            &(*pose_a, ra),
+            (a, None),
+            &(*pose_b, rb),
+            (b, Some(h)),
+            clear_at,
+        ) {
+            PairEval::Clear(_) => return None,
+            PairEval::Value(value, lower) => Bracket {
+                value,
+                lower: lower.min(value),
+            },
+        },
+    };
     if d.value > 0.0 {
-        return Bracket {
+        return Some(Bracket {
             value: d.value,
             lower: if d.lower > 0.0 { d.lower } else { -eps },
-        };
+        });
     }
     let rel32 = super::conv::pose(&rel);
     let depth = match bevy_rapier3d::parry::query::contact(
@@ -710,10 +752,10 @@ fn signed_bracket(
         _ => 0.0,
     };
     let value = -depth.max(eps);
-    Bracket {
+    Some(Bracket {
         value,
         lower: value - eps,
-    }
+    })
 }
 
 impl Guarantee for PlumeKeepOff {
