@@ -60,7 +60,40 @@ pub enum DrawnSurface {
     },
 }
 
+/// Largest coordinate or size a drawn surface may have, m (a scene's positions are limited to
+/// [`crate::scene::validate::MAX_POSITION_M`] too): beyond it, or not finite, a surface is not
+/// drawn (a hook's 1e308 or NaN would become an infinite f32 mesh).
+pub const MAX_DRAWN_M: f64 = crate::scene::validate::MAX_POSITION_M;
+
 impl DrawnSurface {
+    /// Every number is finite and within [`MAX_DRAWN_M`] (sizes positive): the viewer draws
+    /// only such a surface.
+    pub fn is_drawable(&self) -> bool {
+        let ok = |x: f64| x.is_finite() && x.abs() <= MAX_DRAWN_M;
+        match self {
+            Self::TablePrism {
+                outline_lab_m,
+                centre_lab_m,
+                top_m,
+                ..
+            } => {
+                outline_lab_m.len() >= 3
+                    && outline_lab_m.iter().all(|p| ok(p.x) && ok(p.y))
+                    && ok(centre_lab_m.x)
+                    && ok(centre_lab_m.y)
+                    && ok(*top_m)
+                    && *top_m > 0.0
+            }
+            Self::SphereAboutBody { radius_m, .. } => ok(*radius_m) && *radius_m > 0.0,
+            Self::RevolutionAboutBody { meridian_m, .. } => {
+                meridian_m.len() >= 2
+                    && meridian_m
+                        .iter()
+                        .all(|(x, r)| ok(*x) && ok(*r) && *r >= 0.0)
+            }
+        }
+    }
+
     /// The legend line.
     pub fn legend(&self) -> &str {
         match self {

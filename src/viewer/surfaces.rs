@@ -219,9 +219,13 @@ pub fn scene_surfaces(scene: &Scene) -> Vec<Surface> {
     drawn.into_iter().filter_map(surface_of).collect()
 }
 
-/// The viewer's surface for a law's or guarantee's description (none for a degenerate one:
-/// an outline of fewer than three points, a non-positive radius, an empty meridian).
+/// The viewer's surface for a law's or guarantee's description (none for one that is not
+/// [`DrawnSurface::is_drawable`]: an outline of fewer than three points, a non-positive radius,
+/// a meridian of fewer than two points, a number not finite or beyond 1e7 m).
 pub fn surface_of(d: DrawnSurface) -> Option<Surface> {
+    if !d.is_drawable() {
+        return None;
+    }
     match d {
         DrawnSurface::TablePrism {
             legend,
@@ -231,9 +235,6 @@ pub fn surface_of(d: DrawnSurface) -> Option<Surface> {
             curve_body,
             rgba,
         } => {
-            if outline_lab_m.len() < 3 || !(top_m.is_finite() && top_m > 0.0) {
-                return None;
-            }
             let rel: Vec<_> = outline_lab_m.iter().map(|p| p - centre_lab_m).collect();
             Some(Surface {
                 legend,
@@ -250,7 +251,7 @@ pub fn surface_of(d: DrawnSurface) -> Option<Surface> {
             body,
             radius_m,
             rgba,
-        } => (radius_m.is_finite() && radius_m > 0.0).then(|| Surface {
+        } => Some(Surface {
             legend,
             anchor: Anchor::BodyCom(body),
             mesh: sphere(radius_m, SPHERE_RINGS, SPHERE_SEGMENTS),
@@ -264,7 +265,7 @@ pub fn surface_of(d: DrawnSurface) -> Option<Surface> {
             body,
             meridian_m,
             rgba,
-        } => (meridian_m.len() >= 2).then(|| Surface {
+        } => Some(Surface {
             legend,
             anchor: Anchor::BodyCom(body),
             mesh: revolution(&meridian_m, REVOLUTION_SEGMENTS),
@@ -506,12 +507,43 @@ mod tests {
                 .iter()
                 .all(|v| (v.norm() - 45.0).abs() < 1e-9)
         );
-        let none = surface_of(DrawnSurface::SphereAboutBody {
+        // Degenerate or hostile descriptions draw nothing: radius 0, NaN, 1e308; a meridian
+        // with an infinite point; an outline with a NaN vertex.
+        for radius_m in [0.0, f64::NAN, 1e308, -1.0] {
+            let none = surface_of(DrawnSurface::SphereAboutBody {
+                legend: String::new(),
+                body: 0,
+                radius_m,
+                rgba: [0.0; 4],
+            });
+            assert!(none.is_none(), "radius {radius_m}");
+        }
+        assert!(
+            surface_of(DrawnSurface::RevolutionAboutBody {
+                legend: String::new(),
+                body: 0,
+                meridian_m: vec![(0.0, 0.0), (1.0, f64::INFINITY)],
+                rgba: [0.0; 4],
+            })
+            .is_none()
+        );
+        let square = |v: f64| {
+            vec![
+                Vector2::new(0.0, 0.0),
+                Vector2::new(1.0, 0.0),
+                Vector2::new(1.0, v),
+                Vector2::new(0.0, 1.0),
+            ]
+        };
+        let prism = |outline_lab_m| DrawnSurface::TablePrism {
             legend: String::new(),
-            body: 0,
-            radius_m: 0.0,
+            outline_lab_m,
+            centre_lab_m: Vector2::new(0.5, 0.5),
+            top_m: 0.3,
+            curve_body: None,
             rgba: [0.0; 4],
-        });
-        assert!(none.is_none());
+        };
+        assert!(surface_of(prism(square(1.0))).is_some());
+        assert!(surface_of(prism(square(f64::NAN))).is_none());
     }
 }
