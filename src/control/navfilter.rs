@@ -557,16 +557,53 @@ mod tests {
     /// a known thrust profile, σ = 0.5 m measurements every 1 s delivered 0.5 s late.
     /// Returns per run the NEES of the estimate (predicted to now) at the end and the NIS of
     /// each update.
+    /// The known thrust acceleration of the consistency runs at step k (Hill frame, m/s²).
+    fn accel(k: u64) -> Vector3<f64> {
+        let t = k as f64 * DT;
+        Vector3::new(1e-4 * (0.01 * t).sin(), -2e-4, 5e-5 * (0.03 * t).cos())
+    }
+
+    /// The sensor of the consistency runs at step k: every 10th step it exposes the true Hill
+    /// position `r_hill` plus N(0, σ² I) noise; a measurement reaches the filter
+    /// `latency_steps` after its exposure, and the update's NIS is kept.
+    #[allow(clippy::too_many_arguments)]
+    fn sense_and_update(
+        f: &mut RelKalman,
+        pending: &mut VecDeque<(u64, Vector3<f64>)>,
+        g: &mut GaussianNoise,
+        k: u64,
+        r_hill: &Vector3<f64>,
+        sigma: f64,
+        latency_steps: u64,
+        nis: &mut Vec<f64>,
+    ) {
+        if k.is_multiple_of(10) {
+            let z = r_hill
+                + Vector3::new(
+                    g.standard_normal(),
+                    g.standard_normal(),
+                    g.standard_normal(),
+                ) * sigma;
+            pending.push_back((k, z));
+        }
+        while pending
+            .front()
+            .is_some_and(|&(ke, _)| ke + latency_steps <= k)
+        {
+            let (ke, z) = pending.pop_front().expect("front");
+            f.update(ke, k, z);
+            if let Some(v) = f.last_nis {
+                nis.push(v);
+            }
+        }
+    }
+
     fn monte_carlo(runs: u64, steps: u64) -> (Vec<f64>, Vec<f64>) {
         let (q, sigma, latency_steps) = (1e-6, 0.5, 5u64);
         let phi = stm(N, DT);
         let qd = qd_quadrature(N, DT, q);
         let l = qd.cholesky().expect("Q_d positive definite").l();
         let (_, gam) = crate::control::generic::hill::cw_discrete(N, DT);
-        let accel = |k: u64| {
-            let t = k as f64 * DT;
-            Vector3::new(1e-4 * (0.01 * t).sin(), -2e-4, 5e-5 * (0.03 * t).cos())
-        };
         let (mut nees, mut nis) = (Vec::new(), Vec::new());
         for run in 0..runs {
             let mut g = GaussianNoise::new(1000 + run);
@@ -582,25 +619,17 @@ mod tests {
                 if k > 0 {
                     f.propagate(k - 1, accel(k - 1));
                 }
-                if k % 10 == 0 {
-                    let z = x.fixed_rows::<3>(0)
-                        + Vector3::new(
-                            g.standard_normal(),
-                            g.standard_normal(),
-                            g.standard_normal(),
-                        ) * sigma;
-                    pending.push_back((k, z));
-                }
-                while pending
-                    .front()
-                    .is_some_and(|&(ke, _)| ke + latency_steps <= k)
-                {
-                    let (ke, z) = pending.pop_front().expect("front");
-                    f.update(ke, k, z);
-                    if let Some(v) = f.last_nis {
-                        nis.push(v);
-                    }
-                }
+                let r_true = x.fixed_rows::<3>(0).into_owned();
+                sense_and_update(
+                    &mut f,
+                    &mut pending,
+                    &mut g,
+                    k,
+                    &r_true,
+                    sigma,
+                    latency_steps,
+                    &mut nis,
+                );
                 if k + 1 == steps {
                     let (ks, xe, p) = f.estimate().expect("estimating");
                     assert_eq!(ks, k, "the estimate is for the current step");
@@ -672,10 +701,6 @@ mod tests {
         let (q, sigma, latency_steps, sub) = (1e-6, 0.5, 5u64, 10usize);
         let o = EllipticOrbit::from_perigee_altitude(500e3, 0.1, -0.3, 0.5, 1.0, 0.3);
         let p = dcm_lvlh_from_hill(); // tof from Hill
-        let accel = |k: u64| {
-            let t = k as f64 * DT;
-            Vector3::new(1e-4 * (0.01 * t).sin(), -2e-4, 5e-5 * (0.03 * t).cos())
-        };
         let delta = DT / sub as f64;
         let kick = (q * delta).sqrt();
         let (mut nees, mut nis) = (Vec::new(), Vec::new());
@@ -698,25 +723,16 @@ mod tests {
                     f.propagate(k - 1, accel(k - 1));
                 }
                 let r_hill = p.transpose() * r;
-                if k % 10 == 0 {
-                    let z = r_hill
-                        + Vector3::new(
-                            g.standard_normal(),
-                            g.standard_normal(),
-                            g.standard_normal(),
-                        ) * sigma;
-                    pending.push_back((k, z));
-                }
-                while pending
-                    .front()
-                    .is_some_and(|&(ke, _)| ke + latency_steps <= k)
-                {
-                    let (ke, z) = pending.pop_front().expect("front");
-                    f.update(ke, k, z);
-                    if let Some(v) = f.last_nis {
-                        nis.push(v);
-                    }
-                }
+                sense_and_update(
+                    &mut f,
+                    &mut pending,
+                    &mut g,
+                    k,
+                    &r_hill,
+                    sigma,
+                    latency_steps,
+                    &mut nis,
+                );
                 if k + 1 == steps {
                     let (ks, xe, pc) = f.estimate().expect("estimating");
                     assert_eq!(ks, k);
