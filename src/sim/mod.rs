@@ -20,8 +20,10 @@
 //! f64 state copies it.
 //!
 //! # Time
-//! `SimStep` runs exactly [`StepBudget`] times per `App::update`, never by the wall clock; the
-//! same scene gives byte-identical outputs on every run.
+//! Each `App::update` advances exactly [`StepBudget`] fixed steps, never by the wall clock; the
+//! same scene gives byte-identical outputs on every run. With `stepping: Fixed` (the default)
+//! `SimStep` runs once per fixed step; with `MultiRate` one run of `SimStep` may cover several
+//! ([`multirate`]: [`Clock::span`], planned at the head of the Actuate stage).
 
 pub mod airbearing;
 pub mod broadphase;
