@@ -33,6 +33,17 @@ def rpod_steps_per_s(rpod, steps):
     return float(m.group(1)), out
 
 
+def rpod_flagship_wall_s(rpod, stepping):
+    """Wall seconds of the whole flagship (`summary.json`'s `wall_s`) with `stepping` set."""
+    import json
+    import tempfile
+    with tempfile.TemporaryDirectory() as out:
+        subprocess.run([rpod, "run", "scenes/orbit_approach_latch.ron", "--out", out,
+                        "--set", f"stepping={stepping}"], check=True, capture_output=True)
+        with open(f"{out}/summary.json") as f:
+            return json.load(f)["wall_s"]
+
+
 def basilisk_steps_per_s(steps, dt):
     try:
         from Basilisk.simulation import spacecraft, gravityEffector
@@ -84,7 +95,21 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=20000)
     ap.add_argument("--rpod", default="target/release/rpod")
+    ap.add_argument("--flagship", action="store_true",
+                    help="instead: the whole flagship (2 700 s) against Basilisk propagating "
+                         "the two spacecraft for 2 700 s at 0.1 s (issue 29's goal)")
     a = ap.parse_args()
+    if a.flagship:
+        fixed = rpod_flagship_wall_s(a.rpod, "Fixed")
+        multi = rpod_flagship_wall_s(a.rpod, "MultiRate()")
+        print(f"rpod flagship, 2700 s: Fixed {fixed:.2f} s wall, MultiRate() {multi:.2f} s wall")
+        bsk = basilisk_steps_per_s(27000, 0.1)
+        if bsk is None:
+            print("Basilisk not installed (pip install bsk in a venv): skipped")
+            return 0
+        print(f"Basilisk, 2 spacecraft, two-body + J2, RK4, 27000 steps of 0.1 s: {27000 / bsk:.2f} s wall")
+        print(f"rpod MultiRate / Basilisk wall = {multi / (27000 / bsk):.2f} (goal ≤ 1)")
+        return 0
     bsk = basilisk_steps_per_s(a.steps, 0.01)
     ours, report = rpod_steps_per_s(a.rpod, a.steps)
     print(report.rstrip())

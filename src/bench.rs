@@ -330,6 +330,21 @@ fn chaser_attitude_law(mode: &str) -> String {
     )
 }
 
+/// A whole run of a scene with `stepping` set (no output files): wall seconds, pipeline steps
+/// (fixed steps for `Fixed`), fixed steps.
+fn whole_run(path: &Path, stepping: &str) -> Result<(f64, u64, u64), SceneError> {
+    let loaded = load_scene_file(path, &[format!("stepping={stepping}")])?;
+    let mut sim = crate::sim::Simulation::new(&loaded)?;
+    let n = sim.steps_for(loaded.scene.duration_s);
+    let t0 = std::time::Instant::now();
+    sim.step(n);
+    let wall = t0.elapsed().as_secs_f64();
+    let pipeline = sim.summary()["stepping"]["pipeline_steps"]
+        .as_u64()
+        .unwrap_or(n);
+    Ok((wall, pipeline, n))
+}
+
 /// The cliffs of issue 29, each a ratio of steps/s to its plain case measured in the same run,
 /// with bare rapier on the plain scene's world as the floor, as a Markdown table:
 ///
@@ -345,7 +360,12 @@ fn chaser_attitude_law(mode: &str) -> String {
 /// * `free_drift` against bare rapier on its world (goal: 5× Basilisk, see
 ///   `benches/basilisk_free_drift.py`).
 ///
-/// `scenes` is the folder holding `docking_aligned.ron` and `free_drift.ron`.
+/// * multi-rate stepping: `free_drift` and the flagship (`orbit_approach_latch`), each a whole
+///   run with `stepping: MultiRate()` against the same run with `Fixed` (fixed steps per wall
+///   second, so the rates compare across modes).
+///
+/// `scenes` is the folder holding `docking_aligned.ron`, `free_drift.ron` and
+/// `orbit_approach_latch.ron`.
 pub fn run_cliffs(scenes: &Path, steps: u64) -> Result<String, SceneError> {
     let aligned = scenes.join("docking_aligned.ron");
     let load = |p: &PathBuf, sets: &[String]| load_scene_file(p, sets);
@@ -410,5 +430,20 @@ pub fn run_cliffs(scenes: &Path, steps: u64) -> Result<String, SceneError> {
         m.rapier_s / m.pipeline_s,
         m.steps as f64 / m.rapier_s
     );
+    // Multi-rate stepping: whole runs, Fixed against MultiRate() (the scene's own duration).
+    for (file, label) in [
+        ("free_drift.ron", "free_drift, whole run"),
+        ("orbit_approach_latch.ron", "flagship, whole run"),
+    ] {
+        let (fixed_s, _, steps) = whole_run(&scenes.join(file), "Fixed")?;
+        let (multi_s, pipeline, _) = whole_run(&scenes.join(file), "MultiRate()")?;
+        let _ = writeln!(
+            r,
+            "| {label}: stepping MultiRate() against Fixed | {steps} steps ({pipeline} pipeline steps) | {:.0} | {:.0} | {:.2} (wall {multi_s:.2} s against {fixed_s:.2} s) | flagship ≤ Basilisk's wall (`benches/basilisk_free_drift.py --flagship`) | – | – |",
+            steps as f64 / multi_s,
+            steps as f64 / fixed_s,
+            fixed_s / multi_s
+        );
+    }
     Ok(r)
 }

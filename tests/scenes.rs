@@ -124,6 +124,24 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "has role Target",
     ),
     ("dt_huge", 8, "dt_s", "at most 100 s, got 1e12"),
+    (
+        "stepping_max_step_huge",
+        11,
+        "stepping.max_step_s",
+        "to 86400 s, got 1e6",
+    ),
+    (
+        "stepping_tol_nan",
+        11,
+        "stepping.tol_m",
+        "not a finite number",
+    ),
+    (
+        "stepping_unknown_field",
+        11,
+        "stepping.tol",
+        "Unexpected field named `tol`",
+    ),
     ("dt_tiny", 8, "dt_s", "got 1e-300"),
     ("duplicate_body", 42, "bodies.1.name", "duplicate body name"),
     (

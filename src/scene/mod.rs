@@ -55,6 +55,55 @@ pub struct Scene {
     /// How far the monitor looks (which body pairs it tracks); see [`MonitorSpec`].
     #[serde(default)]
     pub monitor: MonitorSpec,
+    /// How the pipeline steps: `Fixed` (the default: every step is `dt_s`) or `MultiRate(…)`
+    /// (longer steps where nothing can happen; see [`Stepping`]).
+    #[serde(default)]
+    pub stepping: Stepping,
+}
+
+/// How the pipeline steps (`crate::sim::multirate`).
+///
+/// `dt_s` is always the finest step. With `MultiRate`, a pipeline step covers several fixed
+/// steps when the monitor's bounds prove that no contact can begin (every pair stays more than
+/// `sim::RAPIER_ENGAGE_M` apart), no docking magnet can switch on and no guarantee's margin can
+/// reach zero within it, no controller call and no trajectory row falls inside it, and the
+/// leading error terms of the one-step free-flight integration over it are within `tol_m` and
+/// `tol_rad`. Near contact, and wherever a feature keeps per-step state (sensors, navigation
+/// filters, PWPF and RCS jets, disturbances, air-bearing tables, the L2 frame), it steps at
+/// `dt_s` exactly as `Fixed` does. `Fixed` reproduces earlier runs byte for byte.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub enum Stepping {
+    /// Every pipeline step is `dt_s`.
+    #[default]
+    Fixed,
+    /// Steps of a whole number of `dt_s`, as long as proven free (see [`Stepping`]).
+    MultiRate {
+        /// Longest pipeline step, s (default 10 s).
+        #[serde(default = "default_max_step_s")]
+        max_step_s: f64,
+        /// Largest estimated position error of one step's free-flight integration, m
+        /// (default 1e-6 m): the leading term |j|·h³/6 of velocity Verlet, |j| the bound on
+        /// the jerk of the differential gravity.
+        #[serde(default = "default_tol_m")]
+        tol_m: f64,
+        /// Largest estimated attitude error of one step's RK4 rotation, rad (default 1e-8
+        /// rad): the step turns a body by at most (120·tol_rad)^(1/5).
+        #[serde(default = "default_tol_rad")]
+        tol_rad: f64,
+    },
+}
+
+fn default_max_step_s() -> f64 {
+    10.0
+}
+
+fn default_tol_m() -> f64 {
+    1e-6
+}
+
+fn default_tol_rad() -> f64 {
+    1e-8
 }
 
 /// Which body pairs the monitor tracks exactly.

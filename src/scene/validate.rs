@@ -48,6 +48,9 @@ pub const MAX_SUBSTEPS: u32 = 1000;
 /// substeps within each step, so a step of 10¹² s would run for hours inside one step (a hang
 /// the fuzz harness found); the bundled scenes use at most 10 s.
 pub const MAX_DT_S: f64 = 100.0;
+/// Longest `stepping: MultiRate(max_step_s)`, s (a day: past it a reference orbit is not a
+/// frame one step can be held in).
+pub const MAX_MULTIRATE_STEP_S: f64 = 86_400.0;
 /// Shortest fixed step, s (rapier's f32 step must stay a normal, invertible number).
 pub const MIN_DT_S: f64 = 1e-6;
 /// Most steps in one run (`duration_s / dt_s`): about four hours at the bench's 70 000 steps/s.
@@ -238,6 +241,41 @@ pub fn validate(s: &Scene) -> Check {
     }
     if s.record_every_steps == 0 {
         return fail("record_every_steps", "must be at least 1");
+    }
+    if let crate::scene::Stepping::MultiRate {
+        max_step_s,
+        tol_m,
+        tol_rad,
+    } = &s.stepping
+    {
+        positive("stepping.max_step_s", *max_step_s, "seconds")?;
+        if !(*max_step_s >= s.dt_s && *max_step_s <= MAX_MULTIRATE_STEP_S) {
+            return fail(
+                "stepping.max_step_s",
+                format!(
+                    "must be from dt_s ({} s) to {} s, got {}",
+                    num(s.dt_s),
+                    num(MAX_MULTIRATE_STEP_S),
+                    num(*max_step_s)
+                ),
+            );
+        }
+        for (field, v, lo, hi, unit) in [
+            ("stepping.tol_m", *tol_m, 1e-15, 1.0, "m"),
+            ("stepping.tol_rad", *tol_rad, 1e-15, 1e-2, "rad"),
+        ] {
+            if !(v >= lo && v <= hi) {
+                return fail(
+                    field,
+                    format!(
+                        "must be from {} {unit} to {} {unit}, got {}",
+                        num(lo),
+                        num(hi),
+                        num(v)
+                    ),
+                );
+            }
+        }
     }
     if s.bodies.len() > MAX_BODIES {
         return fail(

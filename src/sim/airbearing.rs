@@ -235,7 +235,7 @@ pub fn airbearing_forces(
     table: Res<AirBearing>,
     mut q: Query<(&SimBody, &BodyState, &mut Wrench)>,
 ) {
-    let dt = clock.dt_s;
+    let dt = clock.h_s();
     let g = table.gravity_lab_m_s2;
     let sp = &table.spec;
     for (b, s, mut w) in &mut q {

@@ -334,8 +334,9 @@ impl Simulation {
             world: pw,
             substeps: scene.physics_substeps,
         })
-        .insert_resource(Clock { step: 0, dt_s: dt })
+        .insert_resource(Clock::new(dt))
         .insert_resource(StepBudget(0))
+        .insert_resource(super::multirate::SpanCap::default())
         .insert_resource(roster)
         .insert_resource(contacts)
         .insert_resource(guarantees)
@@ -372,6 +373,9 @@ impl Simulation {
             pair_columns: Vec::new(),
             contact_points: false,
         });
+        if let Some(m) = super::multirate::MultiRate::from_scene(&scene.stepping, dt) {
+            app.insert_resource(m);
+        }
         super::add_pipeline(&mut app);
         super::environment::add_systems(&mut app, &scene.environment);
         super::overlap::install(&mut app, loaded, suppressed)?;
@@ -745,6 +749,15 @@ impl Simulation {
             v.as_object_mut(),
         ) {
             o.insert("plume_loads".into(), p.summary());
+        }
+        // Only a multi-rate run says how it stepped: a fixed-step summary stays as it was.
+        if let (Some(m), Some(o)) = (
+            self.app
+                .world()
+                .get_resource::<super::multirate::MultiRate>(),
+            v.as_object_mut(),
+        ) {
+            o.insert("stepping".into(), m.summary(self.scene.dt_s));
         }
         v
     }

@@ -713,7 +713,7 @@ pub fn host_actuate(
         ..
     } = &mut *host;
     let env = env_now.obs();
-    let dt = clock.dt_s;
+    let dt = clock.h_s();
     for (index, slot) in slots.iter_mut().enumerate() {
         let own = &truth[slot.body];
         let uses_hill =

@@ -609,7 +609,7 @@ fn docking_monitor(
     mut compliant: Option<ResMut<CompliantContact>>,
 ) {
     let t = clock.t_s();
-    let dt = clock.dt_s;
+    let dt = clock.h_s();
     let (ce, te) = dock.bodies;
     let [(cb, cs), (tb, ts)] = q.get_many([ce, te]).expect("docking bodies");
     let (g, _, at) = geometry(&dock.spec, (cs, cb), (ts, tb), &dock.ports);

@@ -20,8 +20,10 @@
 //! f64 state copies it.
 //!
 //! # Time
-//! `SimStep` runs exactly [`StepBudget`] times per `App::update`, never by the wall clock; the
-//! same scene gives byte-identical outputs on every run.
+//! Each `App::update` advances exactly [`StepBudget`] fixed steps, never by the wall clock; the
+//! same scene gives byte-identical outputs on every run. With `stepping: Fixed` (the default)
+//! `SimStep` runs once per fixed step; with `MultiRate` one run of `SimStep` may cover several
+//! ([`multirate`]: [`Clock::span`], planned at the head of the Actuate stage).
 
 pub mod airbearing;
 pub mod broadphase;
@@ -34,6 +36,7 @@ pub mod guard;
 pub mod mesh;
 pub mod monitor;
 pub mod motion;
+pub mod multirate;
 pub mod output;
 pub mod overlap;
 pub mod plume;
@@ -91,7 +94,10 @@ impl Stage {
 /// pair).
 #[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
 pub enum Order {
-    /// Actuate, first: a docking mechanism's forces (the magnet).
+    /// Actuate, before anything acts: the step's length ([`multirate::plan_step`]; the
+    /// controllers have run, their commands are held over it).
+    Plan,
+    /// Actuate, then: a docking mechanism's forces (the magnet).
     MechanismForces,
     /// Actuate, then: the controllers' commands.
     ControllerForces,
@@ -112,19 +118,39 @@ pub enum Order {
     Guarantees,
 }
 
-/// Simulated clock. `step` counts completed steps; `t_s = step · dt_s` (never accumulated).
+/// Simulated clock. `step` counts completed fixed steps; `t_s = step · dt_s` (never
+/// accumulated). A pipeline step spans `span` fixed steps: always 1 with `stepping: Fixed`;
+/// with `MultiRate`, [`multirate::plan_step`] sets it each step (see [`multirate`]).
 #[derive(Resource, Debug, Clone)]
 pub struct Clock {
-    /// Completed steps.
+    /// Completed fixed steps.
     pub step: u64,
     /// Fixed step, s.
     pub dt_s: f64,
+    /// Fixed steps the current pipeline step covers (≥ 1).
+    pub span: u64,
 }
 
 impl Clock {
+    /// A clock at t = 0 stepping by `dt_s`, one fixed step per pipeline step.
+    pub fn new(dt_s: f64) -> Self {
+        Self {
+            step: 0,
+            dt_s,
+            span: 1,
+        }
+    }
     /// Simulated time, s.
     pub fn t_s(&self) -> f64 {
         self.step as f64 * self.dt_s
+    }
+    /// Length of the current pipeline step, s: `span · dt_s` (exactly `dt_s` when span = 1).
+    pub fn h_s(&self) -> f64 {
+        if self.span == 1 {
+            self.dt_s
+        } else {
+            self.span as f64 * self.dt_s
+        }
     }
 }
 
@@ -281,6 +307,9 @@ pub struct Guarantees {
     pub status: Vec<GuaranteeStatus>,
     /// Their margin (with its certified lower bound) at the last sample, same order.
     pub last: Vec<crate::geometry::bounds::Bracket>,
+    /// The rate bound each was judged with over the last step (`None`: at the sample only),
+    /// same order (read by [`multirate::plan_step`]).
+    pub last_rate: Vec<Option<f64>>,
     /// Exact parry calls made by the interval searches of guarantees over the run.
     pub interval_queries: u64,
 }
@@ -410,10 +439,18 @@ pub mod conv {
     }
 }
 
-/// Runs `SimStep` as many times as the budget says (the `Update` system).
+/// Runs `SimStep` until the budget's fixed steps are done (the `Update` system): once per
+/// fixed step with `stepping: Fixed`; with `MultiRate` a pipeline step may cover several, never
+/// past the budget ([`multirate::SpanCap`]).
 fn advance(world: &mut World) {
     let n = world.resource::<StepBudget>().0;
-    for _ in 0..n {
+    let start = world.resource::<Clock>().step;
+    loop {
+        let done = world.resource::<Clock>().step - start;
+        if done >= n {
+            break;
+        }
+        world.resource_mut::<multirate::SpanCap>().0 = n - done;
         world.run_schedule(SimStep);
         if world.resource::<guard::Guard>().trip.is_some() {
             break;
@@ -451,7 +488,7 @@ fn environment_gravity(
 /// gravity field (the field owns its own copy).
 fn advance_orbit(mut orbit: Option<ResMut<OrbitEnv>>, clock: Res<Clock>) {
     if let Some(env) = orbit.as_mut() {
-        env.reference.step(clock.dt_s);
+        env.reference.step(clock.h_s());
     }
 }
 
@@ -646,7 +683,8 @@ fn physics_step(
     mut scratch: Local<PhysicsScratch>,
     mut compliant: Option<ResMut<contact_model::CompliantContact>>,
 ) {
-    let dt = clock.dt_s;
+    // The step's length: dt_s, or a multiple of it that `multirate::plan_step` proved free.
+    let dt = clock.h_s();
     let t0 = clock.t_s();
     let n = roster.bodies.len();
     let sc = &mut *scratch;
@@ -884,7 +922,7 @@ fn physics_step(
                 sync.split_steps += 1;
                 sync.last_split_s = Some(t0 + tc);
                 if any_attached || phys.world.impulse_joints.iter().next().is_some() {
-                    step_rapier(&mut phys, tc, dt);
+                    step_rapier(&mut phys, tc, clock.dt_s);
                 }
                 for (k, e) in roster.bodies.iter().enumerate() {
                     if prev_attached[k] {
@@ -896,9 +934,9 @@ fn physics_step(
                         write_rapier(rb, b, &s);
                     }
                 }
-                step_rapier(&mut phys, dt - tc, dt);
+                step_rapier(&mut phys, dt - tc, clock.dt_s);
             }
-            _ => step_rapier(&mut phys, dt, dt),
+            _ => step_rapier(&mut phys, dt, clock.dt_s),
         }
         contact.refresh_touching(&phys.world);
     } else {
@@ -951,7 +989,7 @@ fn physics_step(
         }
         *w = Wrench::default();
     }
-    clock.step += 1;
+    clock.step += clock.span;
 }
 
 /// The monitor's running results.
@@ -1132,6 +1170,7 @@ fn check_guarantees(
     };
     let g = &mut *g;
     g.last.resize(g.list.len(), Bracket::exact(f64::INFINITY));
+    g.last_rate.resize(g.list.len(), None);
     let mut bodies_at: Vec<BodyView> = Vec::new();
     let mut pairs_at: Vec<PairDistance> = Vec::new();
     let mut count = monitor::QueryCount::default();
@@ -1149,6 +1188,7 @@ fn check_guarantees(
         // A rate bound resting on rotation is not proven in a step that turns a body by more
         // than UNDER_RESOLVED_TURN_RAD (the RK4 allowance is argued below that).
         let rotation_unproven = motion.under_resolved && frame_motion.rotation_read.get();
+        g.last_rate[k] = rate;
         let st = &mut g.status[k];
         let Some(rate) = rate else {
             let m = m1.value;
@@ -1436,6 +1476,7 @@ pub fn add_pipeline(app: &mut App) {
     );
     schedule.configure_sets((
         (
+            Order::Plan,
             Order::MechanismForces,
             Order::ControllerForces,
             Order::PlumeForces,
@@ -1455,6 +1496,7 @@ pub fn add_pipeline(app: &mut App) {
             .in_set(Stage::Monitor),
     ));
     schedule.add_systems((
+        multirate::plan_step.in_set(Order::Plan),
         environment_gravity.in_set(Order::Gravity),
         plume::plume_forces.in_set(Order::PlumeForces),
         (physics_step, advance_orbit).chain().in_set(Stage::Physics),

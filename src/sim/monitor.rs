@@ -1713,7 +1713,7 @@ pub fn contacts(
     compliant: Option<Res<super::contact_model::CompliantContact>>,
 ) {
     let t = clock.t_s();
-    let dt = clock.dt_s;
+    let dt = clock.h_s();
     let cs = &mut *cs;
     cs.points.clear();
     cs.step_pairs.clear();

@@ -1206,7 +1206,7 @@ pub fn plume_forces(
             }
         }
     }
-    let (t, dt) = (clock.t_s(), clock.dt_s);
+    let (t, dt) = (clock.t_s(), clock.h_s());
     touched.sort_unstable();
     touched.dedup();
     for pi in touched {

@@ -1,0 +1,495 @@
+//! Multi-rate stepping (`stepping: MultiRate(…)` in a scene): pipeline steps longer than
+//! `dt_s` wherever nothing can happen inside them.
+//!
+//! # What a long step is
+//! A pipeline step covers `span` fixed steps ([`super::Clock::span`]); `t_s = step · dt_s`
+//! stays exact because a span is a whole number of fixed steps. Every stage runs once per
+//! pipeline step with the step's length h = span·dt_s: the controllers at its start (their
+//! command is held over it, as it is held between calls anyway), the actuators' accounting
+//! over h, the f64 free flight over h (velocity Verlet and [`super::rotate_rk4`] in one step:
+//! the path the monitor judges on is the committed integration, as in a fixed step), the
+//! monitor's interval judgements over [t₀, t₀ + h], and the row at its end.
+//!
+//! # When a step may be long ([`plan_step`], at the head of the Actuate stage)
+//! Only when every condition below holds; otherwise the step is `dt_s` and the run is the
+//! fixed-step run (the reason is counted in `summary.json`'s `stepping.short_steps_by_reason`).
+//! 1. **Nothing keeps per-step state.** No sensor and no navigation filter (they expose and
+//!    propagate every fixed step), every controller's actuator `Ideal` or `Saturated` (PWPF,
+//!    RCS jets and their plumes modulate every step), no disturbance, no air-bearing table
+//!    (friction depends on the velocity) and no L2 frame (it advances in fixed steps); at
+//!    most [`MAX_BODIES`] bodies (the pair check below is over every pair).
+//! 2. **No scheduled time inside.** The step ends at or before the next call of every
+//!    controller, the next trajectory row, the end of the requested run, and
+//!    `max_step_s`.
+//! 3. **No contact can begin.** No body touches or is jointed, rapier did not step last step,
+//!    the compliant contact is idle and the docking mechanism is `FREE` with its magnet off.
+//!    For every pair of bodies, with u_i = |v_i| + A_i·h a bound on body i's centre-of-mass
+//!    speed over the step (A_i = |a_g(x_i)| + Σ|F|/m_i: gravity at the start plus the held
+//!    forces, after saturation — exactly the acceleration of the free-flight path), the
+//!    distance between the spheres holding every part's axis-aligned box in any attitude
+//!    stays above [`super::RAPIER_ENGAGE_M`]: d_c − R_i − R_j − (u_i + u_j)·h > 1 m. The
+//!    physics stage's own engagement test is then false over the step (it uses the same
+//!    spheres and the path's speeds, which u bounds), so rapier does not step, nothing is split
+//!    and no contact is missed. The docking ports' gap minus the ports' travel
+//!    (u + Ω·lever for each) stays above the magnet's activation distance, so the magnet
+//!    switches on at the same fixed step as in the fixed-step run.
+//! 4. **No guarantee near its threshold.** Every guarantee was judged on the interval last
+//!    step (a rate bound r; a "samples only" guarantee keeps the run at `dt_s`, where it is
+//!    sampled) and its certified lower margin exceeds 2·r·h. This is a planning rule, not the
+//!    proof: the monitor judges each long step on its whole interval exactly as it judges a
+//!    fixed step (lower bounds from the rate bounds over h, searches where they do not clear),
+//!    so a verdict stays proven whatever h is.
+//! 5. **Error control.** The one-step integration's leading error terms stay within the
+//!    scene's tolerances: velocity Verlet's position error |j|·h³/6 ≤ `tol_m`, with |j| a bound
+//!    on the jerk of the differential gravity: G(u_i + 5·(|v_ref|/r)·|x_i|) where
+//!    G = 3μ/r³·(1 + 10·J2) bounds the gravity-gradient tensor's norm (the J2 term's share is
+//!    about 2·J2·(R⊕/r)² ≤ 2.2e-3; 10·J2 = 1.1e-2 covers it) and 5|v_ref|/r its rate of
+//!    change (2ω from its rotation, 3|ṙ|/r from its size), r = |r_ref| − |v_ref|·h − |x_i|
+//!    the smallest distance from Earth's centre over the step; in free space G = 0. And the
+//!    RK4 rotation's: every body turns by at most Ω_i·h ≤ min((120·tol_rad)^(1/5), 0.3 rad),
+//!    Ω_i = (|Jω| + (|τ| + τ_gg)·h)/λ_min (angular momentum grows at most at the held torque
+//!    plus the gravity-gradient torque bound τ_gg = G·(λ_max − λ_min)).
+//!
+//! The longest span meeting 3–5 is found by bisection (each condition only tightens as h
+//! grows). Nothing here changes a run with `stepping: Fixed`: the resource is absent and the
+//! span stays 1 (h = dt_s exactly: [`super::Clock::h_s`]).
+
+use super::contact_model::CompliantContact;
+use super::controllers::ControllerHost;
+use super::docking::Docking;
+use super::monitor::{ContactState, MonitorGeometry};
+use super::motion::{RK4_INFLATION, StepMotion, UNDER_RESOLVED_TURN_RAD};
+use super::output::Recorder;
+use super::{
+    BodyState, Clock, Gravity, Guarantees, MonitorState, OrbitEnv, Physics, RapierSync, Roster,
+    SimBody,
+};
+use crate::actuation::actuator::ActuatorSpec;
+use crate::control::interface::Command;
+use crate::orbit::constants::{J2_EARTH, MU_EARTH_M3_S2};
+use bevy::ecs::system::SystemParam;
+use bevy::prelude::*;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Fixed steps the current `App::update` may still take (set by the `Update` system before
+/// each pipeline step): a long step never passes the end of the requested run.
+#[derive(Resource, Debug, Clone, Default)]
+pub struct SpanCap(pub u64);
+
+/// Most bodies for which long steps are planned (the pair check is over every pair).
+pub const MAX_BODIES: usize = 64;
+
+/// Two bodies within rapier's reach ([`super::RAPIER_ENGAGE_M`] between their bounding spheres)
+/// may take a long step only while their certified part-to-part distance at t₀ exceeds this
+/// plus [`NEAR_SWEEP_FACTOR`] times the most any of their points can travel over the step, m:
+/// twice [`super::RAPIER_SEES_M`], so rapier (stepped over the long step only as a detector:
+/// the bodies keep their f64 free flight) sees no contact, and the physics stage's swept test
+/// and the compliant model's contact window (three times the step's travel plus 1 mm) find
+/// nothing to split or sub-step.
+pub const NEAR_CLEAR_M: f64 = 2.0 * super::RAPIER_SEES_M;
+
+/// See [`NEAR_CLEAR_M`]: the compliant contact model's window is three travels wide; one more
+/// for the step itself.
+pub const NEAR_SWEEP_FACTOR: f64 = 4.0;
+
+/// A scene's `MultiRate` request and the run's record of it (absent with `Fixed`).
+#[derive(Resource, Debug, Clone)]
+pub struct MultiRate {
+    /// Longest span, fixed steps (⌊max_step_s / dt_s⌋, at least 1).
+    pub max_span: u64,
+    /// Position tolerance of one step's integration, m.
+    pub tol_m: f64,
+    /// Attitude tolerance of one step's integration, rad.
+    pub tol_rad: f64,
+    /// What the run did.
+    pub stats: MultiRateStats,
+}
+
+impl MultiRate {
+    /// From the scene's `stepping`; `None` for `Fixed`.
+    pub fn from_scene(stepping: &crate::scene::Stepping, dt_s: f64) -> Option<Self> {
+        match stepping {
+            crate::scene::Stepping::Fixed => None,
+            crate::scene::Stepping::MultiRate {
+                max_step_s,
+                tol_m,
+                tol_rad,
+            } => Some(Self {
+                // The validated max_step_s is at most a day and dt_s at least 1e-6 s: the
+                // quotient fits a u64.
+                max_span: ((max_step_s / dt_s) * (1.0 + 1e-12)).floor().max(1.0) as u64,
+                tol_m: *tol_m,
+                tol_rad: *tol_rad,
+                stats: MultiRateStats::default(),
+            }),
+        }
+    }
+
+    /// `summary.json`'s `stepping`: the request and what the run did.
+    pub fn summary(&self, dt_s: f64) -> serde_json::Value {
+        serde_json::json!({
+            "mode": "multi_rate",
+            "max_step_s": self.max_span as f64 * dt_s,
+            "tol_m": self.tol_m,
+            "tol_rad": self.tol_rad,
+            "pipeline_steps": self.stats.pipeline_steps,
+            "long_steps": self.stats.long_steps,
+            "fixed_steps_in_long_steps": self.stats.fixed_steps_in_long_steps,
+            "longest_step_s": self.stats.longest_step_s,
+            "short_steps_by_reason": self.stats.short_steps_by_reason,
+        })
+    }
+
+    /// The largest turn one step may give a body, rad: RK4's local error on a rotation by θ
+    /// is about θ⁵/120, so θ ≤ (120·tol_rad)^(1/5), and never past the monitor's resolved
+    /// limit.
+    pub fn max_turn_rad(&self) -> f64 {
+        (120.0 * self.tol_rad)
+            .powf(0.2)
+            .min(UNDER_RESOLVED_TURN_RAD)
+    }
+}
+
+/// What multi-rate stepping did over a run (`summary.json`'s `stepping`).
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct MultiRateStats {
+    /// Pipeline steps run.
+    pub pipeline_steps: u64,
+    /// Of those, steps longer than `dt_s`.
+    pub long_steps: u64,
+    /// Fixed steps covered by long steps.
+    pub fixed_steps_in_long_steps: u64,
+    /// Longest step taken, s.
+    pub longest_step_s: f64,
+    /// Steps kept at `dt_s`, by the first condition that kept them there.
+    pub short_steps_by_reason: BTreeMap<&'static str, u64>,
+}
+
+/// Everything the planner reads.
+#[derive(SystemParam)]
+pub struct PlanInputs<'w, 's> {
+    clock: ResMut<'w, Clock>,
+    cap: Res<'w, SpanCap>,
+    mr: Option<ResMut<'w, MultiRate>>,
+    host: Option<Res<'w, ControllerHost>>,
+    rec: Res<'w, Recorder>,
+    roster: Res<'w, Roster>,
+    bodies: Query<'w, 's, (&'static SimBody, &'static BodyState)>,
+    geo: Res<'w, MonitorGeometry>,
+    motion: Res<'w, StepMotion>,
+    gravity: Option<Res<'w, Gravity>>,
+    orbit: Option<Res<'w, OrbitEnv>>,
+    contact: Res<'w, ContactState>,
+    sync: Res<'w, RapierSync>,
+    phys: Res<'w, Physics>,
+    compliant: Option<Res<'w, CompliantContact>>,
+    docking: Option<Res<'w, Docking>>,
+    guarantees: Res<'w, Guarantees>,
+    mon: Res<'w, MonitorState>,
+    table: Option<Res<'w, super::airbearing::AirBearing>>,
+    l2: Option<Res<'w, super::environment::L2Frame>>,
+}
+
+/// The norms of a held command's force and torque after the actuator, N and N·m, when the
+/// actuator is memoryless (`Ideal`, `Saturated`); `None` for one with per-step state.
+fn held_bound(spec: &ActuatorSpec, cmd: &Command) -> Option<(f64, f64)> {
+    if cmd.valves.is_some() {
+        return None;
+    }
+    let clamp = |v: &nalgebra::Vector3<f64>, m: &[f64; 3]| {
+        nalgebra::Vector3::new(
+            v.x.clamp(-m[0], m[0]),
+            v.y.clamp(-m[1], m[1]),
+            v.z.clamp(-m[2], m[2]),
+        )
+        .norm()
+    };
+    match spec {
+        ActuatorSpec::Ideal => Some((cmd.force_n.norm(), cmd.torque_nm.norm())),
+        ActuatorSpec::Saturated {
+            max_force_n,
+            max_torque_nm,
+        } => Some((
+            clamp(&cmd.force_n, max_force_n),
+            clamp(&cmd.torque_nm, max_torque_nm),
+        )),
+        _ => None,
+    }
+}
+
+/// x > y, false when either is NaN (a NaN bound never clears a condition).
+fn above(x: f64, y: f64) -> bool {
+    x > y
+}
+
+/// One body's bounds over a candidate step.
+struct BodyBound {
+    /// |v₀|, m/s.
+    speed_m_s: f64,
+    /// Bound on the path's acceleration, m/s².
+    accel_m_s2: f64,
+    /// |x₀| (from the world origin, the reference orbit), m.
+    offset_m: f64,
+    /// |J ω₀|, N·m·s.
+    momentum_nms: f64,
+    /// Held torque bound plus the gravity-gradient bound, N·m.
+    torque_nm: f64,
+    /// Smallest and largest principal moments, kg·m².
+    lambda: (f64, f64),
+    /// Radius holding every part's box in any attitude, m.
+    aabb_m: f64,
+    /// Radius holding every part, about the centre of mass, m.
+    extent_m: f64,
+}
+
+/// Pipeline step planning: sets [`Clock::span`] (1 unless every condition of the module
+/// documentation holds) and counts the outcome.
+pub fn plan_step(mut p: PlanInputs) {
+    p.clock.span = 1;
+    if p.mr.is_none() {
+        return;
+    }
+    let plan = plan(&p);
+    let step_s = p.clock.dt_s;
+    let Some(mr) = p.mr.as_deref_mut() else {
+        return;
+    };
+    let st = &mut mr.stats;
+    st.pipeline_steps += 1;
+    match plan {
+        Ok(k) if k > 1 => {
+            st.long_steps += 1;
+            st.fixed_steps_in_long_steps += k;
+            st.longest_step_s = st.longest_step_s.max(k as f64 * step_s);
+            p.clock.span = k;
+        }
+        Ok(_) => *st.short_steps_by_reason.entry("schedule").or_default() += 1,
+        Err(reason) => *st.short_steps_by_reason.entry(reason).or_default() += 1,
+    }
+}
+
+/// The span the conditions allow, or the first reason there is none.
+fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
+    let Some(mr) = p.mr.as_deref() else {
+        return Ok(1);
+    };
+    let clock = &*p.clock;
+    if clock.step == 0 || !p.motion.ready {
+        return Err("first step");
+    }
+    // 1. Features with per-step state.
+    if p.table.is_some() {
+        return Err("air-bearing table");
+    }
+    if p.l2.is_some() {
+        return Err("L2 frame");
+    }
+    let n = p.roster.bodies.len();
+    if n > MAX_BODIES {
+        return Err("more bodies than multirate::MAX_BODIES");
+    }
+    let mut force_n = vec![0.0; n];
+    let mut torque_nm = vec![0.0; n];
+    // 2. The schedule.
+    let mut k_max = mr.max_span.min(p.cap.0.max(1));
+    let every = u64::from(p.rec.every.max(1));
+    k_max = k_max.min(every - clock.step % every);
+    if let Some(host) = p.host.as_deref() {
+        if !host.disturbances.is_empty() {
+            return Err("disturbance");
+        }
+        for slot in &host.slots {
+            if slot.sensor.is_some() || slot.nav.is_some() {
+                return Err("sensor or navigation filter");
+            }
+            let Some((f, t)) = held_bound(&slot.actuator.spec, &slot.held) else {
+                return Err("actuator with per-step state (PWPF, RCS)");
+            };
+            if let (Some(fb), Some(tb)) = (force_n.get_mut(slot.body), torque_nm.get_mut(slot.body))
+            {
+                *fb += f;
+                *tb += t;
+            }
+            let period = slot.period_steps.max(1);
+            k_max = k_max.min(period - clock.step % period);
+        }
+    }
+    if k_max <= 1 {
+        return Ok(1);
+    }
+    // 3. Contact and the mechanism.
+    if p.sync.every_step {
+        return Err("rapier every step (monitor.rapier_every_step)");
+    }
+    if p.contact.touching.iter().any(|t| *t) || p.phys.world.impulse_joints.iter().next().is_some()
+    {
+        return Err("contact or joint");
+    }
+    if p.compliant.as_deref().is_some_and(|c| {
+        !c.step.is_empty()
+            || c.pairs.iter().any(|q| q.in_contact)
+            || c.link.latch.is_some()
+            || c.link.separation.is_some()
+            || c.link.platform.is_some()
+    }) {
+        return Err("compliant contact");
+    }
+    if let Some(d) = p.docking.as_deref()
+        && (d.state != crate::contact::dock_state::DockState::Free || d.magnet_on)
+    {
+        return Err("docking mechanism active");
+    }
+    // 4. Guarantees judged at samples only keep the fixed step.
+    let g = &*p.guarantees;
+    if g.last_rate.len() != g.list.len() || g.last.len() != g.list.len() {
+        return Err("first step");
+    }
+    if g.last_rate.iter().any(Option::is_none) {
+        return Err("guarantee judged at samples only");
+    }
+    // Per-body bounds at t₀.
+    let (g_grad, ref_speed_m_s, ref_r_m) = match p.orbit.as_deref() {
+        Some(o) => {
+            let (r, v) = o.reference.state();
+            let mu = MU_EARTH_M3_S2;
+            (Some(mu), v.norm(), r.norm())
+        }
+        None => (None, 0.0, f64::INFINITY),
+    };
+    let mut bb = Vec::with_capacity(n);
+    for (k, e) in p.roster.bodies.iter().enumerate() {
+        let (b, s) = p.bodies.get(*e).map_err(|_| "first step")?;
+        let a_g = p
+            .gravity
+            .as_deref()
+            .map_or(0.0, |g| g.0.accel_m_s2(&s.pos_m).norm());
+        let lam = p.motion.lambda_kg_m2.get(k).copied().unwrap_or([0.0; 3]);
+        let lmin = lam.iter().copied().fold(f64::INFINITY, f64::min);
+        let lmax = lam.iter().copied().fold(0.0, f64::max);
+        let w_body = s.att.inverse() * s.omega_rad_s;
+        bb.push(BodyBound {
+            speed_m_s: s.vel_m_s.norm(),
+            accel_m_s2: a_g + force_n[k] / b.mass_kg,
+            offset_m: s.pos_m.norm(),
+            momentum_nms: (b.inertia_kg_m2 * w_body).norm(),
+            torque_nm: torque_nm[k],
+            lambda: (lmin, lmax),
+            aabb_m: p.geo.aabb_extent_m.get(k).copied().unwrap_or(f64::INFINITY),
+            extent_m: p.geo.extent_m.get(k).copied().unwrap_or(f64::INFINITY),
+        });
+    }
+    let docking = match p.docking.as_deref() {
+        Some(d) => {
+            let (ce, te) = d.bodies;
+            let (cb, cs) = p.bodies.get(ce).map_err(|_| "first step")?;
+            let (tb, ts) = p.bodies.get(te).map_err(|_| "first step")?;
+            let (geom, _, _) = super::docking::geometry(&d.spec, (cs, cb), (ts, tb), &d.ports);
+            Some((
+                (cb.index, (d.ports.0.0 - cb.com_body_m).norm()),
+                (tb.index, (d.ports.1.0 - tb.com_body_m).norm()),
+                geom.gap_m,
+                d.spec.magnet.activation_distance_m,
+            ))
+        }
+        None => None,
+    };
+    let centres: Vec<nalgebra::Vector3<f64>> = p
+        .roster
+        .bodies
+        .iter()
+        .map(|e| p.bodies.get(*e).map(|(_, s)| s.pos_m))
+        .collect::<Result<_, _>>()
+        .map_err(|_| "first step")?;
+    let max_turn = mr.max_turn_rad();
+    let dt = clock.dt_s;
+    let t0 = clock.t_s();
+    // Whether a step of k fixed steps meets 3–5; the reason it does not.
+    let fits = |k: u64| -> Result<(), &'static str> {
+        let h = k as f64 * dt;
+        let mut omega = Vec::with_capacity(n);
+        for b in &bb {
+            let u = b.speed_m_s + b.accel_m_s2 * h;
+            // G: the gravity-gradient tensor's norm bound at the closest the body comes to
+            // Earth's centre over the step; the jerk bound G·(u + 5|v_ref|/r·|x|).
+            let (g_tensor, jerk) = match g_grad {
+                Some(mu) => {
+                    let r = ref_r_m - ref_speed_m_s * h - b.offset_m;
+                    if !above(r, 0.0) {
+                        return Err("integration tolerance");
+                    }
+                    let g = 3.0 * mu / (r * r * r) * (1.0 + 10.0 * J2_EARTH);
+                    (g, g * (u + 5.0 * ref_speed_m_s / r * b.offset_m))
+                }
+                None => (0.0, 0.0),
+            };
+            if !above(mr.tol_m, jerk * h * h * h / 6.0 - f64::MIN_POSITIVE) {
+                return Err("integration tolerance");
+            }
+            let tau = b.torque_nm + g_tensor * (b.lambda.1 - b.lambda.0);
+            let om = if b.lambda.0 > 0.0 {
+                (b.momentum_nms + tau * h) / b.lambda.0 * RK4_INFLATION
+            } else {
+                f64::INFINITY
+            };
+            if !above(max_turn, om * h - f64::MIN_POSITIVE) {
+                return Err("integration tolerance");
+            }
+            omega.push((u, om));
+        }
+        for i in 0..n {
+            for j in i + 1..n {
+                let d = (centres[i] - centres[j]).norm() - bb[i].aabb_m - bb[j].aabb_m;
+                let travel = (omega[i].0 + omega[j].0) * h;
+                if above(d - travel, super::RAPIER_ENGAGE_M) {
+                    continue;
+                }
+                // Within rapier's reach: the monitor's certified distance at t₀ between the
+                // parts, less what any point of either body can travel, must stay clear.
+                let lower = p
+                    .mon
+                    .pair_index
+                    .get(&(i, j))
+                    .map(|k| &p.mon.pairs[*k])
+                    .filter(|q| q.t_s == t0)
+                    .map_or(f64::NEG_INFINITY, |q| q.lower_m);
+                let sweep = (omega[i].0
+                    + omega[i].1 * bb[i].extent_m
+                    + omega[j].0
+                    + omega[j].1 * bb[j].extent_m)
+                    * h;
+                if !above(lower - NEAR_SWEEP_FACTOR * sweep, NEAR_CLEAR_M) {
+                    return Err("bodies near");
+                }
+            }
+        }
+        if let Some(((c, lc), (t, lt), gap, act)) = docking {
+            let travel = (omega[c].0 + omega[c].1 * lc + omega[t].0 + omega[t].1 * lt) * h;
+            if act > 0.0 && !above(gap - travel, act) {
+                return Err("docking magnet range");
+            }
+        }
+        for (last, rate) in g.last.iter().zip(&g.last_rate) {
+            let r = rate.unwrap_or(f64::INFINITY);
+            if !above(last.lower, 2.0 * r * h) {
+                return Err("guarantee near its threshold");
+            }
+        }
+        Ok(())
+    };
+    // Bisection for the longest span that fits (every condition tightens as h grows).
+    fits(2)?;
+    if fits(k_max).is_ok() {
+        return Ok(k_max);
+    }
+    let (mut lo, mut hi) = (2, k_max);
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if fits(mid).is_ok() {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Ok(lo)
+}
