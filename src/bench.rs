@@ -372,7 +372,10 @@ pub fn run_cliffs(scenes: &Path, steps: u64) -> Result<String, SceneError> {
     let plain = load(&aligned, &[])?;
     let spin = load(
         &aligned,
-        &["bodies.chaser.initial.rate_body_deg_s=(5729.5779513, 0.0, 0.0)".to_string()],
+        &[
+            "bodies.chaser.initial.rate_body_deg_s=(5729.5779513, 0.0, 0.0)".to_string(),
+            "monitor.allow_under_resolved=true".to_string(),
+        ],
     )?;
     let law_latched = load(
         &aligned,

@@ -698,6 +698,7 @@ fn regress_min_distance_broken_only_between_samples_of_a_fast_spin() {
     );
     let text = format!(
         r#"Scene(name: "spin_sweep", dt_s: {DT}, duration_s: 0.05, environment: FreeSpace,
+           monitor: (allow_under_resolved: true),
            bodies: [{spinner}, {balls}],
            guarantees: [MinDistance(name: "clear_5cm", a: "spinner", b: "balls", min_m: 0.05)])"#
     );
@@ -748,6 +749,7 @@ fn val_guarantee_resting_on_an_under_resolved_rotation_is_not_held() {
     let verdicts = |dt: f64| {
         let text = format!(
             r#"Scene(name: "fast_spin", dt_s: {dt}, duration_s: 0.1, environment: FreeSpace,
+               monitor: (allow_under_resolved: true),
                bodies: [
                  (name: "spinner", role: Other, mass_kg: 50.0,
                   inertia_kg_m2: (xx: 20.0, yy: 30.0, zz: 45.0),
@@ -838,6 +840,7 @@ fn val_guarantee_resting_on_an_under_resolved_rotation_is_not_held() {
 fn val_under_resolved_step_only_looks_for_a_violation() {
     let text = format!(
         r#"Scene(name: "fast_spin_near", dt_s: 0.01, duration_s: 0.1, environment: FreeSpace,
+           monitor: (allow_under_resolved: true),
            bodies: [
              (name: "spinner", role: Other, mass_kg: 50.0,
               inertia_kg_m2: (xx: 20.0, yy: 30.0, zz: 45.0),
@@ -874,4 +877,43 @@ fn val_under_resolved_step_only_looks_for_a_violation() {
         "the bound does not clear zero: the search must look"
     );
     assert!(evals <= 3 * n, "{evals} evaluations over {n} steps");
+}
+
+/// Hostile input, class 8 of issue 30: a scene whose initial spin turns a body by more than
+/// `UNDER_RESOLVED_TURN_RAD` (0.3 rad) a step is refused at load, located at the rate field, with
+/// the step that would resolve it (0.3 rad / 100 rad/s = 0.003 s), unless the monitor is told
+/// to run it anyway. Reference: the turn per step |ω|·dt = 100 rad/s × 0.01 s = 1 rad.
+#[test]
+fn regress_spin_beyond_the_resolved_turn_is_refused_unless_allowed() {
+    let text = |allow: &str| {
+        format!(
+            r#"Scene(name: "fast_spin_refused", dt_s: 0.01, duration_s: 0.1, environment: FreeSpace,
+           {allow}
+           bodies: [
+             (name: "spinner", role: Other, mass_kg: 50.0,
+              inertia_kg_m2: (xx: 20.0, yy: 30.0, zz: 45.0),
+              initial: (pos_m: (0.0, 0.0, 0.0), rate_body_deg_s: (0.0, 0.0, {})),
+              parts: [Bus(name: "plate", pos_m: (0.5, 0.0, 0.0), shape: Box(size_m: (1.0, 0.3, 0.02)))]),
+           ])"#,
+            100f64.to_degrees()
+        )
+    };
+    let Err(err) = load_scene_str(&text(""), "fast_spin_refused", &[]) else {
+        panic!("a 1 rad step is refused");
+    };
+    assert_eq!(err.field, "bodies.spinner.initial.rate_body_deg_s", "{err}");
+    assert_eq!(err.line, 6, "{err}");
+    assert!(err.message.contains("turns the body 1 rad"), "{err}");
+    assert!(err.message.contains("dt_s ≤ 0.003 s"), "{err}");
+    assert!(
+        err.message.contains("allow_under_resolved"),
+        "the message names the way to run it anyway: {err}"
+    );
+    // At the resolving step the same spin is accepted; and allowed, the 1 rad step runs.
+    let resolved = text("").replace("dt_s: 0.01,", "dt_s: 0.003,");
+    load_scene_str(&resolved, "fast_spin_refused", &[]).unwrap_or_else(|e| panic!("{e}"));
+    let allowed = text("monitor: (allow_under_resolved: true),");
+    let loaded =
+        load_scene_str(&allowed, "fast_spin_refused", &[]).unwrap_or_else(|e| panic!("{e}"));
+    Simulation::new(&loaded).unwrap_or_else(|e| panic!("{e}"));
 }

@@ -3,6 +3,11 @@
 
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
+/// A step that turns a body by more than this is under-resolved, rad: the monitor's rate bounds
+/// rest on RK4 following Euler's equations to a relative 1e-4, argued for |ω|·dt ≤ 0.3 rad
+/// (`sim::motion`); over a longer turn no guarantee is held and the step is counted.
+pub const UNDER_RESOLVED_TURN_RAD: f64 = 0.3;
+
 /// One RK4 step of Euler's equations J ω̇_b = τ_b − ω_b × J ω_b with quaternion kinematics
 /// q̇ = ½ q ⊗ (0, ω_b), in f64; the torque is held constant in the world frame over the step.
 /// Returns the new attitude (body → world) and world-frame angular velocity.

@@ -127,6 +127,13 @@ pub struct MonitorSpec {
     /// collider pairs at once.
     #[serde(default)]
     pub rapier_every_step: bool,
+    /// Run a scene whose initial spin turns a body by more than
+    /// `math::rigid::UNDER_RESOLVED_TURN_RAD` (0.3 rad) in one step (default false: such a scene
+    /// is refused with the step that would resolve it). Over such steps no guarantee resting on
+    /// the rotation can be held (they are `unresolved`), and near contact the run is tens of
+    /// times slower than without the spin.
+    #[serde(default)]
+    pub allow_under_resolved: bool,
 }
 
 impl MonitorSpec {

@@ -403,6 +403,27 @@ pub fn validate(s: &Scene) -> Check {
             );
         }
         validate_body(b)?;
+        let rate_rad_s = nalgebra::Vector3::from(b.initial.rate_body_deg_s)
+            .norm()
+            .to_radians();
+        let turn_rad = rate_rad_s * s.dt_s;
+        if turn_rad > crate::math::rigid::UNDER_RESOLVED_TURN_RAD && !s.monitor.allow_under_resolved
+        {
+            return fail(
+                format!("bodies.{}.initial.rate_body_deg_s", b.name),
+                format!(
+                    "{} rad/s turns the body {} rad in one step of {} s, more than the {} rad \
+                     over which the monitor's rate bounds are proven: no guarantee could be held \
+                     and the run would be tens of times slower near contact; use dt_s ≤ {} s, or \
+                     set monitor: (allow_under_resolved: true) to run it anyway",
+                    num(rate_rad_s),
+                    num(turn_rad),
+                    num(s.dt_s),
+                    num(crate::math::rigid::UNDER_RESOLVED_TURN_RAD),
+                    num(crate::math::rigid::UNDER_RESOLVED_TURN_RAD / rate_rad_s)
+                ),
+            );
+        }
         colliders += b.parts.iter().map(collider_count).sum::<usize>();
         if colliders > MAX_COLLIDERS {
             return fail(

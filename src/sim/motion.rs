@@ -39,8 +39,7 @@ use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 /// Inflation of the angular-speed bound for RK4's departure from Euler's equations.
 pub const RK4_INFLATION: f64 = 1.0 + 1e-3;
 
-/// A step that turns a body by more than this is counted as under-resolved, rad.
-pub const UNDER_RESOLVED_TURN_RAD: f64 = 0.3;
+pub use crate::math::rigid::UNDER_RESOLVED_TURN_RAD;
 
 /// Free-flight parameters of a path piece.
 #[derive(Debug, Clone)]
