@@ -283,7 +283,8 @@ pub enum HullEval {
     Bracket {
         /// The hulls' certified gap (a lower bound of the mesh distance), m.
         lower: f64,
-        /// The distance of a point of one part to the other part (an upper bound), m.
+        /// An upper bound of the pair's distance: the distance of a point of one part to the
+        /// other part, or the shell's certified bound ([`super::mesh::MeshShell`]), m.
         upper: f64,
     },
     /// The hulls overlap (or a side has no support map): no bound from them.
@@ -313,6 +314,13 @@ pub enum HullEval {
 /// rounding; in a concavity, or inside the hull, it does not, and the caller falls back to the
 /// exact mesh query.
 ///
+/// First tier, for a mesh part against a part with a support map: the mesh's shell
+/// ([`super::mesh::MeshShell`], two spheres about its centre), one point projection and one
+/// support point on the other part ([`shell_bound`]). Where its bracket is already as narrow
+/// as the caller's test of an exact value (lower ≥ upper·(1 − [`GJK_REL_TOL`]) − the f32
+/// rounding), it is the answer, with no support or triangle query on the mesh (a round part
+/// far away: the sphere mesh's shell is 1.1e-4 m thick); otherwise its bounds join the hull's.
+///
 /// With `clear_at`, a lower bound at or above it is returned as [`HullEval::Clear`] before the
 /// point query.
 #[allow(clippy::too_many_arguments)]
@@ -339,6 +347,26 @@ pub fn hull_bracket(
     };
     let rel = pose_a.inv_mul(pose_b);
     let scale = rel.translation.vector.norm() + ra + rb;
+    // First the shell of a mesh part against a part with a support map: no support or
+    // triangle query at all where it is narrow enough (a round part, far away).
+    let pair_eps = F32_REL_TOL * scale;
+    let shell = match (ha.and_then(|h| h.shell()), hb.and_then(|h| h.shell())) {
+        (Some(s), None) if hb.is_none() => shell_bound(pose_b, b, pose_a, s, pair_eps),
+        (None, Some(s)) if ha.is_none() => shell_bound(pose_a, a, pose_b, s, pair_eps),
+        _ => None,
+    };
+    let (shell_lower, shell_upper) = shell.map_or((0.0, f64::INFINITY), |(l, u)| {
+        (l.max(0.0), u.unwrap_or(f64::INFINITY))
+    });
+    if shell.is_some() && shell_lower >= clear_at {
+        return HullEval::Clear(shell_lower);
+    }
+    if shell_lower >= shell_upper * (1.0 - GJK_REL_TOL) - pair_eps {
+        return HullEval::Bracket {
+            lower: shell_lower.min(shell_upper),
+            upper: shell_upper,
+        };
+    }
     let hull_tol = super::mesh::HULL_SUPPORT_REL_TOL
         * (ha.map_or(0.0, |h| h.radius_m()) + hb.map_or(0.0, |h| h.radius_m()));
     let eps = F32_REL_TOL * scale + hull_tol;
@@ -361,6 +389,11 @@ pub fn hull_bracket(
         f64::from(n.dot(s2 - s1))
     };
     let gap = gap_along((p2a - p1) / d).min(f64::from(d));
+    let gap = if shell.is_some() {
+        gap.max(shell_lower + eps)
+    } else {
+        gap
+    };
     if gap - eps >= clear_at {
         return HullEval::Clear(gap - eps);
     }
@@ -436,7 +469,7 @@ pub fn hull_bracket(
     if !upper.is_finite() {
         return HullEval::None;
     }
-    let upper = f64::from(upper);
+    let upper = f64::from(upper).min(shell_upper);
     let lower = (gap - eps).max(0.0);
     HullEval::Bracket {
         lower: lower.min(upper),
@@ -444,13 +477,57 @@ pub fn hull_bracket(
     }
 }
 
-/// The hull support map of a triangle-mesh shape ([`MonitorGeometry::hulls`]); `None` for any
-/// other shape.
+/// The hull support map of a triangle-mesh shape, with the shell of its triangles
+/// ([`super::mesh::MeshShell`]) ([`MonitorGeometry::hulls`]); `None` for any other shape.
 pub fn mesh_hull(shape: &dyn rp::Shape) -> Option<std::sync::Arc<super::mesh::HullSupport>> {
     shape
         .as_trimesh()
-        .and_then(|m| super::mesh::HullSupport::new(m.vertices()))
+        .and_then(|m| {
+            super::mesh::HullSupport::new(m.vertices())
+                .map(|h| h.with_shell(super::mesh::MeshShell::new(m.vertices(), m.indices())))
+        })
         .map(std::sync::Arc::new)
+}
+
+/// The shell bracket ([`super::mesh::MeshShell`]) of a mesh part M and a part X with a
+/// support map: (certified lower bound, certified upper bound when M's shell has an inner
+/// sphere) of their distance, m; `None` when X has no support map or holds M's centre.
+///
+/// With c M's centre in X's frame (the relative pose in f64) and p parry's projection of c
+/// on X (a point of X), n = (c − p)/|c − p|: the gap n·c − h_X(n) (h_X X's support function)
+/// is at most the distance from c to X (any direction's is), so the distance from X to the
+/// outer ball, thus to M, is at least gap − outer. When that is positive p lies outside the
+/// outer ball and the distance from X to M is at most |p − c| − inner (the shell's docs). Both
+/// widened by `eps`, the f32 rounding of X's support point and projection (8 ulps of the
+/// pair's scale, [`F32_REL_TOL`]); c is formed in f64 and the shell's radii carry their own
+/// padding.
+fn shell_bound(
+    pose_x: &Isometry3<f64>,
+    x: &dyn rp::Shape,
+    pose_m: &Isometry3<f64>,
+    shell: &super::mesh::MeshShell,
+    eps: f64,
+) -> Option<(f64, Option<f64>)> {
+    let sx = x.as_support_map()?;
+    let c = pose_x.inv_mul(pose_m) * nalgebra::Point3::from(Vector3::from(shell.centre_m));
+    let proj = x.project_local_point(conv::v(&c.coords), true);
+    if proj.is_inside {
+        return None;
+    }
+    let p = conv::na(proj.point);
+    let to_c = c.coords - p;
+    let dist = to_c.norm();
+    if !(dist > 0.0 && dist.is_finite()) {
+        return None;
+    }
+    let n = to_c / dist;
+    let s = conv::na(sx.local_support_point(conv::v(&n)));
+    let lower = n.dot(&(c.coords - s)) - shell.outer_m - eps;
+    let upper = shell
+        .inner_m
+        .filter(|_| lower > 0.0)
+        .map(|inner| dist - inner + eps);
+    Some((lower, upper))
 }
 
 /// The parts of every body as the monitor uses them (fetched from the ECS once).
