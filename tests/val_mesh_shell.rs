@@ -18,7 +18,12 @@
 //!   mesh lies in the ball of radius R, and the vertex on the axis reaches it); a cube whose
 //!   lowest corner is h straight above the sphere mesh's top vertex is h from it (the mesh lies
 //!   below the top's plane, the corner is h from the vertex);
-//! * ball to box mesh: |P − clamp(P, box)| − r.
+//! * ball to box mesh: |P − clamp(P, box)| − r;
+//! * the inner box (the outer box scaled about the centre until no triangle meets it): for the
+//!   box mesh the box itself; for any mesh no triangle meets it — parry's own cuboid–triangle
+//!   intersection test on every triangle (the box shrunk by 1e-5 of itself, above f32's
+//!   resolution); on a closed concave mesh (a plus-shaped prism, its centre inside) random
+//!   balls' brackets hold the brute-force distance.
 //!
 //! Tolerances: parry works in f32 — a value is within 8 f32 ulps of the pose's scale (|Δc| +
 //! both bounding radii: `monitor::F32_REL_TOL`) of the true distance, and an exact mesh query's
@@ -33,6 +38,85 @@ use rpod::bench::meshes::{tessellated_box, uv_sphere};
 use rpod::math::rng::Lcg;
 use rpod::sim::mesh::MeshShell;
 use rpod::sim::monitor::{self, F32_REL_TOL, GJK_REL_TOL, HullEval, PairEval};
+
+/// No triangle meets the inner box (shrunk by 1e-5 of itself): parry's intersection test.
+fn inner_box_meets_no_triangle(pts: &[Vector], t: &[[u32; 3]], s: &MeshShell) -> bool {
+    use bevy_rapier3d::parry::query::intersection_test;
+    use bevy_rapier3d::parry::shape::{Cuboid, Triangle};
+    use bevy_rapier3d::rapier::math::Pose;
+    let Some(h) = s.inner_half_m else {
+        return true;
+    };
+    let cube = Cuboid::new(Vector::new(
+        (h[0] * (1.0 - 1e-5)) as f32,
+        (h[1] * (1.0 - 1e-5)) as f32,
+        (h[2] * (1.0 - 1e-5)) as f32,
+    ));
+    let c = Vector::new(
+        s.centre_m[0] as f32,
+        s.centre_m[1] as f32,
+        s.centre_m[2] as f32,
+    );
+    t.iter().all(|k| {
+        let [a, b, d] = k.map(|i| pts[i as usize] - c);
+        !intersection_test(
+            &Pose::IDENTITY,
+            &cube,
+            &Pose::IDENTITY,
+            &Triangle::new(a, b, d),
+        )
+        .unwrap_or(true)
+    })
+}
+
+/// A plus-shaped prism (arms of half-width 0.3 m reaching ±1.5 m in x and y, z ∈ [−½, ½]),
+/// closed, its centre inside: concave at the four inner corners.
+fn plus_prism() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+    let o = [
+        (0.3, -1.5),
+        (0.3, -0.3),
+        (1.5, -0.3),
+        (1.5, 0.3),
+        (0.3, 0.3),
+        (0.3, 1.5),
+        (-0.3, 1.5),
+        (-0.3, 0.3),
+        (-1.5, 0.3),
+        (-1.5, -0.3),
+        (-0.3, -0.3),
+        (-0.3, -1.5),
+    ];
+    let cap = [
+        [10, 1, 4],
+        [10, 4, 7],
+        [11, 0, 1],
+        [11, 1, 10],
+        [1, 2, 3],
+        [1, 3, 4],
+        [7, 4, 5],
+        [7, 5, 6],
+        [9, 10, 7],
+        [9, 7, 8],
+    ];
+    let n = o.len() as u32;
+    let mut v = Vec::new();
+    for z in [-0.5, 0.5] {
+        for (x, y) in o {
+            v.push([x, y, z]);
+        }
+    }
+    let mut t = Vec::new();
+    for c in cap {
+        t.push([c[0] + n, c[1] + n, c[2] + n]);
+        t.push([c[0], c[2], c[1]]);
+    }
+    for k in 0..n {
+        let (p, q) = (k, (k + 1) % n);
+        t.push([p, q, q + n]);
+        t.push([p, q + n, p + n]);
+    }
+    (v, t)
+}
 
 fn v32(p: &[f64; 3]) -> Vector {
     Vector::new(p[0] as f32, p[1] as f32, p[2] as f32)
@@ -187,6 +271,12 @@ fn val_mesh_shell_radii_match_the_closed_forms() {
     assert!((planes - inner).abs() < 1e-10, "{planes} vs {inner}");
     // The sagitta of the thinnest band: R(1 − cos) of half a cell's diagonal, about 1e-4.
     assert!(s.outer_m - got < 2e-4, "{s:?}");
+    // Its inner box: a cube inside the inscribed one (half-side R/√3), meeting no triangle.
+    assert_eq!(s.outer_half_m, [1.0; 3]);
+    let h = s.inner_half_m.expect("inner box");
+    assert!(h[0] == h[1] && h[1] == h[2], "{h:?}");
+    assert!(h[0] > 0.5 && h[0] < 1.0 / 3f64.sqrt(), "{h:?}");
+    assert!(inner_box_meets_no_triangle(&pts, &t, &s));
 
     // The box mesh: half-diagonal and the smallest half-extent; also with its vertices
     // unwelded (each face its own copies, as a glTF's seams), and turned inside out.
@@ -211,12 +301,17 @@ fn val_mesh_shell_radii_match_the_closed_forms() {
         assert!((s.outer_m - diag).abs() < 1e-11, "{what}: {s:?}");
         let inner = s.inner_m.expect("closed");
         assert!(inner <= 0.75 && inner > 0.75 - 1e-11, "{what}: {inner}");
+        assert_eq!(s.outer_half_m, [1.0, 1.0, 0.75], "{what}");
+        let h = s.inner_half_m.expect("inner box");
+        for (got, want) in h.iter().zip([1.0, 1.0, 0.75]) {
+            assert!(*got <= want && *got > want * (1.0 - 1e-11), "{what}: {h:?}");
+        }
     }
 
     // Not closed (one triangle gone): no inner sphere. Centre outside the solid (the U
     // prism's box centre (0, 1, 0) lies in its slot): none either.
     let s = MeshShell::new(&pts, &t[1..]).expect("shell");
-    assert_eq!(s.inner_m, None);
+    assert_eq!((s.inner_m, s.inner_half_m), (None, None));
     assert!((s.outer_m - diag).abs() < 1e-11);
     let o = [
         (-1.5, 0.0),
@@ -337,8 +432,9 @@ fn val_mesh_shell_cube_over_the_sphere_mesh_is_the_corner_height() {
 
 #[test]
 fn val_mesh_shell_box_mesh_far_and_near_against_the_closed_form() {
-    // Shell width 1.6 − 0.75 m: alone it is narrow enough only beyond ~700 m; nearer, the
-    // hull answers (its bracket is exact on a convex mesh); the lower bound is sound anywhere.
+    // Spheres 1.6 and 0.75 m: narrow enough only beyond ~700 m; the boxes (outer: the box;
+    // inner: the box less 1e-12 of itself) are narrow at every distance here, and the hull
+    // would be too (its bracket is exact on a convex mesh). Sound anywhere.
     let half = Vector3::new(1.0, 1.0, 0.75);
     let (v, t) = tessellated_box([2.0, 2.0, 1.5], [20, 20, 15]);
     let mesh = trimesh(&v, &t);
@@ -362,5 +458,49 @@ fn val_mesh_shell_box_mesh_far_and_near_against_the_closed_form() {
         let pb = iso(centre, UnitQuaternion::identity());
         let (_, value, lower, eps) = evaluate(&mesh, &ball, &pb);
         check(value, lower, eps, dist, &format!("open mesh, {dist} m"));
+    }
+}
+
+#[test]
+fn val_mesh_shell_concave_closed_mesh_is_bracketed_soundly() {
+    // The plus prism: inner sphere 0.3·√2 (the inner corners' edges), inner box the central
+    // column scaled to 0.2 of the outer box (its arms' inner faces, 0.3 of 1.5 across).
+    let (v, t) = plus_prism();
+    let pts: Vec<Vector> = v.iter().map(v32).collect();
+    let s = MeshShell::new(&pts, &t).expect("shell");
+    let inner = s.inner_m.expect("closed, centre inside");
+    assert!((inner - 0.3 * 2f64.sqrt()).abs() < 1e-7, "{inner}");
+    let h = s.inner_half_m.expect("inner box");
+    for (got, want) in h.iter().zip([0.3, 0.3, 0.1]) {
+        assert!((got - want).abs() < 1e-7, "{h:?}");
+    }
+    assert!(inner_box_meets_no_triangle(&pts, &t, &s));
+    // Random balls, in the arms' concave corners and far off: the bracket holds the
+    // brute-force distance (the exact query answers where neither shell nor hull is narrow).
+    let p = as_f32(&v);
+    let mesh = trimesh(&v, &t);
+    let mut rng = Lcg(12);
+    for k in 0..200 {
+        let r = 0.05 + 0.2 * rng.uniform();
+        let centre = if k % 2 == 0 {
+            // Over an inner corner, between two arms.
+            let q = [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)][k % 4];
+            let a = 0.6 + 1.2 * rng.uniform();
+            Vector3::new(q.0 * a, q.1 * a, rng.symmetric())
+        } else {
+            rng.vec3(1.0).normalize() * (2.0 + 10f64.powf(3.0 * rng.uniform()))
+        };
+        let d = point_mesh_distance(centre, &p, &t) - r;
+        if d <= 0.01 {
+            continue;
+        }
+        let ball = (rp::SharedShape::ball(r as f32), r);
+        let pb = iso(centre, UnitQuaternion::identity());
+        let (hb, value, lower, eps) = evaluate(&mesh, &ball, &pb);
+        let what = format!("ball r {r} at {centre:?}: {hb:?}");
+        check(value, lower, eps, d, &what);
+        if let HullEval::Bracket { lower, upper } = hb {
+            assert!(lower <= d + 1e-12 && upper >= d - eps, "{what} vs {d}");
+        }
     }
 }

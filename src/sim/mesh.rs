@@ -366,6 +366,12 @@ pub struct MeshShell {
     /// No triangle comes within this of c (shrunk by [`SHELL_REL_PAD`]), m; `None` when the
     /// mesh is not closed, c is not inside it, or c lies on it.
     pub inner_m: Option<f64>,
+    /// Half-extents of the vertices' axis-aligned box about c (it holds every triangle), m.
+    pub outer_half_m: [f64; 3],
+    /// Half-extents of a box about c, the outer box scaled down, that no triangle meets, m;
+    /// `None` where `inner_m` is (the same winding argument puts it inside the solid, so the
+    /// distance from a part outside the outer box is at most its distance to this box).
+    pub inner_half_m: Option<[f64; 3]>,
 }
 
 /// Relative padding of [`MeshShell`]'s radii for their f64 rounding (1e-12 of the centre's
@@ -414,10 +420,43 @@ impl MeshShell {
                     - pad
             })
             .filter(|r| *r > 0.0);
+        let half: [f64; 3] = std::array::from_fn(|k| 0.5 * (hi[k] - lo[k]));
+        // The inner box: the outer one scaled by σ about c. In coordinates y_k = (x_k − c_k)/h_k
+        // it is the cube max_k |y_k| ≤ σ; a triangle meeting it has, on every axis, a point with
+        // |y_k| ≤ σ, so σ below max_k (min over the triangle of |y_k|) — 0 on an axis whose
+        // coordinate changes sign over the triangle, else its corner nearest 0 — keeps every
+        // triangle out. Exact (σ = 1) for a triangle on a face of the box.
+        let inner_half_m = inner_m
+            .filter(|_| half.iter().all(|h| *h > 0.0))
+            .and_then(|_| {
+                let sigma = triangles
+                    .iter()
+                    .map(|t| {
+                        (0..3)
+                            .map(|k| {
+                                let y = t.map(|i| (p[i as usize][k] - c[k]) / half[k]);
+                                let (lo, hi) = (
+                                    y.iter().copied().fold(f64::INFINITY, f64::min),
+                                    y.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                                );
+                                if lo <= 0.0 && hi >= 0.0 {
+                                    0.0
+                                } else {
+                                    lo.abs().min(hi.abs())
+                                }
+                            })
+                            .fold(0.0, f64::max)
+                    })
+                    .fold(f64::INFINITY, f64::min)
+                    - SHELL_REL_PAD;
+                (sigma > 0.0 && sigma.is_finite()).then(|| half.map(|h| h * sigma))
+            });
         Some(Self {
             centre_m: c,
             outer_m,
             inner_m,
+            outer_half_m: half,
+            inner_half_m,
         })
     }
 }
