@@ -356,7 +356,10 @@ impl HullSupport {
 /// surface, at a point s no nearer c than `inner_m` (no triangle is), and
 /// |a − s| = |a − c| − |s − c| ≤ |a − c| − `inner_m`. For a round part far away (a sphere
 /// mesh: `outer_m − inner_m` is its sagitta) the two agree to well within parry's own
-/// precision, with no support or triangle query at all.
+/// precision, with no support or triangle query at all. The same argument holds for two boxes
+/// about c (`outer_half_m`, `inner_half_m`): the distance is at least the distance to the
+/// outer box and, from outside it, at most the distance to the inner box — exact to 1e-12 for
+/// a box-shaped mesh.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MeshShell {
     /// The centre c: the centre of the vertices' axis-aligned box, part frame, m.

@@ -315,11 +315,13 @@ pub enum HullEval {
 /// exact mesh query.
 ///
 /// First tier, for a mesh part against a part with a support map: the mesh's shell
-/// ([`super::mesh::MeshShell`], two spheres about its centre), one point projection and one
-/// support point on the other part ([`shell_bound`]). Where its bracket is already as narrow
-/// as the caller's test of an exact value (lower ≥ upper·(1 − [`GJK_REL_TOL`]) − the f32
+/// ([`super::mesh::MeshShell`]: two spheres about its centre, one point projection and one
+/// support point on the other part; then, if those are not narrow enough, two boxes about it,
+/// two GJK queries against cuboids; `shell_bound`). Where its bracket is already as narrow as
+/// the caller's test of an exact value (lower ≥ upper·(1 − [`GJK_REL_TOL`]) − the f32
 /// rounding), it is the answer, with no support or triangle query on the mesh (a round part
-/// far away: the sphere mesh's shell is 1.1e-4 m thick); otherwise its bounds join the hull's.
+/// far away: the sphere mesh's shell is 1.1e-4 m thick; a box-shaped part at any distance);
+/// otherwise its bounds join the hull's.
 ///
 /// With `clear_at`, a lower bound at or above it is returned as [`HullEval::Clear`] before the
 /// point query.
