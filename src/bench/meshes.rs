@@ -336,8 +336,14 @@ fn best_window_s(
 /// [`FLYBY_SPEED_M_S`] (cut to [`CASE_BUDGET_S`] for a slow mesh).
 pub const FLYBY_STEPS: u64 = 400;
 
+/// Runs of each fly-by case, mesh and primitive alternately, the fastest of each kept: one run
+/// is a few milliseconds of wall time, which another process on the machine can double.
+/// Fewer when the case's wall time passes [`CASE_BUDGET_S`].
+pub const FLYBY_REPEATS: usize = 5;
+
 /// One fly-by target at one clearance: the mesh measured over the window (or the part of it
-/// that fits in [`CASE_BUDGET_S`]), then the primitive over the same steps, as two table rows.
+/// that fits in [`CASE_BUDGET_S`]), then the primitive over the same steps, each the fastest
+/// of [`FLYBY_REPEATS`] runs, as two table rows.
 fn flyby_rows(
     r: &mut String,
     dir: &Path,
@@ -360,10 +366,23 @@ fn flyby_rows(
         )
     };
     let t0 = Instant::now();
-    let m = measure_within(&load(mesh_shape)?, warm_up, FLYBY_STEPS, CASE_BUDGET_S)?;
-    let p = measure_within(&load(&target.primitive())?, warm_up, m.steps, f64::INFINITY)?;
+    let (mesh_scene, prim_scene) = (load(mesh_shape)?, load(&target.primitive())?);
+    let mut m = measure_within(&mesh_scene, warm_up, FLYBY_STEPS, CASE_BUDGET_S)?;
+    let mut p = measure_within(&prim_scene, warm_up, m.steps, f64::INFINITY)?;
+    let mut runs = 1;
+    while runs < FLYBY_REPEATS && t0.elapsed().as_secs_f64() < CASE_BUDGET_S {
+        let m2 = measure_within(&mesh_scene, warm_up, m.steps, f64::INFINITY)?;
+        if m2.pipeline_s < m.pipeline_s {
+            m = m2;
+        }
+        let p2 = measure_within(&prim_scene, warm_up, m.steps, f64::INFINITY)?;
+        if p2.pipeline_s < p.pipeline_s {
+            p = p2;
+        }
+        runs += 1;
+    }
     progress(&format!(
-        "fly-by {} at {clearance_m} m: {} steps ({:.0} s)",
+        "fly-by {} at {clearance_m} m: {} steps, fastest of {runs} runs ({:.0} s)",
         target.label(),
         m.steps,
         t0.elapsed().as_secs_f64()
@@ -380,7 +399,7 @@ fn flyby_rows(
         let ratio = if is_mesh {
             let q = m.pipeline_s / p.pipeline_s;
             format!(
-                "**{q:.0}** (goal ≤ {goal}: {})",
+                "**{q:.2}** (goal ≤ {goal}: {})",
                 if q <= goal { "met" } else { "NOT met" }
             )
         } else {
@@ -482,9 +501,10 @@ pub fn run_meshes(scenes: &Path, steps: u64) -> Result<String, SceneError> {
          triangles: the box {TARGET_CELLS:?} cells of 2 cm per axis, welded and closed; the \
          sphere {} latitude bands × {} meridians). Each pair over the same steps after 2 untimed \
          ones: {FLYBY_STEPS} steps, the corner from 1 m before the top to 1 m past it, or the \
-         first part of them when the mesh's took more than {CASE_BUDGET_S} s of wall time. µs \
-         per step; the floors on the same world in the same run (bare parry: one distance query \
-         per step between the closest parts).\n",
+         first part of them when the mesh's took more than {CASE_BUDGET_S} s of wall time; the \
+         fastest of {FLYBY_REPEATS} runs each, mesh and primitive alternately (fewer when a \
+         case passes that time). µs per step; the floors on the same world in the same run \
+         (bare parry: one distance query per step between the closest parts).\n",
         SPHERE_BANDS_SEGMENTS[0], SPHERE_BANDS_SEGMENTS[1]
     );
     let _ = writeln!(

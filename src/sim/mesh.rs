@@ -172,6 +172,9 @@ pub struct HullSupport {
     nodes: Vec<HullNode>,
     /// Largest distance of a vertex from the part origin, m.
     radius_m: f64,
+    /// The two spheres bracketing the triangles ([`MeshShell`]), when given
+    /// ([`HullSupport::with_shell`]).
+    shell: Option<MeshShell>,
 }
 
 /// A node of [`HullSupport`]'s tree: the box of its vertices `start..end`, and its children
@@ -219,6 +222,7 @@ impl HullSupport {
             points_f64,
             nodes,
             radius_m,
+            shell: None,
         })
     }
 
@@ -254,6 +258,16 @@ impl HullSupport {
             nodes[me].right = right;
         }
         me as u32
+    }
+
+    /// The same, with the shell of the mesh's triangles (`None`: none).
+    pub fn with_shell(self, shell: Option<MeshShell>) -> Self {
+        Self { shell, ..self }
+    }
+
+    /// The shell of the mesh's triangles, if given.
+    pub fn shell(&self) -> Option<&MeshShell> {
+        self.shell.as_ref()
     }
 
     /// Largest distance of a vertex from the part origin, m.
@@ -325,6 +339,222 @@ impl HullSupport {
         let p = self.points_f64[self.support_index([d.x, d.y, d.z])];
         nalgebra::Vector3::new(p[0], p[1], p[2])
     }
+}
+
+/// Two spheres about one centre that bracket a mesh part's triangles, for the monitor's far
+/// bracket (`sim::monitor::hull_bracket`): every vertex — so every triangle, a convex
+/// combination of its corners — lies within `outer_m` of `centre_m`; and where the mesh is
+/// closed (every edge, by vertex position, is crossed once each way: an oriented surface
+/// without boundary, whatever its manifoldness) with the centre inside it (its winding number
+/// there is not 0), no triangle comes within `inner_m` of the centre.
+///
+/// What it certifies for a point a outside the outer sphere (|a − c| > `outer_m`), so outside
+/// the vertices' hull: the distance from a to the triangles is at least |a − c| − `outer_m`
+/// and at most |a − c| − `inner_m`. The lower bound: the triangles lie in the outer ball. The
+/// upper: the winding number of a closed triangle surface is an integer, constant off the
+/// surface, 0 outside the hull; it is not 0 at c, so the segment from a to c meets the
+/// surface, at a point s no nearer c than `inner_m` (no triangle is), and
+/// |a − s| = |a − c| − |s − c| ≤ |a − c| − `inner_m`. For a round part far away (a sphere
+/// mesh: `outer_m − inner_m` is its sagitta) the two agree to well within parry's own
+/// precision, with no support or triangle query at all. The same argument holds for two boxes
+/// about c (`outer_half_m`, `inner_half_m`): the distance is at least the distance to the
+/// outer box and, from outside it, at most the distance to the inner box — exact to 1e-12 for
+/// a box-shaped mesh.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeshShell {
+    /// The centre c: the centre of the vertices' axis-aligned box, part frame, m.
+    pub centre_m: [f64; 3],
+    /// Every vertex is within this of c (padded by [`SHELL_REL_PAD`]), m.
+    pub outer_m: f64,
+    /// No triangle comes within this of c (shrunk by [`SHELL_REL_PAD`]), m; `None` when the
+    /// mesh is not closed, c is not inside it, or c lies on it.
+    pub inner_m: Option<f64>,
+    /// Half-extents of the vertices' axis-aligned box about c (it holds every triangle), m.
+    pub outer_half_m: [f64; 3],
+    /// Half-extents of a box about c, the outer box scaled down, that no triangle meets, m;
+    /// `None` where `inner_m` is (the same winding argument puts it inside the solid, so the
+    /// distance from a part outside the outer box is at most its distance to this box).
+    pub inner_half_m: Option<[f64; 3]>,
+}
+
+/// Relative padding of [`MeshShell`]'s radii for their f64 rounding (1e-12 of the centre's
+/// distance from the part origin plus the outer radius, against an actual error of a few
+/// ulps, ≈ 1e-15, of the differences, dot products and square roots that make them).
+pub const SHELL_REL_PAD: f64 = 1e-12;
+
+impl MeshShell {
+    /// The shell of the triangles `triangles` over `vertices` (part frame, as parry's `TriMesh`
+    /// holds them); `None` without a vertex, with a non-finite vertex or an index out of range.
+    pub fn new(vertices: &[Vector], triangles: &[[u32; 3]]) -> Option<Self> {
+        let p: Vec<[f64; 3]> = vertices
+            .iter()
+            .map(|v| [f64::from(v.x), f64::from(v.y), f64::from(v.z)])
+            .collect();
+        if p.is_empty()
+            || p.iter().any(|q| q.iter().any(|c| !c.is_finite()))
+            || triangles.iter().flatten().any(|&i| i as usize >= p.len())
+        {
+            return None;
+        }
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for q in &p {
+            for k in 0..3 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+            }
+        }
+        let c: [f64; 3] = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
+        let sub = |a: &[f64; 3], b: &[f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let norm = |a: &[f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        let outer = p.iter().map(|q| norm(&sub(q, &c))).fold(0.0, f64::max);
+        let pad = SHELL_REL_PAD * (norm(&c) + outer);
+        let outer_m = outer + pad;
+        let inside = closed_by_position(vertices, triangles) && {
+            let w = winding_number(&p, triangles, &c);
+            w.round() != 0.0 && (w - w.round()).abs() < 0.25
+        };
+        let inner_m = inside
+            .then(|| {
+                triangles
+                    .iter()
+                    .map(|t| point_triangle_distance(&c, t.map(|i| &p[i as usize])))
+                    .fold(f64::INFINITY, f64::min)
+                    - pad
+            })
+            .filter(|r| *r > 0.0);
+        let half: [f64; 3] = std::array::from_fn(|k| 0.5 * (hi[k] - lo[k]));
+        // The inner box: the outer one scaled by σ about c. In coordinates y_k = (x_k − c_k)/h_k
+        // it is the cube max_k |y_k| ≤ σ; a triangle meeting it has, on every axis, a point with
+        // |y_k| ≤ σ, so σ below max_k (min over the triangle of |y_k|) — 0 on an axis whose
+        // coordinate changes sign over the triangle, else its corner nearest 0 — keeps every
+        // triangle out. Exact (σ = 1) for a triangle on a face of the box.
+        let inner_half_m = inner_m
+            .filter(|_| half.iter().all(|h| *h > 0.0))
+            .and_then(|_| {
+                let sigma = triangles
+                    .iter()
+                    .map(|t| {
+                        (0..3)
+                            .map(|k| {
+                                let y = t.map(|i| (p[i as usize][k] - c[k]) / half[k]);
+                                let (lo, hi) = (
+                                    y.iter().copied().fold(f64::INFINITY, f64::min),
+                                    y.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                                );
+                                if lo <= 0.0 && hi >= 0.0 {
+                                    0.0
+                                } else {
+                                    lo.abs().min(hi.abs())
+                                }
+                            })
+                            .fold(0.0, f64::max)
+                    })
+                    .fold(f64::INFINITY, f64::min)
+                    - SHELL_REL_PAD;
+                (sigma > 0.0 && sigma.is_finite()).then(|| half.map(|h| h * sigma))
+            });
+        Some(Self {
+            centre_m: c,
+            outer_m,
+            inner_m,
+            outer_half_m: half,
+            inner_half_m,
+        })
+    }
+}
+
+/// Every edge crossed as often one way as the other, vertices identified by position (so a
+/// mesh whose vertices are duplicated along seams, as glTF's often are, still counts).
+fn closed_by_position(vertices: &[Vector], triangles: &[[u32; 3]]) -> bool {
+    use std::collections::HashMap;
+    let mut id: HashMap<[u32; 3], u32> = HashMap::with_capacity(vertices.len());
+    let canon: Vec<u32> = vertices
+        .iter()
+        .map(|v| {
+            // +0 and −0 are one position.
+            let key = [v.x + 0.0, v.y + 0.0, v.z + 0.0].map(f32::to_bits);
+            let n = id.len() as u32;
+            *id.entry(key).or_insert(n)
+        })
+        .collect();
+    let mut edges: Vec<(u32, u32, i32)> = Vec::with_capacity(3 * triangles.len());
+    for t in triangles {
+        let c = t.map(|i| canon[i as usize]);
+        for k in 0..3 {
+            let (a, b) = (c[k], c[(k + 1) % 3]);
+            if a != b {
+                edges.push((a.min(b), a.max(b), if a < b { 1 } else { -1 }));
+            }
+        }
+    }
+    edges.sort_unstable();
+    let mut k = 0;
+    while k < edges.len() {
+        let (a, b) = (edges[k].0, edges[k].1);
+        let mut net = 0;
+        while k < edges.len() && (edges[k].0, edges[k].1) == (a, b) {
+            net += edges[k].2;
+            k += 1;
+        }
+        if net != 0 {
+            return false;
+        }
+    }
+    !triangles.is_empty()
+}
+
+/// The winding number of the triangles about x: the sum of their signed solid angles seen
+/// from x (van Oosterom and Strackee's formula) over 4π.
+fn winding_number(p: &[[f64; 3]], triangles: &[[u32; 3]], x: &[f64; 3]) -> f64 {
+    let mut sum = 0.0;
+    for t in triangles {
+        let [a, b, c] = t.map(|i| {
+            let q = &p[i as usize];
+            nalgebra::Vector3::new(q[0] - x[0], q[1] - x[1], q[2] - x[2])
+        });
+        let (la, lb, lc) = (a.norm(), b.norm(), c.norm());
+        let num = a.dot(&b.cross(&c));
+        let den = la * lb * lc + a.dot(&b) * lc + a.dot(&c) * lb + b.dot(&c) * la;
+        sum += 2.0 * num.atan2(den);
+    }
+    sum / (4.0 * std::f64::consts::PI)
+}
+
+/// Distance from x to the triangle (a, b, c), f64; never above the true distance by more than
+/// rounding (a projection within 1e-9 of the triangle's edges counts as inside, where the plane
+/// distance is at most the true one). Degenerate triangles: the distance to their edges.
+fn point_triangle_distance(x: &[f64; 3], [a, b, c]: [&[f64; 3]; 3]) -> f64 {
+    use nalgebra::Vector3;
+    let (x, a, b, c) = (
+        Vector3::from(*x),
+        Vector3::from(*a),
+        Vector3::from(*b),
+        Vector3::from(*c),
+    );
+    let segment = |p: Vector3<f64>, q: Vector3<f64>| {
+        let e = q - p;
+        let l2 = e.norm_squared();
+        let t = if l2 > 0.0 {
+            ((x - p).dot(&e) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (x - (p + e * t)).norm()
+    };
+    let edges = segment(a, b).min(segment(b, c)).min(segment(c, a));
+    let n = (b - a).cross(&(c - a));
+    let n2 = n.norm_squared();
+    if n2 > 0.0 && n2.is_finite() {
+        // Signed areas of x's projection with each edge, relative to the triangle's.
+        let inside = [(a, b), (b, c), (c, a)]
+            .iter()
+            .all(|(p, q)| (q - p).cross(&(x - p)).dot(&n) >= -1e-9 * n2);
+        if inside {
+            return ((x - a).dot(&n) / n2.sqrt()).abs().min(edges);
+        }
+    }
+    edges
 }
 
 impl bevy_rapier3d::parry::shape::SupportMap for HullSupport {

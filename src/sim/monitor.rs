@@ -283,7 +283,8 @@ pub enum HullEval {
     Bracket {
         /// The hulls' certified gap (a lower bound of the mesh distance), m.
         lower: f64,
-        /// The distance of a point of one part to the other part (an upper bound), m.
+        /// An upper bound of the pair's distance: the distance of a point of one part to the
+        /// other part, or the shell's certified bound ([`super::mesh::MeshShell`]), m.
         upper: f64,
     },
     /// The hulls overlap (or a side has no support map): no bound from them.
@@ -313,6 +314,15 @@ pub enum HullEval {
 /// rounding; in a concavity, or inside the hull, it does not, and the caller falls back to the
 /// exact mesh query.
 ///
+/// First tier, for a mesh part against a part with a support map: the mesh's shell
+/// ([`super::mesh::MeshShell`]: two spheres about its centre, one point projection and one
+/// support point on the other part; then, if those are not narrow enough, two boxes about it,
+/// two GJK queries against cuboids; `shell_bound`). Where its bracket is already as narrow as
+/// the caller's test of an exact value (lower ≥ upper·(1 − [`GJK_REL_TOL`]) − the f32
+/// rounding), it is the answer, with no support or triangle query on the mesh (a round part
+/// far away: the sphere mesh's shell is 1.1e-4 m thick; a box-shaped part at any distance);
+/// otherwise its bounds join the hull's.
+///
 /// With `clear_at`, a lower bound at or above it is returned as [`HullEval::Clear`] before the
 /// point query.
 #[allow(clippy::too_many_arguments)]
@@ -339,6 +349,30 @@ pub fn hull_bracket(
     };
     let rel = pose_a.inv_mul(pose_b);
     let scale = rel.translation.vector.norm() + ra + rb;
+    // First the shell of a mesh part against a part with a support map: no support or
+    // triangle query at all where it is narrow enough (a round part, far away).
+    let pair_eps = F32_REL_TOL * scale;
+    let shell = match (ha.and_then(|h| h.shell()), hb.and_then(|h| h.shell())) {
+        (Some(s), None) if hb.is_none() => {
+            shell_bound((pose_b, b, rb), pose_a, s, pair_eps, clear_at)
+        }
+        (None, Some(s)) if ha.is_none() => {
+            shell_bound((pose_a, a, ra), pose_b, s, pair_eps, clear_at)
+        }
+        _ => None,
+    };
+    let (shell_lower, shell_upper) = shell.map_or((0.0, f64::INFINITY), |(l, u)| {
+        (l.max(0.0), u.unwrap_or(f64::INFINITY))
+    });
+    if shell.is_some() && shell_lower >= clear_at {
+        return HullEval::Clear(shell_lower);
+    }
+    if shell_lower >= shell_upper * (1.0 - GJK_REL_TOL) - pair_eps {
+        return HullEval::Bracket {
+            lower: shell_lower.min(shell_upper),
+            upper: shell_upper,
+        };
+    }
     let hull_tol = super::mesh::HULL_SUPPORT_REL_TOL
         * (ha.map_or(0.0, |h| h.radius_m()) + hb.map_or(0.0, |h| h.radius_m()));
     let eps = F32_REL_TOL * scale + hull_tol;
@@ -361,6 +395,11 @@ pub fn hull_bracket(
         f64::from(n.dot(s2 - s1))
     };
     let gap = gap_along((p2a - p1) / d).min(f64::from(d));
+    let gap = if shell.is_some() {
+        gap.max(shell_lower + eps)
+    } else {
+        gap
+    };
     if gap - eps >= clear_at {
         return HullEval::Clear(gap - eps);
     }
@@ -436,7 +475,7 @@ pub fn hull_bracket(
     if !upper.is_finite() {
         return HullEval::None;
     }
-    let upper = f64::from(upper);
+    let upper = f64::from(upper).min(shell_upper);
     let lower = (gap - eps).max(0.0);
     HullEval::Bracket {
         lower: lower.min(upper),
@@ -444,13 +483,101 @@ pub fn hull_bracket(
     }
 }
 
-/// The hull support map of a triangle-mesh shape ([`MonitorGeometry::hulls`]); `None` for any
-/// other shape.
+/// The hull support map of a triangle-mesh shape, with the shell of its triangles
+/// ([`super::mesh::MeshShell`]) ([`MonitorGeometry::hulls`]); `None` for any other shape.
 pub fn mesh_hull(shape: &dyn rp::Shape) -> Option<std::sync::Arc<super::mesh::HullSupport>> {
     shape
         .as_trimesh()
-        .and_then(|m| super::mesh::HullSupport::new(m.vertices()))
+        .and_then(|m| {
+            super::mesh::HullSupport::new(m.vertices())
+                .map(|h| h.with_shell(super::mesh::MeshShell::new(m.vertices(), m.indices())))
+        })
         .map(std::sync::Arc::new)
+}
+
+/// The shell bracket ([`super::mesh::MeshShell`]) of a mesh part M and a part X (bounding
+/// radius `rx`) with a support map: (certified lower bound, certified upper bound when M's
+/// shell has an inner sphere or box) of their distance, m; `None` when X has no support map or
+/// holds M's centre.
+///
+/// Spheres: with c M's centre in X's frame (the relative pose in f64) and p parry's projection
+/// of c on X (a point of X), n = (c − p)/|c − p|: the gap n·c − h_X(n) (h_X X's support
+/// function) is at most the distance from c to X (any direction's is), so the distance from X
+/// to the outer ball, thus to M, is at least gap − outer. When that is positive p lies outside
+/// the outer ball and the distance from X to M is at most |p − c| − inner (the shell's docs).
+/// The lower bound is widened by `eps`, the f32 rounding of X's support point and projection
+/// (8 ulps of the pair's scale, [`F32_REL_TOL`]); the upper bound, like the hull bracket's, is
+/// a distance from a point of X as parry's f32 gives it (exact to that rounding, which is
+/// within every caller's tolerance of a value); c is formed in f64 and the shell's radii carry
+/// their own padding.
+///
+/// Boxes, when the spheres are not yet as narrow as an exact query (lower ≥ upper·(1 −
+/// [`GJK_REL_TOL`]) − `eps`) and the lower bound is below `clear_at`: the outer box holds M,
+/// so its certified bracket's lower bound with X ([`shape_bracket`]) is one of M's; when that
+/// is positive, X's witness lies outside the outer box, so outside M's hull, and its distance
+/// to the inner box's witness (a point inside M's solid: the segment between them crosses the
+/// surface) is an upper bound. The boxes' half-extents are rounded outwards (outer) and inwards
+/// (inner) to f32.
+fn shell_bound(
+    (pose_x, x, rx): (&Isometry3<f64>, &dyn rp::Shape, f64),
+    pose_m: &Isometry3<f64>,
+    shell: &super::mesh::MeshShell,
+    eps: f64,
+    clear_at: f64,
+) -> Option<(f64, Option<f64>)> {
+    use bevy_rapier3d::parry::shape::Cuboid;
+    let sx = x.as_support_map()?;
+    let centre = Vector3::from(shell.centre_m);
+    let c = pose_x.inv_mul(pose_m) * nalgebra::Point3::from(centre);
+    let proj = x.project_local_point(conv::v(&c.coords), true);
+    if proj.is_inside {
+        return None;
+    }
+    let p = conv::na(proj.point);
+    let to_c = c.coords - p;
+    let dist = to_c.norm();
+    if !(dist > 0.0 && dist.is_finite()) {
+        return None;
+    }
+    let n = to_c / dist;
+    let s = conv::na(sx.local_support_point(conv::v(&n)));
+    let mut lower = n.dot(&(c.coords - s)) - shell.outer_m - eps;
+    let mut upper = shell
+        .inner_m
+        .filter(|_| lower > 0.0)
+        .map(|inner| dist - inner);
+    let narrow = |l: f64, u: Option<f64>| u.is_some_and(|u| l >= u * (1.0 - GJK_REL_TOL) - eps);
+    if lower >= clear_at || narrow(lower, upper) {
+        return Some((lower, upper));
+    }
+    // f32 half-extents rounded outwards (up) or inwards (down).
+    let round = |h: [f64; 3], up: bool| {
+        let r = h.map(|v| {
+            let f = v as f32;
+            match (up, f64::from(f).total_cmp(&v)) {
+                (true, std::cmp::Ordering::Less) => f.next_up(),
+                (false, std::cmp::Ordering::Greater) => f.next_down(),
+                _ => f,
+            }
+        });
+        Cuboid::new(bevy_rapier3d::rapier::math::Vector::new(r[0], r[1], r[2]))
+    };
+    let pad = super::mesh::SHELL_REL_PAD * (centre.norm() + shell.outer_m);
+    let pose_box = pose_m * nalgebra::Translation3::from(centre);
+    let outer_half = shell.outer_half_m.map(|h| h + pad);
+    let outer = round(outer_half, true);
+    let r_outer = Vector3::from(outer_half).norm();
+    let box_lower = shape_bracket(pose_x, x, rx, &pose_box, &outer, r_outer).lower;
+    lower = lower.max(box_lower);
+    if let Some(h) = shell.inner_half_m.filter(|_| box_lower > 0.0) {
+        let inner = round(h, false);
+        let r_inner = Vector3::from(h).norm();
+        let u = shape_bracket(pose_x, x, rx, &pose_box, &inner, r_inner).value;
+        if u.is_finite() {
+            upper = Some(upper.map_or(u, |v| v.min(u)));
+        }
+    }
+    Some((lower, upper))
 }
 
 /// The parts of every body as the monitor uses them (fetched from the ECS once).

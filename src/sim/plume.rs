@@ -6,12 +6,14 @@
 //! A jet's plume ([`crate::actuation::rcs::PlumeSpec`]) is the solid cone with its apex at
 //! the nozzle, its axis the exhaust direction (−thrust), half-angle α and length L.
 //!
-//! [`plume_hits`] is the check at one instant; [`PlumeKeepOff`] is the scene guarantee
+//! [`plume_hits`] is the check at one instant (mesh parts through the monitor's shell and hull
+//! brackets, as the guarantee judges them: [`plume_clearance_bracket`]); [`PlumeKeepOff`] is
+//! the scene guarantee
 //! `PlumeKeepOff(name, body, around, parts: [...])` built on it (registered like every kind,
 //! [`crate::guarantee::registry`]), judged on every step interval (see its docs and
 //! `docs/guarantees.md`).
 
-use super::monitor::{F32_REL_TOL, PairEval, pair_eval_shapes, shape_bracket, shape_distance};
+use super::monitor::{F32_REL_TOL, PairEval, pair_eval_shapes, shape_bracket};
 use crate::actuation::actuator::ActuatorSpec;
 use crate::actuation::rcs::{JetSpec, plume_cone};
 use crate::control::ControllerSpec;
@@ -117,28 +119,133 @@ pub fn glob_match(pattern: &str, name: &str) -> bool {
     p[i..].iter().all(|c| *c == b'*')
 }
 
-/// The clearance between one jet's plume and a part, m (0 when they touch).
-/// `jet_frame` is the pose of the frame the jet's position and direction are written in (the
-/// firing body's centre-of-mass frame), `part_pose` the part's pose, both in one frame.
+/// Radius about its centre (the axis's midpoint) of the pyramid of [`plume_shape`] for a
+/// plume of half-angle α and length L, m: its base corners, at L·tan α / cos(π/N) from the
+/// axis and L/2 from the centre, are its farthest points (the apex is L/2 away).
+pub fn plume_shape_radius_m(half_angle_rad: f64, length_m: f64) -> f64 {
+    let corner =
+        length_m * half_angle_rad.tan() / (std::f64::consts::PI / f64::from(PLUME_SIDES)).cos();
+    (length_m / 2.0).hypot(corner)
+}
+
+/// Bounding radius of a part's judged shape about its own origin (parry's bounding sphere:
+/// its centre's distance plus its radius), m.
+fn shape_radius_m(shape: &dyn rp::Shape) -> f64 {
+    let s = shape.compute_local_bounding_sphere();
+    f64::from(s.center().length() + s.radius())
+}
+
+/// The clearance between one jet's plume and a part, m, with its certified lower bound (both 0
+/// when they touch). `jet_frame` is the pose of the frame the jet's position and direction are
+/// written in (the firing body's centre-of-mass frame), `part_pose` the part's pose, both in
+/// one frame; `hull` the part's hull support map when it is a triangle mesh
+/// ([`super::monitor::mesh_hull`]).
+///
+/// A part with a support map: parry's distance and the gap along its witness direction
+/// ([`shape_bracket`]). A triangle mesh with its hull: the monitor's evaluation
+/// ([`pair_eval_shapes`], as [`PlumeKeepOff`] judges it): the mesh's shell or its hull's
+/// bracket where that is as narrow as parry's exact query — then no triangle-by-triangle
+/// query — else the exact triangle-mesh query; either way within [`super::monitor::GJK_REL_TOL`]
+/// of the distance plus the f32 rounding of the pose ([`F32_REL_TOL`] of the pair's scale). A
+/// mesh without its hull: the exact triangle-mesh query, its lower bound that value less those
+/// tolerances.
+pub fn plume_clearance_bracket(
+    jet: &JetSpec,
+    jet_frame: &Isometry3<f64>,
+    part_pose: &Isometry3<f64>,
+    part: &dyn rp::Shape,
+    hull: Option<&super::mesh::HullSupport>,
+) -> Option<Bracket> {
+    let (apex, axis, alpha, len) = plume_cone(jet)?;
+    let (cone, pose) = plume_shape(&apex, &axis, alpha, len);
+    let pose = jet_frame * pose;
+    let (ra, rb) = (plume_shape_radius_m(alpha, len), shape_radius_m(part));
+    let d = match (hull, part.as_support_map()) {
+        (None, Some(_)) => shape_bracket(&pose, &*cone, ra, part_pose, part, rb),
+        _ => match pair_eval_shapes(
+            &(pose, ra),
+            (&*cone, None),
+            &(*part_pose, rb),
+            (part, hull),
+            f64::INFINITY,
+        ) {
+            PairEval::Value(value, lower) if lower.is_nan() => {
+                // No hull: parry's exact query, bracketed by its tolerances.
+                let eps = F32_REL_TOL
+                    * ((pose.translation.vector - part_pose.translation.vector).norm() + ra + rb);
+                Bracket {
+                    value,
+                    lower: (value * (1.0 - super::monitor::GJK_REL_TOL) - eps).max(0.0),
+                }
+            }
+            PairEval::Value(value, lower) => Bracket {
+                value,
+                lower: lower.min(value),
+            },
+            // (Not with an infinite `clear_at`.)
+            PairEval::Clear(lower) => Bracket {
+                value: lower,
+                lower,
+            },
+        },
+    };
+    Some(Bracket {
+        value: d.value.max(0.0),
+        lower: d.lower.clamp(0.0, d.value.max(0.0)),
+    })
+}
+
+/// The clearance between one jet's plume and a part, m (0 when they touch): the value of
+/// [`plume_clearance_bracket`].
 pub fn plume_clearance(
     jet: &JetSpec,
     jet_frame: &Isometry3<f64>,
     part_pose: &Isometry3<f64>,
     part: &dyn rp::Shape,
+    hull: Option<&super::mesh::HullSupport>,
 ) -> Option<f64> {
-    let (apex, axis, alpha, len) = plume_cone(jet)?;
-    let (cone, pose) = plume_shape(&apex, &axis, alpha, len);
-    Some(shape_distance(&(jet_frame * pose), &*cone, part_pose, part))
+    plume_clearance_bracket(jet, jet_frame, part_pose, part, hull).map(|b| b.value)
+}
+
+/// A part [`plume_hits`] checks: `body/collider` name, pose, judged shape, and for a triangle
+/// mesh its hull support map ([`super::monitor::mesh_hull`], made once with the part: its
+/// distances then go through the monitor's shell and hull brackets).
+#[derive(Clone)]
+pub struct PlumeTarget {
+    /// `body/collider`.
+    pub name: String,
+    /// Pose, in the frame of the `jet_frame` given to [`plume_hits`].
+    pub pose: Isometry3<f64>,
+    /// The judged shape.
+    pub shape: rp::SharedShape,
+    /// Hull support map of a triangle-mesh shape (`None` for a primitive; a mesh without it
+    /// is judged by the exact triangle-mesh query alone).
+    pub hull: Option<std::sync::Arc<super::mesh::HullSupport>>,
+}
+
+impl PlumeTarget {
+    /// The part, with its hull support map when its shape is a triangle mesh.
+    pub fn new(name: impl Into<String>, pose: Isometry3<f64>, shape: rp::SharedShape) -> Self {
+        let hull = super::monitor::mesh_hull(&*shape);
+        Self {
+            name: name.into(),
+            pose,
+            shape,
+            hull,
+        }
+    }
 }
 
 /// Every (firing jet, listed part) whose plume touches the part. `parts` are the other body's
-/// colliders (`body/collider` name, pose, judged shape) in the same frame as `jet_frame`;
-/// `patterns` select them by name (globs).
+/// colliders in the same frame as `jet_frame`; `patterns` select them by name (globs). A pair
+/// counts as touching when the certified lower bound of its clearance
+/// ([`plume_clearance_bracket`]) is 0: a plume within the f32 precision of a part is a hit,
+/// never a false clearance (as [`PlumeKeepOff`] counts it).
 pub fn plume_hits(
     jets: &[JetSpec],
     firing: &[bool],
     jet_frame: &Isometry3<f64>,
-    parts: &[(String, Isometry3<f64>, rp::SharedShape)],
+    parts: &[PlumeTarget],
     patterns: &[String],
 ) -> Vec<PlumeHit> {
     let mut out = Vec::new();
@@ -146,14 +253,16 @@ pub fn plume_hits(
         if !on {
             continue;
         }
-        for (name, pose, shape) in parts {
-            if !patterns.iter().any(|p| glob_match(p, name)) {
+        for p in parts {
+            if !patterns.iter().any(|pat| glob_match(pat, &p.name)) {
                 continue;
             }
-            if plume_clearance(j, jet_frame, pose, &**shape).is_some_and(|d| d <= 0.0) {
+            if plume_clearance_bracket(j, jet_frame, &p.pose, &*p.shape, p.hull.as_deref())
+                .is_some_and(|d| d.lower <= 0.0)
+            {
                 out.push(PlumeHit {
                     jet: j.name.clone(),
-                    part: name.clone(),
+                    part: p.name.clone(),
                 });
             }
         }
@@ -413,11 +522,15 @@ fn scene_plumed_jets<'a>(controllers: &'a [ControllerSpec], body: &str) -> Vec<&
         .collect()
 }
 
-/// Radius about the centre of mass of a sphere holding a jet's plume cone, m: the nozzle's
-/// distance plus the cone's slant length L/cos α (the cone is the hull of its apex and its
-/// base circle, every point of which is within the slant length of the apex).
+/// Radius about the centre of mass of a sphere holding a jet's plume as it is judged (the
+/// pyramid of [`plume_shape`]), m: the nozzle's distance plus the pyramid's farthest point from
+/// its apex, a base corner at √(L² + (L·tan α / cos(π/N))²) (the pyramid is the hull of its
+/// apex and corners; the cone's slant length L/cos α is 7.5e-5·sin²α of it shorter).
 pub fn plume_reach_m(j: &JetSpec) -> f64 {
-    plume_cone(j).map_or(0.0, |(apex, _, alpha, len)| apex.norm() + len / alpha.cos())
+    plume_cone(j).map_or(0.0, |(apex, _, alpha, len)| {
+        let corner = len * alpha.tan() / (std::f64::consts::PI / f64::from(PLUME_SIDES)).cos();
+        apex.norm() + len.hypot(corner)
+    })
 }
 
 /// `PlumeKeepOff(name, body, around, parts: [...])`: no firing jet of `body`'s `Rcs`
@@ -618,7 +731,7 @@ impl PlumeKeepOff {
                 reach = reach.max(plume_reach_m(j));
                 let (shape, pose) = plume_shape(&apex, &axis, alpha, len);
                 let pose = jet_frame * pose;
-                let r = (len / 2.0).hypot(len * alpha.tan());
+                let r = plume_shape_radius_m(alpha, len);
                 let firing = jv.firing.get(k).copied().unwrap_or(false);
                 cones.push((j.name.as_str(), shape, pose, r, firing));
             }
@@ -866,7 +979,7 @@ mod tests {
             for (dy, hit) in [(-1e-3, true), (1e-3, false)] {
                 // A panel beside the axis: its edge nearest the axis at y = ρ + dy.
                 let (pose, shape) = box_part(s, depth, (rho + dy, rho + dy + 1.0), (-0.5, 0.5));
-                let d = plume_clearance(&j, &id, &pose, &*shape).unwrap();
+                let d = plume_clearance(&j, &id, &pose, &*shape, None).unwrap();
                 assert_eq!(
                     d <= 0.0,
                     hit,
@@ -884,10 +997,10 @@ mod tests {
         }
         // Beyond the plume's length: no hit even on the axis.
         let (pose, shape) = box_part(len + 1e-3, 1.0, (-0.5, 0.5), (-0.5, 0.5));
-        assert!(plume_clearance(&j, &id, &pose, &*shape).unwrap() > 0.0);
+        assert!(plume_clearance(&j, &id, &pose, &*shape, None).unwrap() > 0.0);
         // Behind the nozzle: no hit.
         let (pose, shape) = box_part(-2.0, 1.0, (-0.5, 0.5), (-0.5, 0.5));
-        assert!(plume_clearance(&j, &id, &pose, &*shape).unwrap() > 0.0);
+        assert!(plume_clearance(&j, &id, &pose, &*shape, None).unwrap() > 0.0);
     }
 
     #[test]
@@ -895,12 +1008,8 @@ mod tests {
         let j = jet(10.0, 5.0);
         let (pose, shape) = box_part(2.0, 0.1, (-0.5, 0.5), (-0.5, 0.5));
         let parts = vec![
-            ("target/solar_array_py_2".to_string(), pose, shape.clone()),
-            (
-                "target/bus".to_string(),
-                Isometry3::translation(0.0, 5.0, 0.0),
-                shape,
-            ),
+            PlumeTarget::new("target/solar_array_py_2", pose, shape.clone()),
+            PlumeTarget::new("target/bus", Isometry3::translation(0.0, 5.0, 0.0), shape),
         ];
         let pats = vec!["target/solar_array_*".to_string()];
         let hits = plume_hits(
