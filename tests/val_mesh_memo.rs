@@ -206,6 +206,14 @@ fn val_mesh_memo_exact_is_the_brute_force_minimum() {
                 "case {k}: value {} against {truth}",
                 ev.value_m
             );
+            // Tight: as narrow as an exact query's own tolerance (what the monitor accepts as
+            // a value), from the triangles' gaps alone.
+            assert!(
+                ev.lower_m >= ev.value_m * (1.0 - GJK_REL_TOL) - e,
+                "case {k}: bracket [{}, {}] wider than GJK's tolerance",
+                ev.lower_m,
+                ev.value_m
+            );
             // The witnesses are points of the parts at the value's distance.
             let (wa, wb) = (ev.witness_a, ev.witness_b);
             let (pa, pbb) = if mesh_first { (pm, pb) } else { (pb, pm) };

@@ -24,7 +24,9 @@
 //! as parry's `TriMesh` distance traverses its BVH (best first, a node pruned by the distance
 //! of its box to the other part's box): each triangle against the other part by GJK, its
 //! certified gap along the witness direction n, n·(s_b(−n) − s_tri(n)) — any axis's gap is at
-//! most the distance, and a triangle's support is exact (its three corners) —, the lower bound
+//! most the distance, and a triangle's support is exact (its three corners) —, and along the
+//! direction from the triangle's point nearest the other part's witness (an exact point
+//! projection: nearer the true direction than GJK's where GJK stops early), the lower bound
 //! the smallest gap over the triangles evaluated (a pruned node's box is at least the best
 //! distance found, so no pruned triangle is closer), less the f32 rounding of the relative pose.
 //! Tests: `tests/val_mesh_memo.rs` (brute force over every triangle in f64, closed forms).
@@ -33,6 +35,7 @@ use super::{F32_REL_TOL, conv};
 use bevy_rapier3d::parry::bounding_volume::Aabb;
 use bevy_rapier3d::parry::partitioning::BvhNode;
 use bevy_rapier3d::parry::query;
+use bevy_rapier3d::parry::query::PointQuery;
 use bevy_rapier3d::parry::shape::{SupportMap, TriMesh};
 use bevy_rapier3d::rapier::math::{Real, Vector};
 use bevy_rapier3d::rapier::prelude as rp;
@@ -194,10 +197,20 @@ fn trimesh_support_map(
                         lowest.set(0.0);
                         return Some((0.0, (Vector::ZERO, Vector::ZERO)));
                     }
-                    let n = (p2m - p1) / d;
-                    let s_far = *rel * s.local_support_point(inv * -n);
-                    let t_far = tri.local_support_point(n);
-                    let gap = n.dot(s_far - t_far).min(d);
+                    let gap_along = |n: Vector| {
+                        let s_far = *rel * s.local_support_point(inv * -n);
+                        n.dot(s_far - tri.local_support_point(n))
+                    };
+                    let mut gap = gap_along((p2m - p1) / d);
+                    // Also along the direction from the triangle's point nearest the other
+                    // part's witness (exact: a point projection), often nearer the true one
+                    // than GJK's (any direction's gap is a lower bound).
+                    let q = tri.project_local_point(p2m, true).point;
+                    let dq = (p2m - q).length();
+                    if dq > 0.0 && dq.is_finite() {
+                        gap = gap.max(gap_along((p2m - q) / dq));
+                    }
+                    let gap = gap.min(d);
                     lowest.set(lowest.get().min(gap));
                     Some((d, (p1, rel.inverse_transform_point(p2m))))
                 }
