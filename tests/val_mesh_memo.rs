@@ -383,3 +383,106 @@ fn val_mesh_memo_pair_eval_along_the_axis_is_certified_and_reuses_it() {
         "{from_memo} of {steps} steps from the memo"
     );
 }
+
+/// A faceted docking cone as `DockingCone` builds it (32 sides, base radius 0.12 m at the
+/// origin, tip radius 0.03 m at 0.25 m along x): its points.
+fn cone_points() -> Vec<Vector3<f64>> {
+    let mut pts = Vec::new();
+    for k in 0..32 {
+        let t = 2.0 * std::f64::consts::PI * k as f64 / 32.0;
+        let (c, s) = (t.cos(), t.sin());
+        pts.push(Vector3::new(0.0, 0.12 * c, 0.12 * s).map(|x| f64::from(x as f32)));
+        pts.push(Vector3::new(0.25, 0.03 * c, 0.03 * s).map(|x| f64::from(x as f32)));
+    }
+    pts
+}
+
+#[test]
+fn val_mesh_memo_axis_bound_holds_for_every_point_and_rolls_by_the_radius() {
+    let cone_pts = cone_points();
+    let cone = rp::SharedShape::convex_hull(
+        &cone_pts
+            .iter()
+            .map(|p| Vector::new(p.x as f32, p.y as f32, p.z as f32))
+            .collect::<Vec<_>>(),
+    )
+    .expect("cone");
+    let cuboid = rp::SharedShape::cuboid(0.5, 0.2, 0.1);
+    let mut corners = Vec::new();
+    for sx in [-0.5, 0.5] {
+        for sy in [-0.2, 0.2] {
+            for sz in [-0.1, 0.1] {
+                corners.push(Vector3::new(sx, sy, sz));
+            }
+        }
+    }
+    let ball = rp::SharedShape::ball(0.3);
+    let radius = |pts: &[Vector3<f64>]| pts.iter().map(|p| p.norm()).fold(0.0, f64::max);
+    let cases: [(&rp::SharedShape, Vec<Vector3<f64>>, f64); 3] = [
+        (&cone, cone_pts.clone(), radius(&cone_pts)),
+        (&cuboid, corners.clone(), radius(&corners)),
+        (&ball, Vec::new(), 0.3),
+    ];
+    let mut rng = Lcg(4242);
+    for k in 0..3000 {
+        let (shape, pts, rb) = &cases[k % 3];
+        let rel0 = iso(
+            Vector3::new(
+                rng.uniform_in(-5.0, 5.0),
+                rng.uniform_in(-5.0, 5.0),
+                rng.uniform_in(-5.0, 5.0),
+            ),
+            random_rotation(&mut rng, std::f64::consts::PI),
+        );
+        let big = k % 2 == 0;
+        let rel1 = iso(
+            rel0.translation.vector
+                + Vector3::new(
+                    rng.uniform_in(-1e-3, 1e-3),
+                    rng.uniform_in(-1e-3, 1e-3),
+                    rng.uniform_in(-1e-3, 1e-3),
+                ),
+            random_rotation(&mut rng, if big { std::f64::consts::PI } else { 1e-3 })
+                * rel0.rotation,
+        );
+        let bound = memo::displacement_bound_axis_m(&rel0, &rel1, (&***shape, *rb));
+        assert!(bound <= displacement_bound_m(&rel0, &rel1, *rb) + 1e-15);
+        // Every vertex, convex combinations of four, and (a ball) points on its surface.
+        let mut samples: Vec<Vector3<f64>> = pts.clone();
+        for _ in 0..40 {
+            if pts.is_empty() {
+                let dir = random_rotation(&mut rng, std::f64::consts::PI) * Vector3::x();
+                samples.push(dir * 0.3);
+            } else {
+                let w: Vec<f64> = (0..4).map(|_| rng.uniform_in(0.0, 1.0)).collect();
+                let sum: f64 = w.iter().sum();
+                let mut p = Vector3::zeros();
+                for (wi, _) in w.iter().zip(0..4) {
+                    let v =
+                        pts[(rng.uniform_in(0.0, pts.len() as f64) as usize).min(pts.len() - 1)];
+                    p += v * (wi / sum);
+                }
+                samples.push(p);
+            }
+        }
+        for p in samples {
+            let p = Point3::from(p);
+            let moved = (rel1 * p - rel0 * p).norm();
+            assert!(moved <= bound, "case {k}: a point moved {moved} > {bound}");
+        }
+    }
+    // A pure roll of the cone about its own axis by θ: 2·sin(θ/2)·0.12 m (its base radius), not
+    // its bounding radius (0.2518 m).
+    let rel0 = iso(
+        Vector3::new(0.3, -1.2, 0.5),
+        UnitQuaternion::from_euler_angles(0.3, -0.7, 1.1),
+    );
+    let theta: f64 = 0.05;
+    let rel1 = iso(
+        rel0.translation.vector,
+        rel0.rotation * UnitQuaternion::from_scaled_axis(Vector3::x() * theta),
+    );
+    let b = memo::displacement_bound_axis_m(&rel0, &rel1, (&*cone, radius(&cone_pts)));
+    let closed = 2.0 * (theta / 2.0).sin() * f64::from(0.12f32);
+    assert!((b - closed).abs() <= 1e-9, "{b} against {closed}");
+}

@@ -889,7 +889,7 @@ pub fn pair_eval(
     // The pair's last exact evaluation, advanced to this pose (a certified bracket, `memo`).
     let key = (i, a, j, b);
     if let Some(e) = geo.memo.get(key) {
-        let (lower, upper) = e.advance(&pa.0.inv_mul(&pb.0), pb.1);
+        let (lower, upper) = e.advance_parts(&pa.0.inv_mul(&pb.0), (sa, pa.1), (sb, pb.1));
         if lower >= clear_at {
             return PairEval::Clear(lower);
         }

@@ -39,7 +39,7 @@ use bevy_rapier3d::parry::query::PointQuery;
 use bevy_rapier3d::parry::shape::{SupportMap, TriMesh};
 use bevy_rapier3d::rapier::math::{Real, Vector};
 use bevy_rapier3d::rapier::prelude as rp;
-use nalgebra::{Isometry3, Point3};
+use nalgebra::{Isometry3, Point3, Vector3};
 use std::cell::Cell;
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -73,11 +73,83 @@ pub fn displacement_bound_m(rel0: &Isometry3<f64>, rel1: &Isometry3<f64>, rb_m: 
     dt + chord + F64_SLACK * scale
 }
 
+/// Largest distance of a point of `shape` (its own frame) from the line through its origin
+/// along the unit vector `u`, m, where it is cheap and exact: the vertices of a convex
+/// polyhedron or a box (the distance from a line is convex, so a vertex reaches its maximum
+/// over the solid), a ball's radius. `None` for other shapes (meshes included).
+pub fn axis_radius_m(shape: &dyn rp::Shape, u: &Vector3<f64>) -> Option<f64> {
+    let off = |p: Vector| {
+        let p = conv::na(p);
+        (p - u * p.dot(u)).norm()
+    };
+    if let Some(c) = shape.as_convex_polyhedron() {
+        return Some(c.points().iter().map(|p| off(*p)).fold(0.0, f64::max));
+    }
+    if let Some(b) = shape.as_cuboid() {
+        let h = b.half_extents;
+        let mut m = 0.0f64;
+        for sx in [-1.0, 1.0] {
+            for sy in [-1.0, 1.0] {
+                for sz in [-1.0, 1.0] {
+                    m = m.max(off(Vector::new(sx * h.x, sy * h.y, sz * h.z)));
+                }
+            }
+        }
+        return Some(m);
+    }
+    shape.as_ball().map(|b| f64::from(b.radius))
+}
+
+/// [`displacement_bound_m`] with the rotation's axis: a point p of part b moves by
+/// |(t₁ − t₀) + (Q − I)R₀p| with Q = R₁R₀ᵀ, and |(Q − I)x| = 2·sin(θ/2)·(x's distance from Q's
+/// axis u), so the turn moves part b's points by at most 2·sin(θ/2)·ρ with ρ the largest
+/// distance of a point of b from the line along R₀ᵀu through its origin ([`axis_radius_m`];
+/// `rb_m` where that is not known). A part turning about its own axis (a docking cone rolling)
+/// moves by its radius about that axis times the turn, not its bounding radius.
+pub fn displacement_bound_axis_m(
+    rel0: &Isometry3<f64>,
+    rel1: &Isometry3<f64>,
+    (b, rb_m): (&dyn rp::Shape, f64),
+) -> f64 {
+    let dt = (rel1.translation.vector - rel0.translation.vector).norm();
+    let turn = rel1.rotation * rel0.rotation.inverse();
+    let scale = rel0.translation.vector.norm() + rel1.translation.vector.norm() + rb_m;
+    let chord = match turn.axis_angle() {
+        Some((u, theta)) => {
+            let ub = rel0.rotation.inverse() * u.into_inner();
+            let rho = axis_radius_m(b, &ub).map_or(rb_m, |r| r.min(rb_m));
+            2.0 * (0.5 * theta).sin() * rho
+        }
+        None => 0.0,
+    };
+    dt + chord + F64_SLACK * scale
+}
+
 impl ExactEval {
     /// The certified bracket (lower, upper) of the pair's distance at the relative pose `rel`
     /// (b's frame in a's), part b within `rb_m` of its origin, m.
     pub fn advance(&self, rel: &Isometry3<f64>, rb_m: f64) -> (f64, f64) {
-        let lower = self.lower_m - displacement_bound_m(&self.rel, rel, rb_m);
+        self.advance_by(rel, displacement_bound_m(&self.rel, rel, rb_m))
+    }
+
+    /// [`Self::advance`] with the rotation's axis, on whichever side bounds the motion better
+    /// (part b's points moving in a's frame, or a's in b's: the distance is the same):
+    /// [`displacement_bound_axis_m`].
+    pub fn advance_parts(
+        &self,
+        rel: &Isometry3<f64>,
+        a: (&dyn rp::Shape, f64),
+        b: (&dyn rp::Shape, f64),
+    ) -> (f64, f64) {
+        let moved_b = displacement_bound_axis_m(&self.rel, rel, b);
+        let moved_a = displacement_bound_axis_m(&self.rel.inverse(), &rel.inverse(), a);
+        self.advance_by(rel, moved_b.min(moved_a))
+    }
+
+    /// The bracket at `rel` when no point of either part moved more than `moved_m` relative to
+    /// the other since the evaluation.
+    fn advance_by(&self, rel: &Isometry3<f64>, moved_m: f64) -> (f64, f64) {
+        let lower = self.lower_m - moved_m;
         let upper = (self.witness_a - rel * self.witness_b).norm();
         (lower.max(0.0).min(upper), upper)
     }
