@@ -17,6 +17,8 @@ use bevy_rapier3d::rapier::prelude as rp;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use std::collections::{BTreeMap, HashMap};
 
+pub mod memo;
+
 /// Who a collider is.
 #[derive(Debug, Clone)]
 pub struct ColliderRef {
@@ -606,6 +608,9 @@ pub struct MonitorGeometry {
     /// convex hull ([`super::mesh::HullSupport`], for [`hull_bracket`]); `None` for the other
     /// parts. May be shorter than `shapes` (read as `None`).
     pub hulls: Vec<Vec<Option<std::sync::Arc<super::mesh::HullSupport>>>>,
+    /// The last triangle-by-triangle evaluation of each mesh part pair, advanced conservatively
+    /// to later poses by [`pair_eval`] ([`memo`]); starts empty.
+    pub memo: memo::MeshPairMemo,
 }
 
 /// Symmetry of a part about an axis of its own, for the rotation-aware rate bound.
@@ -979,8 +984,16 @@ pub enum PairEval {
 /// [`F32_REL_TOL`]·(|c_a − c_b| + r_a + r_b), the same bound every caller derives from an exact
 /// value — is the answer (value: the upper bound, achieved by a point of one part and its
 /// projection on the other's mesh); otherwise (a concavity, a part inside the other's hull) the
-/// exact triangle-mesh query, its lower bound the larger of its value less those tolerances and
-/// the hull's. Either way the value is within those tolerances of the true mesh distance.
+/// exact triangle-mesh query ([`memo::mesh_exact`]), its lower bound the largest of its
+/// triangles' certified gaps, its value less those tolerances and the hull's. Either way the
+/// value is within those tolerances of the true mesh distance.
+///
+/// Before all that, the pair's last exact query ([`MonitorGeometry::memo`]) is advanced to this
+/// pose ([`memo::ExactEval::advance`]: its lower bound less how far any point of part b can have
+/// moved in part a's frame, and the distance of its two witness points carried along): a lower
+/// bound at or above `clear_at` clears the pair, and a bracket as narrow as above is the answer
+/// (value: the carried witnesses' distance). Docking collar, chaser latched in the slot: one
+/// exact query, then none while the stack stays rigid.
 #[allow(clippy::too_many_arguments)]
 pub fn pair_eval(
     geo: &MonitorGeometry,
@@ -994,7 +1007,45 @@ pub fn pair_eval(
 ) -> PairEval {
     let (sa, sb) = (&*geo.shapes[i][a], &*geo.shapes[j][b]);
     let (ha, hb) = (geo.hull(i, a), geo.hull(j, b));
-    pair_eval_shapes(pa, (sa, ha), pb, (sb, hb), clear_at)
+    if ha.is_none() && hb.is_none() {
+        return pair_eval_shapes(pa, (sa, ha), pb, (sb, hb), clear_at);
+    }
+    let eps =
+        F32_REL_TOL * ((pa.0.translation.vector - pb.0.translation.vector).norm() + pa.1 + pb.1);
+    let settled = |lower: f64, upper: f64| lower >= upper * (1.0 - GJK_REL_TOL) - eps;
+    // The pair's last exact evaluation, advanced to this pose (a certified bracket, `memo`).
+    let key = (i, a, j, b);
+    if let Some(e) = geo.memo.get(key) {
+        let (lower, upper) = e.advance_parts(&pa.0.inv_mul(&pb.0), (sa, pa.1), (sb, pb.1));
+        if lower >= clear_at {
+            return PairEval::Clear(lower);
+        }
+        if settled(lower, upper) {
+            return PairEval::Value(upper, lower);
+        }
+    }
+    let hull_lower = match hull_bracket(&pa.0, (sa, ha, pa.1), &pb.0, (sb, hb, pb.1), clear_at) {
+        HullEval::Clear(l) => return PairEval::Clear(l),
+        HullEval::Bracket { lower, upper } if settled(lower, upper) => {
+            return PairEval::Value(upper, lower);
+        }
+        HullEval::Bracket { lower, .. } => lower,
+        HullEval::None => 0.0,
+    };
+    // Triangle by triangle, with a tight lower bound and witnesses kept for later poses.
+    // Its lower bound: the triangles' smallest gap, or the value less GJK's and f32's
+    // tolerances (as every exact value's), or the hull's, whichever is largest.
+    if let Some(mut e) = memo::mesh_exact(&pa.0, (sa, pa.1), &pb.0, (sb, pb.1)) {
+        let loose = e.value_m * (1.0 - GJK_REL_TOL) - eps;
+        e.lower_m = e.lower_m.max(loose).max(hull_lower).min(e.value_m).max(0.0);
+        if e.value_m > 0.0 {
+            geo.memo.put(key, e);
+        }
+        return PairEval::Value(e.value_m, e.lower_m);
+    }
+    let d = shape_distance(&pa.0, sa, &pb.0, sb);
+    let loose = d * (1.0 - GJK_REL_TOL) - eps;
+    PairEval::Value(d, loose.max(hull_lower).min(d).max(0.0))
 }
 
 /// [`pair_eval`] for two shapes given directly (world pose and bounding radius, the shape, its

@@ -1,0 +1,299 @@
+//! A mesh pair's distance advanced conservatively from its last exact evaluation.
+//!
+//! Where a part pair with a triangle mesh is not settled by the mesh's convex hull
+//! ([`super::hull_bracket`]: a concavity, or a part inside the other's hull — the docking
+//! collar of the example vehicle around the chaser's cone, every triangle of its rim equally
+//! close), the monitor evaluates it triangle by triangle ([`mesh_exact`]) and keeps the result
+//! ([`MeshPairMemo`]): the relative pose, a certified lower bound and the witness points (a
+//! point of each part, in its own frame). At any later relative pose of the same two parts:
+//!
+//! * **lower bound**: the distance is 1-Lipschitz in a rigid displacement of either set, and
+//!   a point p of part b (|p| ≤ r_b about its origin) moves, in part a's frame, by
+//!   |(t₁ − t₀) + (R₁ − R₀)p| ≤ |t₁ − t₀| + 2·sin(θ/2)·r_b (θ the angle of R₁R₀ᵀ:
+//!   ‖R₁R₀ᵀ − I‖ = 2 sin(θ/2)); so d₁ ≥ l₀ − that displacement ([`displacement_bound_m`]);
+//! * **upper bound**: the two witness points are points of the parts; carried along with them,
+//!   their distance at the new pose is a distance achieved by the two parts.
+//!
+//! The monitor uses the pair as cleared when that lower bound clears the level it asks for, and
+//! as a value when the bracket is as narrow as an exact query's own tolerance
+//! ([`super::GJK_REL_TOL`], [`super::F32_REL_TOL`]); otherwise it evaluates again. Nothing is
+//! assumed about how the parts moved in between: the bound is between two poses, whatever path
+//! joined them.
+//!
+//! [`mesh_exact`] is the triangle-by-triangle evaluation with a *tight* certified lower bound,
+//! as parry's `TriMesh` distance traverses its BVH (best first, a node pruned by the distance
+//! of its box to the other part's box): each triangle against the other part by GJK, its
+//! certified gap along the witness direction n, n·(s_b(−n) − s_tri(n)) — any axis's gap is at
+//! most the distance, and a triangle's support is exact (its three corners) —, and along the
+//! direction from the triangle's point nearest the other part's witness (an exact point
+//! projection: nearer the true direction than GJK's where GJK stops early), the lower bound
+//! the smallest gap over the triangles evaluated (a pruned node's box is at least the best
+//! distance found, so no pruned triangle is closer), less the f32 rounding of the relative pose.
+//! Tests: `tests/val_mesh_memo.rs` (brute force over every triangle in f64, closed forms).
+
+use super::{F32_REL_TOL, conv};
+use bevy_rapier3d::parry::bounding_volume::Aabb;
+use bevy_rapier3d::parry::partitioning::BvhNode;
+use bevy_rapier3d::parry::query;
+use bevy_rapier3d::parry::query::PointQuery;
+use bevy_rapier3d::parry::shape::{SupportMap, TriMesh};
+use bevy_rapier3d::rapier::math::{Real, Vector};
+use bevy_rapier3d::rapier::prelude as rp;
+use nalgebra::{Isometry3, Point3, Vector3};
+use std::cell::Cell;
+use std::collections::HashMap;
+use std::sync::Mutex;
+
+/// A part pair's last triangle-by-triangle evaluation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExactEval {
+    /// Pose of part b's frame in part a's frame at the evaluation.
+    pub rel: Isometry3<f64>,
+    /// The distance found (the witnesses' distance), m.
+    pub value_m: f64,
+    /// Certified lower bound of the distance to the triangles, m.
+    pub lower_m: f64,
+    /// Witness point of part a, in a's frame, m.
+    pub witness_a: Point3<f64>,
+    /// Witness point of part b, in b's frame, m.
+    pub witness_b: Point3<f64>,
+}
+
+/// Relative rounding allowed on the f64 displacement bound (of |t| and r_b): far below f32's.
+const F64_SLACK: f64 = 64.0 * f64::EPSILON;
+
+/// An upper bound of how far any point of part b (within `rb_m` of its frame's origin) moves,
+/// in part a's frame, between the relative poses `rel0` and `rel1` (b's frame in a's), m:
+/// |t₁ − t₀| + 2·sin(θ/2)·r_b with θ the angle of R₁R₀ᵀ, plus the f64 rounding.
+pub fn displacement_bound_m(rel0: &Isometry3<f64>, rel1: &Isometry3<f64>, rb_m: f64) -> f64 {
+    let dt = (rel1.translation.vector - rel0.translation.vector).norm();
+    let turn = rel1.rotation * rel0.rotation.inverse();
+    let chord = 2.0 * (0.5 * turn.angle()).sin() * rb_m;
+    let scale = rel0.translation.vector.norm() + rel1.translation.vector.norm() + rb_m;
+    dt + chord + F64_SLACK * scale
+}
+
+/// Largest distance of a point of `shape` (its own frame) from the line through its origin
+/// along the unit vector `u`, m, where it is cheap and exact: the vertices of a convex
+/// polyhedron or a box (the distance from a line is convex, so a vertex reaches its maximum
+/// over the solid), a ball's radius. `None` for other shapes (meshes included).
+pub fn axis_radius_m(shape: &dyn rp::Shape, u: &Vector3<f64>) -> Option<f64> {
+    let off = |p: Vector| {
+        let p = conv::na(p);
+        (p - u * p.dot(u)).norm()
+    };
+    if let Some(c) = shape.as_convex_polyhedron() {
+        return Some(c.points().iter().map(|p| off(*p)).fold(0.0, f64::max));
+    }
+    if let Some(b) = shape.as_cuboid() {
+        let h = b.half_extents;
+        let mut m = 0.0f64;
+        for sx in [-1.0, 1.0] {
+            for sy in [-1.0, 1.0] {
+                for sz in [-1.0, 1.0] {
+                    m = m.max(off(Vector::new(sx * h.x, sy * h.y, sz * h.z)));
+                }
+            }
+        }
+        return Some(m);
+    }
+    shape.as_ball().map(|b| f64::from(b.radius))
+}
+
+/// [`displacement_bound_m`] with the rotation's axis: a point p of part b moves by
+/// |(t₁ − t₀) + (Q − I)R₀p| with Q = R₁R₀ᵀ, and |(Q − I)x| = 2·sin(θ/2)·(x's distance from Q's
+/// axis u), so the turn moves part b's points by at most 2·sin(θ/2)·ρ with ρ the largest
+/// distance of a point of b from the line along R₀ᵀu through its origin ([`axis_radius_m`];
+/// `rb_m` where that is not known). A part turning about its own axis (a docking cone rolling)
+/// moves by its radius about that axis times the turn, not its bounding radius.
+pub fn displacement_bound_axis_m(
+    rel0: &Isometry3<f64>,
+    rel1: &Isometry3<f64>,
+    (b, rb_m): (&dyn rp::Shape, f64),
+) -> f64 {
+    let dt = (rel1.translation.vector - rel0.translation.vector).norm();
+    let turn = rel1.rotation * rel0.rotation.inverse();
+    let scale = rel0.translation.vector.norm() + rel1.translation.vector.norm() + rb_m;
+    let chord = match turn.axis_angle() {
+        Some((u, theta)) => {
+            let ub = rel0.rotation.inverse() * u.into_inner();
+            let rho = axis_radius_m(b, &ub).map_or(rb_m, |r| r.min(rb_m));
+            2.0 * (0.5 * theta).sin() * rho
+        }
+        None => 0.0,
+    };
+    dt + chord + F64_SLACK * scale
+}
+
+impl ExactEval {
+    /// The certified bracket (lower, upper) of the pair's distance at the relative pose `rel`
+    /// (b's frame in a's), part b within `rb_m` of its origin, m.
+    pub fn advance(&self, rel: &Isometry3<f64>, rb_m: f64) -> (f64, f64) {
+        self.advance_by(rel, displacement_bound_m(&self.rel, rel, rb_m))
+    }
+
+    /// [`Self::advance`] with the rotation's axis, on whichever side bounds the motion better
+    /// (part b's points moving in a's frame, or a's in b's: the distance is the same):
+    /// [`displacement_bound_axis_m`].
+    pub fn advance_parts(
+        &self,
+        rel: &Isometry3<f64>,
+        a: (&dyn rp::Shape, f64),
+        b: (&dyn rp::Shape, f64),
+    ) -> (f64, f64) {
+        let moved_b = displacement_bound_axis_m(&self.rel, rel, b);
+        let moved_a = displacement_bound_axis_m(&self.rel.inverse(), &rel.inverse(), a);
+        self.advance_by(rel, moved_b.min(moved_a))
+    }
+
+    /// The bracket at `rel` when no point of either part moved more than `moved_m` relative to
+    /// the other since the evaluation.
+    fn advance_by(&self, rel: &Isometry3<f64>, moved_m: f64) -> (f64, f64) {
+        let lower = self.lower_m - moved_m;
+        let upper = (self.witness_a - rel * self.witness_b).norm();
+        (lower.max(0.0).min(upper), upper)
+    }
+}
+
+/// The last exact evaluation of each mesh part pair (body i, part a, body j, part b), kept by
+/// the monitor between queries. A clone starts empty (the entries are only a cache: any of them
+/// is a certificate at any pose, and none is needed).
+#[derive(Default)]
+pub struct MeshPairMemo(Mutex<HashMap<(usize, usize, usize, usize), ExactEval>>);
+
+impl Clone for MeshPairMemo {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+impl std::fmt::Debug for MeshPairMemo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "MeshPairMemo({} pairs)", self.len())
+    }
+}
+
+impl MeshPairMemo {
+    /// The kept evaluation of a pair, if any.
+    pub fn get(&self, key: (usize, usize, usize, usize)) -> Option<ExactEval> {
+        self.0.lock().ok()?.get(&key).copied()
+    }
+
+    /// Keeps (or replaces) a pair's evaluation.
+    pub fn put(&self, key: (usize, usize, usize, usize), e: ExactEval) {
+        if let Ok(mut m) = self.0.lock() {
+            m.insert(key, e);
+        }
+    }
+
+    /// Pairs kept.
+    pub fn len(&self) -> usize {
+        self.0.lock().map_or(0, |m| m.len())
+    }
+
+    /// No pair kept.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// The distance of part a (at `pa`, within `ra_m` of its origin) and part b (at `pb`, within
+/// `rb_m`), one of them a triangle mesh and the other a shape with a support map, triangle by
+/// triangle with a tight certified lower bound and the witness points (see the module's
+/// documentation). `None` for any other pair of shapes. Touching or overlapping parts give 0
+/// (and witnesses at the origin of each part: not to be carried).
+pub fn mesh_exact(
+    pa: &Isometry3<f64>,
+    (a, ra_m): (&dyn rp::Shape, f64),
+    pb: &Isometry3<f64>,
+    (b, rb_m): (&dyn rp::Shape, f64),
+) -> Option<ExactEval> {
+    // m: the mesh side, s: the other; `rel` is s's frame in m's.
+    let (m, pm, s_shape, ps, mesh_is_a) = match (a.as_trimesh(), b.as_trimesh()) {
+        (Some(m), None) => (m, pa, b, pb, true),
+        (None, Some(m)) => (m, pb, a, pa, false),
+        _ => return None,
+    };
+    let s = s_shape.as_support_map()?;
+    let rel = pm.inv_mul(ps);
+    let rel32 = conv::pose(&rel);
+    let eps = F32_REL_TOL * (rel.translation.vector.norm() + ra_m + rb_m);
+    let (value, lower, wm, ws) = trimesh_support_map(m, &rel32, s_shape, s)?;
+    let value = f64::from(value);
+    let lower = (f64::from(lower) - eps).max(0.0).min(value);
+    let (wm, ws) = (Point3::from(conv::na(wm)), Point3::from(conv::na(ws)));
+    let (witness_a, witness_b) = if mesh_is_a { (wm, ws) } else { (ws, wm) };
+    Some(ExactEval {
+        rel: pa.inv_mul(pb),
+        value_m: value,
+        lower_m: lower,
+        witness_a,
+        witness_b,
+    })
+}
+
+/// Triangle mesh `m` against the support map `s` (shape `s_shape`) at `rel` (s's frame in m's),
+/// in f32: (the best triangle's distance, the smallest certified gap over the triangles
+/// evaluated, the witness on m in m's frame, the witness on s in s's frame).
+fn trimesh_support_map(
+    m: &TriMesh,
+    rel: &rp::Pose,
+    s_shape: &dyn rp::Shape,
+    s: &dyn SupportMap,
+) -> Option<(Real, Real, Vector, Vector)> {
+    // As parry's `distance_to_shape`: a node's cost is the distance between its box and the
+    // other part's box (their Minkowski difference's distance to the origin), a lower bound of
+    // every triangle in it.
+    let s_box = s_shape.compute_aabb(rel);
+    let shift = -s_box.center();
+    let margin = s_box.half_extents();
+    let lowest = Cell::new(Real::INFINITY);
+    let inv = rel.rotation.inverse();
+    let best = m.bvh().find_best(
+        Real::MAX,
+        |node: &BvhNode, _| {
+            Aabb {
+                mins: node.mins() + shift - margin,
+                maxs: node.maxs() + shift + margin,
+            }
+            .distance_to_origin()
+        },
+        |id, _| {
+            let tri = m.triangle(id);
+            // parry's own pair query (GJK, or its closed forms for balls), both witnesses in
+            // the mesh's frame.
+            match query::closest_points(&rp::Pose::IDENTITY, &tri, rel, s_shape, Real::MAX).ok()? {
+                query::ClosestPoints::WithinMargin(p1, p2m) => {
+                    let d = (p2m - p1).length();
+                    if !d.is_finite() || d <= 0.0 {
+                        lowest.set(0.0);
+                        return Some((0.0, (Vector::ZERO, Vector::ZERO)));
+                    }
+                    let gap_along = |n: Vector| {
+                        let s_far = *rel * s.local_support_point(inv * -n);
+                        n.dot(s_far - tri.local_support_point(n))
+                    };
+                    let mut gap = gap_along((p2m - p1) / d);
+                    // Also along the direction from the triangle's point nearest the other
+                    // part's witness (exact: a point projection), often nearer the true one
+                    // than GJK's (any direction's gap is a lower bound).
+                    let q = tri.project_local_point(p2m, true).point;
+                    let dq = (p2m - q).length();
+                    if dq > 0.0 && dq.is_finite() {
+                        gap = gap.max(gap_along((p2m - q) / dq));
+                    }
+                    let gap = gap.min(d);
+                    lowest.set(lowest.get().min(gap));
+                    Some((d, (p1, rel.inverse_transform_point(p2m))))
+                }
+                query::ClosestPoints::Intersecting => {
+                    lowest.set(0.0);
+                    Some((0.0, (Vector::ZERO, Vector::ZERO)))
+                }
+                query::ClosestPoints::Disjoint => None,
+            }
+        },
+    )?;
+    let (_, (d, (p1, p2))) = best;
+    Some((d, lowest.get().min(d), p1, p2))
+}
