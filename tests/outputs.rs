@@ -307,3 +307,30 @@ fn invariant_no_nan_or_infinity_in_any_output() {
         let _ = std::fs::remove_dir_all(&d);
     }
 }
+
+/// A run in progress shows its events so far: after `collision_course`'s guarantee is violated
+/// (21.17 s) the temporary `events.jsonl.partial` already holds that event, although the run
+/// has not ended (it used to stay in the write buffer until the end, so a stopped run looked as
+/// if nothing had happened). Reference: the event the same run reports in memory.
+#[test]
+fn regress_events_reach_the_partial_file_while_the_run_goes_on() {
+    let dir = tmp("events-live");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut sim = rpod::sim::Simulation::from_file("scenes/collision_course.ron", &[]).unwrap();
+    sim.record_to(&dir).unwrap();
+    sim.run_for(30.0);
+    let want: Vec<String> = sim.events().iter().map(|e| e.kind.clone()).collect();
+    assert!(
+        want.iter().any(|k| k == "guarantee_violated"),
+        "the scene's violation happens by 30 s: {want:?}"
+    );
+    let text = std::fs::read_to_string(dir.join("events.jsonl.partial")).unwrap();
+    let got: Vec<String> = text
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap()["kind"].to_string())
+        .map(|k| k.trim_matches('"').to_string())
+        .collect();
+    assert_eq!(got, want, "every event so far is on disk");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -541,6 +541,29 @@ pub fn record_now(world: &mut World) {
         .expect("the record system's resources exist");
 }
 
+/// Writes the step's pending events to `events.jsonl` and keeps them in the history. Events are
+/// few: each step's reach the (still temporary) file at once, so a run that is stopped or still
+/// running shows what has happened so far (a whole run's 1.7 KiB of events used to sit in the
+/// 8 KiB write buffer until the end, and a stopped run looked as if nothing had happened).
+fn write_events(rec: &mut Recorder, log: &mut EventLog) {
+    if log.pending.is_empty() {
+        return;
+    }
+    let pending: Vec<super::Event> = std::mem::take(&mut log.pending);
+    if let Some(files) = rec.files.as_mut() {
+        for e in &pending {
+            let line = serde_json::to_string(e).expect("event serialises");
+            if let Err(err) = writeln!(files.events, "{line}") {
+                rec.error.get_or_insert(err.to_string());
+            }
+        }
+        if let Err(err) = files.events.flush() {
+            rec.error.get_or_insert(err.to_string());
+        }
+    }
+    rec.history.extend(pending);
+}
+
 #[allow(clippy::too_many_arguments)]
 fn write_step(
     rec: &mut Recorder,
@@ -554,16 +577,7 @@ fn write_step(
     cs: &ContactState,
     orbit: Option<&super::OrbitEnv>,
 ) {
-    let pending: Vec<super::Event> = std::mem::take(&mut log.pending);
-    if let Some(files) = rec.files.as_mut() {
-        for e in &pending {
-            let line = serde_json::to_string(e).expect("event serialises");
-            if let Err(err) = writeln!(files.events, "{line}") {
-                rec.error.get_or_insert(err.to_string());
-            }
-        }
-    }
-    rec.history.extend(pending);
+    write_events(rec, log);
     rec.events_written = rec.history.len();
     if rec.last_row_step == Some(step) {
         return;
@@ -629,18 +643,7 @@ pub fn record(
     }
     rec.force_row = false;
     if !due {
-        if !log.pending.is_empty() {
-            let pending: Vec<super::Event> = std::mem::take(&mut log.pending);
-            if let Some(files) = rec.files.as_mut() {
-                for e in &pending {
-                    let line = serde_json::to_string(e).expect("event serialises");
-                    if let Err(err) = writeln!(files.events, "{line}") {
-                        rec.error.get_or_insert(err.to_string());
-                    }
-                }
-            }
-            rec.history.extend(pending);
-        }
+        write_events(rec, &mut log);
         return;
     }
     let states: Vec<(&SimBody, &BodyState)> = roster
