@@ -3,13 +3,13 @@
 //!
 //! 1. `val_multirate_relative_motion_j2_600s`: a tumbling target and a drifting chaser in an
 //!    e = 0.01 orbit with J2, rows every 10 s so that steps of up to 10 s are allowed. Reference:
-//!    an f64 RK4 integration, written here, of the reference orbit and of both bodies' absolute
+//!    an f64 RK4 integration (`tests/common`: `rk4`, `accel`) of the reference orbit and of both bodies' absolute
 //!    orbits under two-body + J2 (10 ms, its own error below 1 µm over 600 s), differenced.
 //!    Required: < 1 mm after 600 s, the threshold of the fixed-step test of the same case
 //!    (`tests/val_orbit.rs`) — and the run must really have taken long steps (fewer than a
 //!    tenth of the fixed steps as pipeline steps).
 //! 2. `val_multirate_cw_circular_300s`: a circular orbit without J2, a non-rotating chaser: the
-//!    Clohessy–Wiltshire closed form (written here) within the linearisation error bound
+//!    Clohessy–Wiltshire closed form (`tests/common::cw`) within the linearisation error bound
 //!    `rpod::orbit::cw::cw_linearisation_error_bound`, plus the multi-rate integration's own
 //!    allowance: its stated per-step tolerance `tol_m` times the number of pipeline steps.
 //! 3. `val_multirate_matches_fixed_on_bundled_scenes`: every bundled example scene (`scenes/*.ron`)
@@ -27,32 +27,11 @@
 //!    the fixed-step run, span 1 at every step). The mesh flagship
 //!    (`orbit_approach_latch_truss.ron`) is left out: it costs minutes per run (issue 26).
 
-use nalgebra::{Matrix3, Vector3};
-use rpod::orbit::constants::{J2_EARTH, MU_EARTH_M3_S2, R_EARTH_M};
+mod common;
 
-fn accel(r: &Vector3<f64>, j2: bool) -> Vector3<f64> {
-    let rn = r.norm();
-    let mut a = -MU_EARTH_M3_S2 / rn.powi(3) * r;
-    if j2 {
-        let k = 1.5 * J2_EARTH * MU_EARTH_M3_S2 * R_EARTH_M.powi(2) / rn.powi(5);
-        let z2 = 5.0 * (r.z / rn).powi(2);
-        a += Vector3::new(
-            k * r.x * (z2 - 1.0),
-            k * r.y * (z2 - 1.0),
-            k * r.z * (z2 - 3.0),
-        );
-    }
-    a
-}
-
-fn rk4(r: &mut Vector3<f64>, v: &mut Vector3<f64>, h: f64, j2: bool) {
-    let (k1r, k1v) = (*v, accel(r, j2));
-    let (k2r, k2v) = (*v + k1v * (h / 2.0), accel(&(*r + k1r * (h / 2.0)), j2));
-    let (k3r, k3v) = (*v + k2v * (h / 2.0), accel(&(*r + k2r * (h / 2.0)), j2));
-    let (k4r, k4v) = (*v + k3v * h, accel(&(*r + k3r * h), j2));
-    *r += (k1r + k2r * 2.0 + k3r * 2.0 + k4r) * (h / 6.0);
-    *v += (k1v + k2v * 2.0 + k3v * 2.0 + k4v) * (h / 6.0);
-}
+use common::{cw, hill, rk4};
+use nalgebra::Vector3;
+use rpod::orbit::constants::MU_EARTH_M3_S2;
 
 fn scene(e: f64, j2: bool, target_rate_deg_s: [f64; 3], x0: [f64; 3], v0: [f64; 3]) -> String {
     format!(
@@ -127,24 +106,6 @@ fn val_multirate_relative_motion_j2_600s() {
         pipeline < 6_000,
         "{pipeline} pipeline steps for 60 000 fixed steps: long steps were not taken"
     );
-}
-
-/// Clohessy–Wiltshire state transition (Hill frame: x radial, y along-track, z normal).
-fn cw(x0: &Vector3<f64>, v0: &Vector3<f64>, n: f64, t: f64) -> Vector3<f64> {
-    let (s, c) = ((n * t).sin(), (n * t).cos());
-    Vector3::new(
-        (4.0 - 3.0 * c) * x0.x + s / n * v0.x + 2.0 / n * (1.0 - c) * v0.y,
-        6.0 * (s - n * t) * x0.x + x0.y - 2.0 / n * (1.0 - c) * v0.x
-            + (4.0 * s - 3.0 * n * t) / n * v0.y,
-        c * x0.z + s / n * v0.z,
-    )
-}
-
-fn hill(r: &Vector3<f64>, v: &Vector3<f64>) -> Matrix3<f64> {
-    let x = r.normalize();
-    let z = r.cross(v).normalize();
-    let y = z.cross(&x);
-    Matrix3::from_rows(&[x.transpose(), y.transpose(), z.transpose()])
 }
 
 #[test]

@@ -1,42 +1,21 @@
 //! Translational fidelity of the simulation in orbit.
 //!
 //! 1. `val_relative_motion_j2_600s`: the chaser's world-frame position (relative to the
-//!    reference orbit) against an independent f64 integration, written here, of both the
+//!    reference orbit) against an independent f64 integration (`tests/common`: `rk4`, `accel`) of both the
 //!    reference orbit and the chaser's absolute orbit under two-body + J2 (RK4 at 10 ms; its own
 //!    error over 600 s is below 1 µm), differenced at the end. Required: < 1 mm after 600 s.
 //! 2. `val_cw_circular_300s`: circular orbit, no J2: the chaser follows the Clohessy–Wiltshire
-//!    closed form (written here) in the Hill frame within the linearisation error bound of
+//!    closed form (`tests/common::cw`) in the Hill frame within the linearisation error bound of
 //!    `rpod::orbit::cw::cw_linearisation_error_bound` (Taylor remainder of the second-order
 //!    gravity term through Duhamel's formula; validated in `orbit::cw` against nonlinear
 //!    two-body integration), plus 1e-8 m for the simulation's own integration error (velocity
 //!    Verlet, global error of order dt²·n²·ρ·t ≈ 1e-9 m here).
 
-use nalgebra::{Matrix3, Vector3};
-use rpod::orbit::constants::{J2_EARTH, MU_EARTH_M3_S2, R_EARTH_M};
+mod common;
 
-fn accel(r: &Vector3<f64>, j2: bool) -> Vector3<f64> {
-    let rn = r.norm();
-    let mut a = -MU_EARTH_M3_S2 / rn.powi(3) * r;
-    if j2 {
-        let k = 1.5 * J2_EARTH * MU_EARTH_M3_S2 * R_EARTH_M.powi(2) / rn.powi(5);
-        let z2 = 5.0 * (r.z / rn).powi(2);
-        a += Vector3::new(
-            k * r.x * (z2 - 1.0),
-            k * r.y * (z2 - 1.0),
-            k * r.z * (z2 - 3.0),
-        );
-    }
-    a
-}
-
-fn rk4(r: &mut Vector3<f64>, v: &mut Vector3<f64>, h: f64, j2: bool) {
-    let (k1r, k1v) = (*v, accel(r, j2));
-    let (k2r, k2v) = (*v + k1v * (h / 2.0), accel(&(*r + k1r * (h / 2.0)), j2));
-    let (k3r, k3v) = (*v + k2v * (h / 2.0), accel(&(*r + k2r * (h / 2.0)), j2));
-    let (k4r, k4v) = (*v + k3v * h, accel(&(*r + k3r * h), j2));
-    *r += (k1r + k2r * 2.0 + k3r * 2.0 + k4r) * (h / 6.0);
-    *v += (k1v + k2v * 2.0 + k3v * 2.0 + k4v) * (h / 6.0);
-}
+use common::{cw, hill, rk4};
+use nalgebra::Vector3;
+use rpod::orbit::constants::MU_EARTH_M3_S2;
 
 fn scene(e: f64, j2: bool, chaser_hill: [f64; 3], vel_hill: [f64; 3]) -> String {
     format!(
@@ -87,24 +66,6 @@ fn val_relative_motion_j2_600s() {
     println!("chaser position error after 600 s: {err:e} m (worst over the run {worst:e} m)");
     assert!(err < 1e-3, "chaser position error {err} m after 600 s");
     assert!(worst < 1e-3, "worst position error over the run {worst} m");
-}
-
-/// Clohessy–Wiltshire state transition (Hill frame: x radial, y along-track, z normal).
-fn cw(x0: &Vector3<f64>, v0: &Vector3<f64>, n: f64, t: f64) -> Vector3<f64> {
-    let (s, c) = ((n * t).sin(), (n * t).cos());
-    Vector3::new(
-        (4.0 - 3.0 * c) * x0.x + s / n * v0.x + 2.0 / n * (1.0 - c) * v0.y,
-        6.0 * (s - n * t) * x0.x + x0.y - 2.0 / n * (1.0 - c) * v0.x
-            + (4.0 * s - 3.0 * n * t) / n * v0.y,
-        c * x0.z + s / n * v0.z,
-    )
-}
-
-fn hill(r: &Vector3<f64>, v: &Vector3<f64>) -> Matrix3<f64> {
-    let x = r.normalize();
-    let z = r.cross(v).normalize();
-    let y = z.cross(&x);
-    Matrix3::from_rows(&[x.transpose(), y.transpose(), z.transpose()])
 }
 
 #[test]

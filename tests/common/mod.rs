@@ -1,7 +1,11 @@
-//! Closed forms shared by the integration tests (each test file that uses them names them in
+//! Closed forms and an independent orbit integrator shared by the integration tests (each test file that uses them names them in
 //! its own `//!` header).
 
+#![allow(dead_code)] // each test file uses its own part
+
+use nalgebra::{Matrix3, Vector3};
 use rpod::control::generic::glideslope::Profile;
+use rpod::orbit::constants::{J2_EARTH, MU_EARTH_M3_S2, R_EARTH_M};
 
 /// The closed-loop motion of a glideslope flown by a critically damped PD (ω, ζ = 1) with
 /// exact CW cancellation and reference feed-forward, along V-bar, from rest at range
@@ -83,4 +87,50 @@ impl GlideslopeLoop {
         // The reference's steps are smooth in the plant: no impulses left to add.
         dv
     }
+}
+
+/// Two-body (+ J2 when `j2`) gravitational acceleration at ECI position `r`, m/s²: the
+/// independent force model of the orbit fidelity tests.
+pub fn accel(r: &Vector3<f64>, j2: bool) -> Vector3<f64> {
+    let rn = r.norm();
+    let mut a = -MU_EARTH_M3_S2 / rn.powi(3) * r;
+    if j2 {
+        let k = 1.5 * J2_EARTH * MU_EARTH_M3_S2 * R_EARTH_M.powi(2) / rn.powi(5);
+        let z2 = 5.0 * (r.z / rn).powi(2);
+        a += Vector3::new(
+            k * r.x * (z2 - 1.0),
+            k * r.y * (z2 - 1.0),
+            k * r.z * (z2 - 3.0),
+        );
+    }
+    a
+}
+
+/// One classical RK4 step of ṙ = v, v̇ = `accel`(r) over `h` s (an independent integrator).
+pub fn rk4(r: &mut Vector3<f64>, v: &mut Vector3<f64>, h: f64, j2: bool) {
+    let (k1r, k1v) = (*v, accel(r, j2));
+    let (k2r, k2v) = (*v + k1v * (h / 2.0), accel(&(*r + k1r * (h / 2.0)), j2));
+    let (k3r, k3v) = (*v + k2v * (h / 2.0), accel(&(*r + k2r * (h / 2.0)), j2));
+    let (k4r, k4v) = (*v + k3v * h, accel(&(*r + k3r * h), j2));
+    *r += (k1r + k2r * 2.0 + k3r * 2.0 + k4r) * (h / 6.0);
+    *v += (k1v + k2v * 2.0 + k3v * 2.0 + k4v) * (h / 6.0);
+}
+
+/// Clohessy–Wiltshire state transition (Hill frame: x radial, y along-track, z normal).
+pub fn cw(x0: &Vector3<f64>, v0: &Vector3<f64>, n: f64, t: f64) -> Vector3<f64> {
+    let (s, c) = ((n * t).sin(), (n * t).cos());
+    Vector3::new(
+        (4.0 - 3.0 * c) * x0.x + s / n * v0.x + 2.0 / n * (1.0 - c) * v0.y,
+        6.0 * (s - n * t) * x0.x + x0.y - 2.0 / n * (1.0 - c) * v0.x
+            + (4.0 * s - 3.0 * n * t) / n * v0.y,
+        c * x0.z + s / n * v0.z,
+    )
+}
+
+/// The rotation from ECI to the Hill frame (x radial, y along-track, z orbit normal) of (r, v).
+pub fn hill(r: &Vector3<f64>, v: &Vector3<f64>) -> Matrix3<f64> {
+    let x = r.normalize();
+    let z = r.cross(v).normalize();
+    let y = z.cross(&x);
+    Matrix3::from_rows(&[x.transpose(), y.transpose(), z.transpose()])
 }
