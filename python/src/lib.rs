@@ -729,21 +729,38 @@ impl PySimulation {
         }
         self.start_recording()?;
         self.started = true;
-        let chunk = if self.python_laws > 0 { 1 } else { 10_000 };
+        // With Python code in the loop, one pipeline step at a time (one fixed step, or a long
+        // step with `stepping: MultiRate`), so that a raise stops the run at its step.
+        let chunk = if self.python_laws > 0 { 0 } else { 10_000 };
         let errors = self.errors.clone();
         let mut left = n;
         while left > 0 {
-            let k = left.min(chunk);
-            {
+            let k = {
                 let mut sim = cell.try_borrow_mut().map_err(|_| busy_error())?;
                 let sim = &mut *sim;
                 let t_before = sim.t_s();
-                let stepped = guarded("step", || sim.step(k));
-                if let Err(e) = stepped {
-                    self.stopped = Some(format!("at t = {t_before} s, {e}"));
-                    return Err(e);
+                let stepped = guarded("step", || {
+                    if chunk == 0 {
+                        sim.step_pipeline(left)
+                    } else {
+                        let k = left.min(chunk);
+                        sim.step(k);
+                        k
+                    }
+                });
+                let k = match stepped {
+                    Ok(k) => k,
+                    Err(e) => {
+                        self.stopped = Some(format!("at t = {t_before} s, {e}"));
+                        return Err(e);
+                    }
+                };
+                // A pipeline step that advanced nothing: the finiteness guard stopped the run
+                // (reported just below); never loop on it.
+                left -= k.min(left);
+                if k == 0 {
+                    left = 0;
                 }
-                left -= k;
                 if let Some(e) = errors.lock().ok().and_then(|mut s| s.take()) {
                     let what: String = e.to_string().chars().take(500).collect();
                     self.stopped = Some(format!(
@@ -756,7 +773,8 @@ impl PySimulation {
                     self.stopped = Some(trip.to_string());
                     return Err(NumericError::new_err(trip.to_string()));
                 }
-            }
+                k
+            };
             if (n - left) % 10_000 < k {
                 py.check_signals()?;
             }

@@ -152,6 +152,32 @@ def test_python_law_is_byte_identical_to_the_rust_hill_pd(tmp_path):
     assert float(rows[-1]["chaser.hill_y_m"]) == pytest.approx(-60.5, abs=0.5)
 
 
+def test_python_law_with_multi_rate_stepping_is_the_rust_law_s_run(tmp_path):
+    # `stepping: MultiRate()`: the Python law's run takes the same long steps as the Rust
+    # law's (the binding steps one pipeline step at a time, not one fixed step), bit for bit.
+    common = {"duration_s": 300.0, "stepping": "MultiRate()"}
+    runs = {}
+    for name, controllers in [("rust", f"[{TARGET_ATTITUDE}, {HILL_PD_RUST}]"),
+                              ("python", f"[{TARGET_ATTITUDE}]")]:
+        sim = rpod.Simulation(
+            FLAGSHIP, set={**common, "controllers": controllers}, out_dir=tmp_path / name
+        )
+        if name == "python":
+            sim.add_controller(
+                HillPd((0.0, -60.0, 0.0), 0.05, 1.0), body="chaser", target="target",
+                period_s=0.1, actuator=SATURATED_5N, columns=HillPd.COLUMNS,
+            )
+        sim.run_until(300.0)
+        runs[name] = sim.finish()
+    for f in ["trajectory.csv", "events.jsonl", "contacts.csv"]:
+        assert (tmp_path / "rust" / f).read_bytes() == (tmp_path / "python" / f).read_bytes(), f
+    st = runs["python"]["stepping"]
+    assert st == runs["rust"]["stepping"]
+    # 30 000 fixed steps; rows every 100 and calls every 10 bound each step to 0.1 s.
+    assert st["long_steps"] > 2000, st
+    assert st["pipeline_steps"] < 5000, st
+
+
 def test_python_pd_flies_the_flagship_to_latched(out_dir):
     attitude = (
         'Attitude(body: "chaser", target: "target", period_s: 0.1, actuator: Saturated('

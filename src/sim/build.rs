@@ -510,6 +510,25 @@ impl Simulation {
         self.wall_s += t0.elapsed().as_secs_f64();
     }
 
+    /// Runs one pipeline step of at most `max` fixed steps and returns how many it advanced:
+    /// one with `stepping: Fixed`, possibly several with `MultiRate` ([`super::multirate`]); 0
+    /// when `max` is 0 or the finiteness guard has stopped the run. For callers that must look
+    /// at the run after every pipeline step (the Python binding, where a Python law or guarantee
+    /// may have raised); the same steps as [`Simulation::step`] (the `SimStep` schedule, which
+    /// is all an update runs).
+    pub fn step_pipeline(&mut self, max: u64) -> u64 {
+        if max == 0 || self.guard_trip().is_some() {
+            return 0;
+        }
+        let t0 = std::time::Instant::now();
+        let before = self.steps();
+        let world = self.app.world_mut();
+        world.resource_mut::<super::multirate::SpanCap>().0 = max;
+        world.run_schedule(super::SimStep);
+        self.wall_s += t0.elapsed().as_secs_f64();
+        self.steps() - before
+    }
+
     /// Steps needed to cover `duration_s` (rounded to the nearest step).
     pub fn steps_for(&self, duration_s: f64) -> u64 {
         (duration_s / self.scene.dt_s).round().max(0.0) as u64
