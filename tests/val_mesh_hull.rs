@@ -23,6 +23,8 @@
 //! hull must be at least as narrow. Every certified lower bound must be at or below the
 //! closed form, with no tolerance.
 
+mod common;
+
 use bevy_rapier3d::rapier::math::Vector;
 use bevy_rapier3d::rapier::prelude as rp;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -74,24 +76,7 @@ fn u_prism() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
         [9, 6, 7],
         [9, 7, 8],
     ];
-    let n = o.len() as u32;
-    let mut v = Vec::new();
-    for z in [-0.5, 0.5] {
-        for (x, y) in o {
-            v.push([x, y, z]);
-        }
-    }
-    let mut t = Vec::new();
-    for c in cap {
-        t.push([c[0] + n, c[1] + n, c[2] + n]);
-        t.push([c[0], c[2], c[1]]);
-    }
-    for k in 0..n {
-        let (p, q) = (k, (k + 1) % n);
-        t.push([p, q, q + n]);
-        t.push([p, q + n, p + n]);
-    }
-    (v, t)
+    common::closed_prism(&o, &cap)
 }
 
 fn iso(p: Vector3<f64>, q: UnitQuaternion<f64>) -> Isometry3<f64> {

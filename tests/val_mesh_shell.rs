@@ -31,6 +31,8 @@
 //! as narrow. Certified lower bounds must be at or below the reference with no tolerance but
 //! the reference's own f64 rounding (1e-12 m).
 
+mod common;
+
 use bevy_rapier3d::rapier::math::Vector;
 use bevy_rapier3d::rapier::prelude as rp;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -98,24 +100,7 @@ fn plus_prism() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
         [9, 10, 7],
         [9, 7, 8],
     ];
-    let n = o.len() as u32;
-    let mut v = Vec::new();
-    for z in [-0.5, 0.5] {
-        for (x, y) in o {
-            v.push([x, y, z]);
-        }
-    }
-    let mut t = Vec::new();
-    for c in cap {
-        t.push([c[0] + n, c[1] + n, c[2] + n]);
-        t.push([c[0], c[2], c[1]]);
-    }
-    for k in 0..n {
-        let (p, q) = (k, (k + 1) % n);
-        t.push([p, q, q + n]);
-        t.push([p, q + n, p + n]);
-    }
-    (v, t)
+    common::closed_prism(&o, &cap)
 }
 
 fn v32(p: &[f64; 3]) -> Vector {

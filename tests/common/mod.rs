@@ -134,3 +134,27 @@ pub fn hill(r: &Vector3<f64>, v: &Vector3<f64>) -> Matrix3<f64> {
     let y = z.cross(&x);
     Matrix3::from_rows(&[x.transpose(), y.transpose(), z.transpose()])
 }
+
+/// A closed prism from z = −½ to ½ over the polygon `outline` (counter-clockwise seen from +z),
+/// its caps triangulated by `cap` (indices into `outline`, counter-clockwise): the top cap as
+/// given, the bottom reversed, each side a pair of triangles; outward normals throughout.
+pub fn closed_prism(outline: &[(f64, f64)], cap: &[[u32; 3]]) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+    let n = outline.len() as u32;
+    let mut v = Vec::new();
+    for z in [-0.5, 0.5] {
+        for &(x, y) in outline {
+            v.push([x, y, z]);
+        }
+    }
+    let mut t = Vec::new();
+    for c in cap {
+        t.push([c[0] + n, c[1] + n, c[2] + n]);
+        t.push([c[0], c[2], c[1]]);
+    }
+    for k in 0..n {
+        let (p, q) = (k, (k + 1) % n);
+        t.push([p, q, q + n]);
+        t.push([p, q + n, p + n]);
+    }
+    (v, t)
+}
