@@ -242,6 +242,15 @@ pub fn shape_bracket(
             lower: (d * (1.0 - GJK_REL_TOL) - eps).max(0.0),
         }
     };
+    if a.as_support_map().is_some() && b.as_support_map().is_some() {
+        return memo::convex_exact(pose_a, (a, ra), pose_b, (b, rb)).map_or_else(fallback, |e| {
+            Bracket {
+                value: e.value_m,
+                lower: e.lower_m,
+            }
+        });
+    }
+    // No support map (a mesh): the witnesses' distance is parry's distance; no second query.
     match query::closest_points(&Pose::IDENTITY, a, &rel32, b, f32::MAX) {
         Ok(query::ClosestPoints::Intersecting) => Bracket::exact(0.0),
         Ok(query::ClosestPoints::WithinMargin(p1, p2)) => {
@@ -249,23 +258,10 @@ pub fn shape_bracket(
             if d.is_nan() || d <= 0.0 {
                 return Bracket::exact(0.0);
             }
-            let (Some(sa), Some(sb)) = (a.as_support_map(), b.as_support_map()) else {
-                // No support map (a mesh): the witnesses' distance is parry's distance; no
-                // second query.
-                let value = d as f64;
-                return Bracket {
-                    value,
-                    lower: (value * (1.0 - GJK_REL_TOL) - eps).max(0.0),
-                };
-            };
-            let n = (p2 - p1) / d;
-            let pa = sa.local_support_point(n);
-            let pb = rel32 * sb.local_support_point(rel32.rotation.inverse() * -n);
-            let gap = n.dot(pb - pa) as f64;
             let value = d as f64;
             Bracket {
                 value,
-                lower: (gap.min(value) - eps).max(0.0),
+                lower: (value * (1.0 - GJK_REL_TOL) - eps).max(0.0),
             }
         }
         _ => fallback(),
@@ -610,7 +606,7 @@ pub struct MonitorGeometry {
     pub hulls: Vec<Vec<Option<std::sync::Arc<super::mesh::HullSupport>>>>,
     /// The last triangle-by-triangle evaluation of each mesh part pair, advanced conservatively
     /// to later poses by [`pair_eval`] ([`memo`]); starts empty.
-    pub memo: memo::MeshPairMemo,
+    pub memo: memo::PairMemo,
 }
 
 /// Symmetry of a part about an axis of its own, for the rotation-aware rate bound.
@@ -975,10 +971,16 @@ pub enum PairEval {
     Value(f64, f64),
 }
 
+/// Widest bracket, relative to its value, that [`pair_eval`] answers from a pair of support
+/// maps' kept evaluation (ours: a tenth of the closest approach's tolerance,
+/// [`min_distance_tolerance_m`], so a carried value stays well inside what a fresh query reports).
+pub const MEMO_REL_WIDTH: f64 = 1e-4;
+
 /// The distance of part a (world pose and bounding radius `pa`) of body i and part b of body j.
 ///
-/// A pair of parts with support maps is parry's exact query ([`shape_distance`]), as always. A
-/// pair with a triangle-mesh part is first bracketed by its convex hull ([`hull_bracket`]): a
+/// A pair of parts with support maps is parry's exact query with its witnesses and the certified
+/// gap along them ([`memo::convex_exact`], as [`shape_bracket`]; a shape parry answers only by
+/// distance, [`shape_distance`], with a NaN lower bound). A pair with a triangle-mesh part is first bracketed by its convex hull ([`hull_bracket`]): a
 /// certified lower bound at or above `clear_at` prunes it ([`PairEval::Clear`]); a bracket as
 /// narrow as parry's own GJK distance — lower ≥ upper·(1 − [`GJK_REL_TOL`]) − the f32 rounding
 /// [`F32_REL_TOL`]·(|c_a − c_b| + r_a + r_b), the same bound every caller derives from an exact
@@ -992,8 +994,12 @@ pub enum PairEval {
 /// pose ([`memo::ExactEval::advance`]: its lower bound less how far any point of part b can have
 /// moved in part a's frame, and the distance of its two witness points carried along): a lower
 /// bound at or above `clear_at` clears the pair, and a bracket as narrow as above is the answer
-/// (value: the carried witnesses' distance). Docking collar, chaser latched in the slot: one
-/// exact query, then none while the stack stays rigid.
+/// (value: the carried witnesses' distance). Docking collar (or the primitive cone and slot),
+/// chaser latched in the slot: one exact query, then none while the stack stays rigid; in free
+/// flight a pair far from the closest is cleared by its advanced bound until the motion since
+/// its evaluation eats the margin. A pair's value thus depends on the pose of its last exact
+/// query as well as on this one (within the tolerances above; the same in every run of the
+/// same scene).
 #[allow(clippy::too_many_arguments)]
 pub fn pair_eval(
     geo: &MonitorGeometry,
@@ -1007,22 +1013,59 @@ pub fn pair_eval(
 ) -> PairEval {
     let (sa, sb) = (&*geo.shapes[i][a], &*geo.shapes[j][b]);
     let (ha, hb) = (geo.hull(i, a), geo.hull(j, b));
-    if ha.is_none() && hb.is_none() {
-        return pair_eval_shapes(pa, (sa, ha), pb, (sb, hb), clear_at);
-    }
     let eps =
         F32_REL_TOL * ((pa.0.translation.vector - pb.0.translation.vector).norm() + pa.1 + pb.1);
     let settled = |lower: f64, upper: f64| lower >= upper * (1.0 - GJK_REL_TOL) - eps;
     // The pair's last exact evaluation, advanced to this pose (a certified bracket, `memo`).
     let key = (i, a, j, b);
     if let Some(e) = geo.memo.get(key) {
-        let (lower, upper) = e.advance_parts(&pa.0.inv_mul(&pb.0), (sa, pa.1), (sb, pb.1));
-        if lower >= clear_at {
-            return PairEval::Clear(lower);
+        // The radii's bound first (cheap), then the turn's axis (tighter for a part rolling
+        // about its own axis) only if that does not settle the pair.
+        //
+        // A mesh pair is cleared by the advanced lower bound, or answered by the bracket when it
+        // is as narrow as an exact query's tolerance. A pair of support maps is answered only
+        // while its bracket is no wider than twice its fresh evaluation's and than
+        // [`MEMO_REL_WIDTH`] of its value (plus the f32 rounding), and farther apart than
+        // [`TOUCH_DISTANCE_M`] (touching is parry's to say), and then also when it would
+        // clear `clear_at` (the value costs nothing more): its value and lower bound stay as
+        // close to the truth as a fresh query's, for the callers' interval bounds and reported
+        // distances. That holds in a rigid latched stack; in free flight the pair is queried
+        // again.
+        let convex = ha.is_none() && hb.is_none();
+        let width_ok = (e.value_m - e.lower_m).min(MEMO_REL_WIDTH * e.value_m) + eps;
+        let decide = |(lower, upper): (f64, f64)| {
+            if convex {
+                (upper - lower <= width_ok && lower > TOUCH_DISTANCE_M)
+                    .then_some(PairEval::Value(upper, lower))
+            } else if lower >= clear_at {
+                Some(PairEval::Clear(lower))
+            } else if settled(lower, upper) {
+                Some(PairEval::Value(upper, lower))
+            } else {
+                None
+            }
+        };
+        let rel = pa.0.inv_mul(&pb.0);
+        let quick = e.advance_quick(&rel, pa.1, pb.1);
+        if let Some(answer) = decide(quick) {
+            return answer;
         }
-        if settled(lower, upper) {
-            return PairEval::Value(upper, lower);
+        if let Some(answer) = decide(e.advance_parts(&rel, (sa, pa.1), (sb, pb.1))) {
+            return answer;
         }
+    }
+    if ha.is_none() && hb.is_none() {
+        // Two parts with support maps: parry's query with its witnesses and the certified gap
+        // along them, kept for later poses.
+        // (Its lower bound is the gap alone, as `shape_bracket`'s: not raised to the value less
+        // GJK's tolerance, which holds only when GJK stopped on its tolerance.)
+        let Some(e) = memo::convex_exact(&pa.0, (sa, pa.1), &pb.0, (sb, pb.1)) else {
+            return pair_eval_shapes(pa, (sa, ha), pb, (sb, hb), clear_at);
+        };
+        if e.value_m > 0.0 {
+            geo.memo.put(key, e);
+        }
+        return PairEval::Value(e.value_m, e.lower_m);
     }
     let hull_lower = match hull_bracket(&pa.0, (sa, ha, pa.1), &pb.0, (sb, hb, pb.1), clear_at) {
         HullEval::Clear(l) => return PairEval::Clear(l),

@@ -67,10 +67,20 @@ const F64_SLACK: f64 = 64.0 * f64::EPSILON;
 /// |t₁ − t₀| + 2·sin(θ/2)·r_b with θ the angle of R₁R₀ᵀ, plus the f64 rounding.
 pub fn displacement_bound_m(rel0: &Isometry3<f64>, rel1: &Isometry3<f64>, rb_m: f64) -> f64 {
     let dt = (rel1.translation.vector - rel0.translation.vector).norm();
-    let turn = rel1.rotation * rel0.rotation.inverse();
-    let chord = 2.0 * (0.5 * turn.angle()).sin() * rb_m;
+    let chord = 2.0 * half_turn(rel0, rel1).0 * rb_m;
     let scale = rel0.translation.vector.norm() + rel1.translation.vector.norm() + rb_m;
     dt + chord + F64_SLACK * scale
+}
+
+/// sin(θ/2) of the turn R₁R₀ᵀ between the rotations of `rel0` and `rel1` (θ in [0, π]) and its
+/// unit axis (`None` for no turn), from the turn's unit quaternion (w, v): |v| = sin(θ/2), no
+/// trigonometry.
+fn half_turn(rel0: &Isometry3<f64>, rel1: &Isometry3<f64>) -> (f64, Option<Vector3<f64>>) {
+    let turn = rel1.rotation * rel0.rotation.inverse();
+    let v = turn.quaternion().imag();
+    let s = v.norm();
+    let axis = (s > 0.0 && s.is_finite()).then(|| v / s);
+    (s.min(1.0), axis)
 }
 
 /// Largest distance of a point of `shape` (its own frame) from the line through its origin
@@ -112,15 +122,14 @@ pub fn displacement_bound_axis_m(
     (b, rb_m): (&dyn rp::Shape, f64),
 ) -> f64 {
     let dt = (rel1.translation.vector - rel0.translation.vector).norm();
-    let turn = rel1.rotation * rel0.rotation.inverse();
     let scale = rel0.translation.vector.norm() + rel1.translation.vector.norm() + rb_m;
-    let chord = match turn.axis_angle() {
-        Some((u, theta)) => {
-            let ub = rel0.rotation.inverse() * u.into_inner();
+    let chord = match half_turn(rel0, rel1) {
+        (sin_half, Some(u)) => {
+            let ub = rel0.rotation.inverse() * u;
             let rho = axis_radius_m(b, &ub).map_or(rb_m, |r| r.min(rb_m));
-            2.0 * (0.5 * theta).sin() * rho
+            2.0 * sin_half * rho
         }
-        None => 0.0,
+        _ => 0.0,
     };
     dt + chord + F64_SLACK * scale
 }
@@ -130,6 +139,16 @@ impl ExactEval {
     /// (b's frame in a's), part b within `rb_m` of its origin, m.
     pub fn advance(&self, rel: &Isometry3<f64>, rb_m: f64) -> (f64, f64) {
         self.advance_by(rel, displacement_bound_m(&self.rel, rel, rb_m))
+    }
+
+    /// [`Self::advance`] on whichever side bounds the motion better (part b's points moving in
+    /// a's frame, within `rb_m` of b's origin, or a's in b's, within `ra_m`): no look at the
+    /// shapes, a few multiplications. [`Self::advance_parts`] is tighter for a part turning
+    /// about an axis of its own.
+    pub fn advance_quick(&self, rel: &Isometry3<f64>, ra_m: f64, rb_m: f64) -> (f64, f64) {
+        let moved_b = displacement_bound_m(&self.rel, rel, rb_m);
+        let moved_a = displacement_bound_m(&self.rel.inverse(), &rel.inverse(), ra_m);
+        self.advance_by(rel, moved_b.min(moved_a))
     }
 
     /// [`Self::advance`] with the rotation's axis, on whichever side bounds the motion better
@@ -155,33 +174,43 @@ impl ExactEval {
     }
 }
 
-/// The last exact evaluation of each mesh part pair (body i, part a, body j, part b), kept by
-/// the monitor between queries. A clone starts empty (the entries are only a cache: any of them
-/// is a certificate at any pose, and none is needed).
-#[derive(Default)]
-pub struct MeshPairMemo(Mutex<HashMap<(usize, usize, usize, usize), ExactEval>>);
+/// Most part pairs a [`PairMemo`] keeps: a scene's limits allow 64 bodies of 256 parts (about
+/// 10⁸ part pairs), so the cache is bounded; a pair evaluated once the memo is full is simply
+/// not kept (it is evaluated exactly each time, as without the memo). 65 536 entries are about
+/// 10 MB.
+pub const PAIR_MEMO_MAX_PAIRS: usize = 1 << 16;
 
-impl Clone for MeshPairMemo {
+/// The last exact evaluation of each part pair (body i, part a, body j, part b) — mesh pairs
+/// and pairs of parts with support maps —, kept by the monitor between queries. A clone starts
+/// empty (the entries are only a cache: any of them is a certificate at any pose, and none is
+/// needed). At most [`PAIR_MEMO_MAX_PAIRS`] pairs.
+#[derive(Default)]
+pub struct PairMemo(Mutex<HashMap<(usize, usize, usize, usize), ExactEval>>);
+
+impl Clone for PairMemo {
     fn clone(&self) -> Self {
         Self::default()
     }
 }
 
-impl std::fmt::Debug for MeshPairMemo {
+impl std::fmt::Debug for PairMemo {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "MeshPairMemo({} pairs)", self.len())
+        write!(f, "PairMemo({} pairs)", self.len())
     }
 }
 
-impl MeshPairMemo {
+impl PairMemo {
     /// The kept evaluation of a pair, if any.
     pub fn get(&self, key: (usize, usize, usize, usize)) -> Option<ExactEval> {
         self.0.lock().ok()?.get(&key).copied()
     }
 
-    /// Keeps (or replaces) a pair's evaluation.
+    /// Keeps (or replaces) a pair's evaluation; a new pair is not kept once
+    /// [`PAIR_MEMO_MAX_PAIRS`] are.
     pub fn put(&self, key: (usize, usize, usize, usize), e: ExactEval) {
-        if let Ok(mut m) = self.0.lock() {
+        if let Ok(mut m) = self.0.lock()
+            && (m.len() < PAIR_MEMO_MAX_PAIRS || m.contains_key(&key))
+        {
             m.insert(key, e);
         }
     }
@@ -194,6 +223,70 @@ impl MeshPairMemo {
     /// No pair kept.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+}
+
+/// The distance of two parts with support maps (part a at `pa`, within `ra_m` of its origin;
+/// part b at `pb`, within `rb_m`) with its certified lower bound and witness points: parry's
+/// `closest_points` (GJK, or its closed forms) at the relative pose formed in f64, and the gap
+/// along the witness direction n, n·(s_b(−n) − s_a(n)) with s the support points — any axis's
+/// gap is at most the distance — less the f32 rounding of the relative pose,
+/// [`F32_REL_TOL`]·(|t_rel| + r_a + r_b). `None` when either part has no support map or parry
+/// finds no answer. Touching or overlapping parts give 0 (witnesses at the origins: not to be
+/// carried).
+pub fn convex_exact(
+    pa: &Isometry3<f64>,
+    (a, ra_m): (&dyn rp::Shape, f64),
+    pb: &Isometry3<f64>,
+    (b, rb_m): (&dyn rp::Shape, f64),
+) -> Option<ExactEval> {
+    let (sa, sb) = (a.as_support_map()?, b.as_support_map()?);
+    let rel = pa.inv_mul(pb);
+    let eps = F32_REL_TOL * (rel.translation.vector.norm() + ra_m + rb_m);
+    let rel32 = conv::pose(&rel);
+    let touching = ExactEval {
+        rel,
+        value_m: 0.0,
+        lower_m: 0.0,
+        witness_a: Point3::origin(),
+        witness_b: Point3::origin(),
+    };
+    // Two boxes: parry's own box–box closest points (separating axes, then a projection), the
+    // ones its `distance` measures, so that the value is the one `query::distance` gives;
+    // every other pair through the dispatcher (GJK, or its closed forms for balls), as there.
+    let points = match (a.as_cuboid(), b.as_cuboid()) {
+        (Some(ca), Some(cb)) => {
+            match query::details::closest_points_cuboid_cuboid(&rel32, ca, cb, Real::MAX) {
+                // (Points in each box's own frame: the second into a's.)
+                query::ClosestPoints::WithinMargin(p1, p2) => {
+                    query::ClosestPoints::WithinMargin(p1, rel32 * p2)
+                }
+                other => other,
+            }
+        }
+        _ => query::closest_points(&rp::Pose::IDENTITY, a, &rel32, b, Real::MAX).ok()?,
+    };
+    match points {
+        query::ClosestPoints::Intersecting => Some(touching),
+        query::ClosestPoints::WithinMargin(p1, p2) => {
+            let d = (p2 - p1).length();
+            if d.is_nan() || d <= 0.0 {
+                return Some(touching);
+            }
+            let n = (p2 - p1) / d;
+            let sa_n = sa.local_support_point(n);
+            let sb_n = rel32 * sb.local_support_point(rel32.rotation.inverse() * -n);
+            let gap = f64::from(n.dot(sb_n - sa_n));
+            let value = f64::from(d);
+            Some(ExactEval {
+                rel,
+                value_m: value,
+                lower_m: (gap.min(value) - eps).max(0.0),
+                witness_a: Point3::from(conv::na(p1)),
+                witness_b: Point3::from(conv::na(rel32.inverse_transform_point(p2))),
+            })
+        }
+        query::ClosestPoints::Disjoint => None,
     }
 }
 
