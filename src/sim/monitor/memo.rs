@@ -185,7 +185,39 @@ pub const PAIR_MEMO_MAX_PAIRS: usize = 1 << 16;
 /// empty (the entries are only a cache: any of them is a certificate at any pose, and none is
 /// needed). At most [`PAIR_MEMO_MAX_PAIRS`] pairs.
 #[derive(Default)]
-pub struct PairMemo(Mutex<HashMap<(usize, usize, usize, usize), ExactEval>>);
+pub struct PairMemo(Mutex<HashMap<PairKey, ExactEval, KeyHash>>);
+
+/// A part pair: (body i, part a, body j, part b).
+pub type PairKey = (usize, usize, usize, usize);
+
+/// The memo's hash of its small integer keys: a multiply-and-rotate mix per word (as rustc's
+/// FxHash), deterministic and a few times cheaper than the default SipHash, which guards
+/// against keys chosen by an adversary — these are part indices, not input.
+#[derive(Default, Clone, Copy)]
+pub struct KeyHasher(u64);
+
+impl std::hash::Hasher for KeyHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.write_u64(u64::from(*b));
+        }
+    }
+
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+
+    fn write_usize(&mut self, x: usize) {
+        self.write_u64(x as u64);
+    }
+}
+
+/// [`KeyHasher`] as a `HashMap`'s hasher.
+type KeyHash = std::hash::BuildHasherDefault<KeyHasher>;
 
 impl Clone for PairMemo {
     fn clone(&self) -> Self {
@@ -201,13 +233,13 @@ impl std::fmt::Debug for PairMemo {
 
 impl PairMemo {
     /// The kept evaluation of a pair, if any.
-    pub fn get(&self, key: (usize, usize, usize, usize)) -> Option<ExactEval> {
+    pub fn get(&self, key: PairKey) -> Option<ExactEval> {
         self.0.lock().ok()?.get(&key).copied()
     }
 
     /// Keeps (or replaces) a pair's evaluation; a new pair is not kept once
     /// [`PAIR_MEMO_MAX_PAIRS`] are.
-    pub fn put(&self, key: (usize, usize, usize, usize), e: ExactEval) {
+    pub fn put(&self, key: PairKey, e: ExactEval) {
         if let Ok(mut m) = self.0.lock()
             && (m.len() < PAIR_MEMO_MAX_PAIRS || m.contains_key(&key))
         {
