@@ -12,7 +12,6 @@ use crate::scene::{LoadedScene, SceneError, load_scene_file, load_scene_str};
 use crate::sim::{Physics, Simulation};
 use std::fmt::Write;
 use std::path::Path;
-use std::path::PathBuf;
 use std::time::Instant;
 
 /// One scene measured: wall seconds for `steps` steps of each.
@@ -345,6 +344,25 @@ fn whole_run(path: &Path, stepping: &str) -> Result<(f64, u64, u64), SceneError>
     Ok((wall, pipeline, n))
 }
 
+/// The four `docking_aligned` variants of [`run_cliffs`]: plain, the chaser spinning at
+/// 100 rad/s about its docking axis (the monitor told to allow it: it turns 1 rad a step), an
+/// `Attitude` law holding yaw 183° through the latch, and an `AlignPort` law in contact.
+pub fn cliff_scenes(scenes: &Path) -> Result<[LoadedScene; 4], SceneError> {
+    let aligned = scenes.join("docking_aligned.ron");
+    let load = |sets: &[String]| load_scene_file(&aligned, sets);
+    Ok([
+        load(&[])?,
+        load(&[
+            "bodies.chaser.initial.rate_body_deg_s=(5729.5779513, 0.0, 0.0)".to_string(),
+            "monitor=(allow_under_resolved: true)".to_string(),
+        ])?,
+        load(&[chaser_attitude_law(
+            "Inertial(attitude: EulerZyxDeg(yaw: 183.0, pitch: 0.0, roll: 0.0))",
+        )])?,
+        load(&[chaser_attitude_law("AlignPort")])?,
+    ])
+}
+
 /// The cliffs of issue 29, each a ratio of steps/s to its plain case measured in the same run,
 /// with bare rapier on the plain scene's world as the floor, as a Markdown table:
 ///
@@ -367,23 +385,7 @@ fn whole_run(path: &Path, stepping: &str) -> Result<(f64, u64, u64), SceneError>
 /// `scenes` is the folder holding `docking_aligned.ron`, `free_drift.ron` and
 /// `orbit_approach_latch.ron`.
 pub fn run_cliffs(scenes: &Path, steps: u64) -> Result<String, SceneError> {
-    let aligned = scenes.join("docking_aligned.ron");
-    let load = |p: &PathBuf, sets: &[String]| load_scene_file(p, sets);
-    let plain = load(&aligned, &[])?;
-    let spin = load(
-        &aligned,
-        &[
-            "bodies.chaser.initial.rate_body_deg_s=(5729.5779513, 0.0, 0.0)".to_string(),
-            "monitor.allow_under_resolved=true".to_string(),
-        ],
-    )?;
-    let law_latched = load(
-        &aligned,
-        &[chaser_attitude_law(
-            "Inertial(attitude: EulerZyxDeg(yaw: 183.0, pitch: 0.0, roll: 0.0))",
-        )],
-    )?;
-    let law_contact = load(&aligned, &[chaser_attitude_law("AlignPort")])?;
+    let [plain, spin, law_latched, law_contact] = cliff_scenes(scenes)?;
     let mut r = String::new();
     let _ = writeln!(
         r,
@@ -449,4 +451,39 @@ pub fn run_cliffs(scenes: &Path, steps: u64) -> Result<String, SceneError> {
         );
     }
     Ok(r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cliffs' scene variants load from the bundled scenes (the overrides name fields the
+    /// scene format has: a broken override made `rpod bench --cliffs` fail at once).
+    #[test]
+    fn cliff_scenes_load_with_their_overrides() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+        let [plain, spin, latched, contact] = cliff_scenes(&dir).expect("cliff scenes load");
+        let rate = |l: &LoadedScene| {
+            let b = l
+                .scene
+                .bodies
+                .iter()
+                .find(|b| b.name == "chaser")
+                .expect("chaser");
+            b.initial.rate_body_deg_s[0]
+        };
+        assert_eq!(rate(&plain), 0.0);
+        // 100 rad/s in deg/s.
+        assert!((rate(&spin).to_radians() - 100.0).abs() < 1e-6);
+        assert!(spin.scene.monitor.allow_under_resolved);
+        assert!(!plain.scene.monitor.allow_under_resolved);
+        assert_eq!(
+            latched.scene.controllers.len(),
+            plain.scene.controllers.len() + 1
+        );
+        assert_eq!(
+            contact.scene.controllers.len(),
+            plain.scene.controllers.len() + 1
+        );
+    }
 }
