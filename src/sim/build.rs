@@ -797,7 +797,7 @@ impl Simulation {
             serde_json::json!({"value_m": m.distance_m,
                 "parts": [mon.part_name(a, m.part_a), mon.part_name(b, m.part_b)],
                 "t_s": m.t_s, "found": if m.inside { "interval" } else { "sample" },
-                "tolerance_m": super::monitor::min_distance_tolerance_m(m.distance_m)})
+                "tolerance_m": m.tolerance_m})
         });
         let pairs: Vec<_> = mon
             .min_per_pair
@@ -873,7 +873,7 @@ impl Simulation {
                 "split_steps": sync.split_steps,
                 "swept_test_queries": sync.swept_queries,
                 "rotation_under_resolved_steps": motion.under_resolved_steps,
-                "min_distance_tolerance": "max(1e-6 m, 0.1 % of the distance)",
+                "min_distance_tolerance": "max(1e-6 m, 0.1 % of the distance), or the closest pair's own bracket width where wider (twice it between samples): min_distance.tolerance_m",
                 "event_time_tolerance_s": self.scene.dt_s * super::EVENT_TIME_TOL,
             },
             "docking": w.get_resource::<super::docking::Docking>().map(super::docking::summary),

@@ -1041,6 +1041,11 @@ pub struct PairMin {
     pub t_s: f64,
     /// Found between two samples (by the interval search), not at a step.
     pub inside: bool,
+    /// How far the recorded distance may be above the true closest approach, m: the search's
+    /// tolerance, max(1 µm, 0.1 % of the distance), or — where the closest pair's certified
+    /// lower bound is farther below its value — the bracket's width at a sample, twice it for
+    /// the interval search ([`monitor::min_distance_tolerance_m`]).
+    pub tolerance_m: f64,
 }
 
 /// Body pairs that guarantees name (always tracked by the monitor), i < j.

@@ -1488,6 +1488,14 @@ pub fn min_distance_tolerance_m(d: f64) -> f64 {
     (1e-3 * d.abs()).max(1e-6)
 }
 
+/// The tolerance of a closest approach recorded at a sample with bracket `d`:
+/// [`min_distance_tolerance_m`], or the bracket's width where that is wider, m.
+pub fn sample_tolerance_m(d: &Bracket) -> f64 {
+    let width = d.value - d.lower;
+    let tol = min_distance_tolerance_m(d.value);
+    if width > tol { width } else { tol }
+}
+
 /// Interior evaluations allowed per pair per step for its closest approach.
 const MAX_MIN_EVALS: u32 = 48;
 
@@ -1588,6 +1596,7 @@ pub fn distances(
                     part_b: 0,
                     t_s: t,
                     inside: false,
+                    tolerance_m: 0.0,
                 });
                 mon.min_clearance_per_pair.push(f64::INFINITY);
                 k
@@ -1657,6 +1666,7 @@ pub fn distances(
             part_b: hit.b,
             t_s: t,
             inside: false,
+            tolerance_m: sample_tolerance_m(&hit.d),
         };
         let dt = motion.dt_s;
         if motion.ready && fresh_prev && (prev.t_s - (t - dt)).abs() <= 1e-9 * t.max(1.0) {
@@ -1668,21 +1678,17 @@ pub fn distances(
             // A distance is never negative: a threshold at or under zero (the pair has touched
             // already) is cleared by every sub-interval, whatever the rate bound (no refinement
             // while two bodies stay in contact, latched or not).
-            // A closest pair without support maps (a mesh part) has a certified lower bound
-            // only GJK_REL_TOL below its distance, wider than the tolerance: the search could
-            // never prove the tolerance and would spend its budget every step. Its tolerance is
-            // twice its own bracket's width (the bound stays certified; only how close the
-            // recorded closest approach is to the true one changes, by that width).
-            let mesh_slack = if geo.shapes[i][hit.a].as_support_map().is_none()
-                || geo.shapes[j][hit.b].as_support_map().is_none()
-            {
-                2.0 * (hit.d.value - hit.d.lower).max(d0.value - d0.lower)
-            } else {
-                0.0
-            };
+            // A closest pair whose certified lower bound is farther below its value than the
+            // tolerance (a mesh part's, d·GJK_REL_TOL below; a faceted cone against a wall,
+            // where the gap along GJK's witness direction falls short of the distance) could
+            // never have the tolerance proved: the search would spend its budget every step
+            // and still not prove it. Its tolerance is twice its own bracket's width (the bound
+            // stays certified; only how close the recorded closest approach is to the true one
+            // changes, by that width, and the summary's `tolerance_m` says so).
+            let slack = 2.0 * (hit.d.value - hit.d.lower).max(d0.value - d0.lower);
             let thr = |b: f64| {
                 let w = w.min(b);
-                let t = w - min_distance_tolerance_m(w).max(mesh_slack);
+                let t = w - min_distance_tolerance_m(w).max(slack);
                 if t <= 0.0 { f64::NEG_INFINITY } else { t }
             };
             if interval_lower_bound(d0.lower, hit.d.lower, rate, dt).max(0.0) < thr(hit.d.value) {
@@ -1727,6 +1733,7 @@ pub fn distances(
                         part_b: pb,
                         t_s: t - dt + r.t,
                         inside: r.t > 0.0,
+                        tolerance_m: min_distance_tolerance_m(r.value).max(slack),
                     };
                 }
                 mon.min_lower_m = mon.min_lower_m.min(r.lower.max(0.0));
@@ -1826,6 +1833,10 @@ pub fn distances(
             part_b: c.part_b,
             t_s: t,
             inside: false,
+            tolerance_m: sample_tolerance_m(&Bracket {
+                value: c.distance_m,
+                lower: c.lower_m,
+            }),
         });
         mon.overall_pair = (c.a, c.b);
     }
