@@ -13,6 +13,9 @@
 //! `tests/val_zhang2018.rs` use the same functions.
 
 use crate::orbit::l2::{L2Centre, L2State};
+use crate::report::ClaimKind::{BeyondThePaper, Paper};
+use crate::report::plot::PolygonStyle;
+use crate::report::{Claim, Color, Dash, Figure, LineStyle, PALETTE, Plot, ReportBuilder};
 use crate::scene::load_scene_file;
 use crate::sim::Simulation;
 use crate::sim::environment::L2Frame;
@@ -433,33 +436,84 @@ fn status<'a>(tr: &'a Trace, name: &str) -> Option<&'a crate::guarantee::Guarant
     tr.guarantees.iter().find(|g| g.name == name)
 }
 
-/// Writes REPORT.md, the figures and claims.json.
-fn write_report(out: &Path, r: &Results) -> Result<(), String> {
-    use crate::report::plot::PolygonStyle;
-    use crate::report::{Claim, Color, Dash, Figure, LineStyle, PALETTE, Plot, ReportBuilder};
-    let l = 5000.0;
-    let day = 86_400.0;
-    let hour = 3600.0;
+/// Capture radius l of the paper, m (§3).
+const L_M: f64 = 5000.0;
+/// One day, s.
+const DAY_S: f64 = 86_400.0;
+/// One hour, s.
+const HOUR_S: f64 = 3600.0;
 
-    // ---------------------------------------------------------------- numbers
+/// The numbers of the pair scene (and of Fig. 2) that the claims and the report quote.
+struct PairNumbers<'a> {
+    /// Body indices of P and E.
+    ip: usize,
+    ie: usize,
+    /// Refined minimum separation (m) and its time (s), with and without avoidance.
+    min_on: f64,
+    t_on: f64,
+    min_off: f64,
+    t_off: f64,
+    /// The capture guarantee with and without avoidance.
+    g_on: &'a crate::guarantee::GuaranteeStatus,
+    g_off: &'a crate::guarantee::GuaranteeStatus,
+    /// First time E's avoidance engaged (s) and how long it was engaged in all (s).
+    first_engaged: Option<f64>,
+    engaged_s: f64,
+    /// H of eq (12) takes both signs: L2 model, gravity-free.
+    h_has_both: bool,
+    h_free_both: bool,
+    /// First zero of H (s): L2 model Bevy-free, ECS world, gravity-free.
+    t_sign: f64,
+    t_sign_ecs: f64,
+    t_sign_free: f64,
+}
+
+/// The pair-scene numbers of [`PairNumbers`].
+fn pair_numbers(r: &Results) -> Result<PairNumbers<'_>, String> {
     let (ip, ie) = (
         r.pair.on.body("p").ok_or("p")?,
         r.pair.on.body("e").ok_or("e")?,
     );
     let (min_on, t_on) = refined_min_separation(&r.pair.on, ip, ie);
     let (min_off, t_off) = refined_min_separation(&r.pair.off, ip, ie);
-    let g_on = status(&r.pair.on, "capture.p.e").ok_or("guarantee")?;
-    let g_off = status(&r.pair.off, "capture.p.e").ok_or("guarantee")?;
     let engaged = r.pair.on.column("zhang2018.e.engaged").ok_or("column")?;
-    let first_engaged = engaged
-        .iter()
-        .position(|&v| v > 0.5)
-        .map(|k| r.pair.on.t_s[k]);
-    let engaged_s = engaged.iter().filter(|&&v| v > 0.5).count() as f64 * r.pair.on.dt_s;
-    let h_has_both = r.fig2.iter().any(|x| x.1 > 0.0) && r.fig2.iter().any(|x| x.1 < 0.0);
-    let t_sign = r.h_zero_s.first().copied().unwrap_or(f64::NAN);
-    let t_sign_ecs = r.h_sign_changes_ecs_s.first().copied().unwrap_or(f64::NAN);
+    Ok(PairNumbers {
+        ip,
+        ie,
+        min_on,
+        t_on,
+        min_off,
+        t_off,
+        g_on: status(&r.pair.on, "capture.p.e").ok_or("guarantee")?,
+        g_off: status(&r.pair.off, "capture.p.e").ok_or("guarantee")?,
+        first_engaged: engaged
+            .iter()
+            .position(|&v| v > 0.5)
+            .map(|k| r.pair.on.t_s[k]),
+        engaged_s: engaged.iter().filter(|&&v| v > 0.5).count() as f64 * r.pair.on.dt_s,
+        h_has_both: r.fig2.iter().any(|x| x.1 > 0.0) && r.fig2.iter().any(|x| x.1 < 0.0),
+        h_free_both: r.fig2_free.iter().any(|x| x.1 > 0.0) && r.fig2_free.iter().any(|x| x.1 < 0.0),
+        t_sign: r.h_zero_s.first().copied().unwrap_or(f64::NAN),
+        t_sign_ecs: r.h_sign_changes_ecs_s.first().copied().unwrap_or(f64::NAN),
+        t_sign_free: r.h_zero_free_s.first().copied().unwrap_or(f64::NAN),
+    })
+}
 
+/// Per pair of the three-spacecraft scene, with and without avoidance.
+struct ReconfNumbers {
+    /// Report table rows: pair, separation and guarantee with, then without, avoidance.
+    rows: Vec<Vec<String>>,
+    /// Smallest pair separation with avoidance, m.
+    min_on: f64,
+    /// Every pair's guarantee held and stayed above l with avoidance.
+    all_held: bool,
+    /// The pairs that came within l without avoidance ("a–b N m").
+    off_entered: Vec<String>,
+}
+
+/// The three-spacecraft numbers of [`ReconfNumbers`].
+fn reconf_numbers(r: &Results) -> ReconfNumbers {
+    let (l, hour) = (L_M, HOUR_S);
     let names = &r.reconf.on.names;
     let mut reconf_rows = Vec::new();
     let mut reconf_min_on = f64::INFINITY;
@@ -486,20 +540,43 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             ]);
         }
     }
+    ReconfNumbers {
+        rows: reconf_rows,
+        min_on: reconf_min_on,
+        all_held: reconf_all_held,
+        off_entered: reconf_off_entered,
+    }
+}
 
-    // ---------------------------------------------------------------- claims
-    use crate::report::ClaimKind::{BeyondThePaper, Paper};
-    let h_free_both =
-        r.fig2_free.iter().any(|x| x.1 > 0.0) && r.fig2_free.iter().any(|x| x.1 < 0.0);
-    let t_sign_free = r.h_zero_free_s.first().copied().unwrap_or(f64::NAN);
-    let h_sign_text = |zeros: &[f64]| {
-        zeros
-            .iter()
-            .map(|t| format!("{:.3} d", t / day))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let claims = vec![
+/// Times of the zeros of H in days, "a d, b d".
+fn h_sign_text(zeros: &[f64]) -> String {
+    zeros
+        .iter()
+        .map(|t| format!("{:.3} d", t / DAY_S))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The claims of the report, in its order.
+fn claims(r: &Results, n: &PairNumbers, rc: &ReconfNumbers) -> Vec<Claim> {
+    let mut claims = claims_hamiltonian(r, n);
+    claims.extend(claims_barrier(r));
+    claims.extend(claims_closed_loop(r, n, rc));
+    claims
+}
+
+/// Fig. 2: H takes both signs (gravity-free and L2 model) and what its sign marks.
+fn claims_hamiltonian(r: &Results, n: &PairNumbers) -> Vec<Claim> {
+    let &PairNumbers {
+        h_has_both,
+        h_free_both,
+        t_sign,
+        t_sign_ecs,
+        t_sign_free,
+        ..
+    } = n;
+    let (l, day) = (L_M, DAY_S);
+    vec![
         Claim::new(
             "zhang2018-fig2-gravity-free-h-both-signs",
             Paper,
@@ -577,6 +654,12 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
                 .fold(f64::INFINITY, f64::min)
                 / 1e3
         )),
+    ]
+}
+
+/// Fig. 3 reversals and the eq (17) circle.
+fn claims_barrier(r: &Results) -> Vec<Claim> {
+    vec![
         Claim::new(
             "zhang2018-fig3-reversals",
             Paper,
@@ -608,6 +691,26 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             ),
             r.eq17_circle_err_m < 1e-6,
         ),
+    ]
+}
+
+/// The avoidance law in the ECS world: the pair with and without it, the reconfiguration.
+fn claims_closed_loop(r: &Results, n: &PairNumbers, rc: &ReconfNumbers) -> Vec<Claim> {
+    let &PairNumbers {
+        min_on,
+        t_on,
+        min_off,
+        t_off,
+        g_on,
+        g_off,
+        first_engaged,
+        engaged_s,
+        ..
+    } = n;
+    let (reconf_min_on, reconf_all_held, reconf_off_entered) =
+        (rc.min_on, rc.all_held, &rc.off_entered);
+    let (l, hour) = (L_M, HOUR_S);
+    vec![
         Claim::new(
             "zhang2018-avoidance-keeps-l",
             Paper,
@@ -661,9 +764,12 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             ),
             reconf_all_held && !reconf_off_entered.is_empty(),
         ),
-    ];
+    ]
+}
 
-    // ---------------------------------------------------------------- figures
+/// Fig. 2: H over time with its sign regions, and the separation of the thrust-free pair.
+fn fig2(r: &Results, t_sign: f64) -> Figure {
+    let (l, day) = (L_M, DAY_S);
     let region = |color: Color| PolygonStyle {
         fill: Some((color, 0.18)),
         stroke: None,
@@ -679,7 +785,7 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
         });
     let t_end2 = r.fig2.last().map_or(0.0, |x| x.0) / day;
     let ts = t_sign / day;
-    let fig2 = Figure::new(
+    Figure::new(
         "Fig. 2 — eq (12) along the paper's scenario (thrust-free; L2 model and gravity-free)",
     )
     .plot(
@@ -741,8 +847,13 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             )
             .hline(l / 1e3, "l = 5 km")
             .vline(r.closest_approach.1 / day, "closest approach"),
-    );
-    let fig3 = Figure::new(
+    )
+}
+
+/// Fig. 3: P's optimal thrust over backward time.
+fn fig3(r: &Results) -> Figure {
+    let day = DAY_S;
+    Figure::new(
         "Fig. 3 — P's optimal thrust over backward time on the barrier path (adversarial, L2)",
     )
     .plot(
@@ -766,7 +877,13 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             .x_label("backward time τ [d]")
             .y_label("v* (from +X of rot, unwrapped) [deg]")
             .line("v*", r.fig3.iter().map(|x| (x.0 / day, x.3))),
-    );
+    )
+}
+
+/// The pair's separation with and without avoidance: whole maneuver and ±3 h zoom.
+fn fig_pair(r: &Results, n: &PairNumbers) -> Figure {
+    let (l, hour) = (L_M, HOUR_S);
+    let (ip, ie, t_off) = (n.ip, n.ie, n.t_off);
     let sep_on = km(&r.pair.on.separation_m(ip, ie));
     let sep_off = km(&r.pair.off.separation_m(ip, ie));
     let tc = t_off;
@@ -778,7 +895,7 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             .map(|(t, s)| (t / hour, *s))
             .collect()
     };
-    let fig_pair = Figure::new(
+    Figure::new(
         "Pair (paper's initial states): separation with and without avoidance (ECS world, dt 10 s)",
     )
     .plot(
@@ -800,7 +917,12 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             .line("with avoidance", zoom(&r.pair.on, &sep_on))
             .line("without avoidance", zoom(&r.pair.off, &sep_off))
             .hline(l / 1e3, "l = 5 km"),
-    );
+    )
+}
+
+/// P relative to E in the rotating frame near the encounter, with the capture circle.
+fn fig_rel(r: &Results, n: &PairNumbers) -> Figure {
+    let (ip, ie) = (n.ip, n.ie);
     let circle: Vec<(f64, f64)> = (0..=72)
         .map(|k| {
             let a = k as f64 * std::f64::consts::TAU / 72.0;
@@ -817,14 +939,20 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             .filter(|(x, y)| x.abs() < 15.0 && y.abs() < 15.0)
             .collect()
     };
-    let fig_rel = Plot::new("P relative to E in the rotating frame near the encounter")
+    Plot::new("P relative to E in the rotating frame near the encounter")
         .x_label("X_p − X_e [km]")
         .y_label("Y_p − Y_e [km]")
         .equal_aspect()
         .outline("capture circle l = 5 km", circle)
         .line("with avoidance", rel(&r.pair.on))
         .line("without avoidance", rel(&r.pair.off))
-        .into_figure();
+        .into_figure()
+}
+
+/// The three-spacecraft reconfiguration: every pair's separation.
+fn fig_reconf(r: &Results) -> Figure {
+    let (l, hour) = (L_M, HOUR_S);
+    let names = &r.reconf.on.names;
     let mut fig_reconf =
         Plot::new("Three-spacecraft reconfiguration: pair separations (ECS world, dt 10 s)")
             .x_label("t [h]")
@@ -849,9 +977,14 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             }
         }
     }
-    let fig_reconf = fig_reconf.hline(l / 1e3, "l = 5 km").into_figure();
+    fig_reconf.hline(l / 1e3, "l = 5 km").into_figure()
+}
 
-    // ---------------------------------------------------------------- report
+/// Writes REPORT.md, the figures and claims.json.
+fn write_report(out: &Path, r: &Results) -> Result<(), String> {
+    let n = pair_numbers(r)?;
+    let rc = reconf_numbers(r);
+    let claims = claims(r, &n, &rc);
     let mut rep = ReportBuilder::new(
         "Zhang, He, Lü, Wang (2018): differential-game barrier for formation collision avoidance near Sun–Earth L2",
     );
@@ -866,6 +999,19 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
          non-rotating with the `rot` axes at t = 0 and its origin on the formation centre.",
     );
     rep.claims(&claims);
+    corrections_section(&mut rep);
+    fig2_section(&mut rep, r, &n);
+    fig3_section(&mut rep, r);
+    pair_section(&mut rep, r, &n);
+    reconf_section(&mut rep, r, &rc);
+    notes_section(&mut rep, r);
+    rep.write(out)
+        .map_err(|e| format!("cannot write the report: {e}"))?;
+    Ok(())
+}
+
+/// The corrections of the printed paper, one table row each.
+fn corrections_section(rep: &mut ReportBuilder) {
     rep.heading("Corrections of the printed paper (each one documented)");
     rep.table(
         &["where", "printed", "used here", "why"],
@@ -886,6 +1032,12 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             vec!["thrust F, maneuver".into(), "not given".into(), "F = 1 N each (2000 kg); P's collision-course reconfiguration built by `collision_course_plan`".into(), "the premise of the avoidance test".into()],
         ],
     );
+}
+
+/// Fig. 2: what H does along the scenario, gravity-free and in the L2 model.
+fn fig2_section(rep: &mut ReportBuilder, r: &Results, n: &PairNumbers) {
+    let (t_sign, t_sign_ecs, t_sign_free) = (n.t_sign, n.t_sign_ecs, n.t_sign_free);
+    let day = DAY_S;
     rep.heading("Fig. 2 — the Hamiltonian along the paper's scenario");
     rep.paragraph(format!(
         "Eq (12) as printed (both players minimising, ½ normalisation) along the thrust-free \
@@ -934,8 +1086,12 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
     rep.figure(
         "fig2_hamiltonian",
         "Fig. 2: H over time with its sign regions",
-        fig2,
+        fig2(r, t_sign),
     );
+}
+
+/// Fig. 3 and the eq (17) circle.
+fn fig3_section(rep: &mut ReportBuilder, r: &Results) {
     rep.heading("Fig. 3 — P's optimal control over backward time");
     rep.paragraph(format!(
         "Barrier path from the BUP at the paper's P state and line of sight (relative velocity \
@@ -950,8 +1106,24 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
     rep.figure(
         "fig3_optimal_control",
         "Fig. 3: P's optimal thrust over backward time",
-        fig3,
+        fig3(r),
     );
+}
+
+/// The avoidance law on the paper's initial states.
+fn pair_section(rep: &mut ReportBuilder, r: &Results, n: &PairNumbers) {
+    let &PairNumbers {
+        min_on,
+        t_on,
+        min_off,
+        t_off,
+        g_on,
+        g_off,
+        first_engaged,
+        engaged_s,
+        ..
+    } = n;
+    let hour = HOUR_S;
     rep.heading("Avoidance on the paper's initial states (ECS world)");
     rep.paragraph(
         "`scenes/papers/zhang2018/zhang2018_pair.ron`: P flies a bang-bang reconfiguration aimed at E (92.76° \
@@ -1006,13 +1178,17 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
     rep.figure(
         "separation_pair",
         "Separation with and without avoidance",
-        fig_pair,
+        fig_pair(r, n),
     );
     rep.figure(
         "relative_pair",
         "Relative motion near the encounter",
-        fig_rel,
+        fig_rel(r, n),
     );
+}
+
+/// The three-spacecraft reconfiguration.
+fn reconf_section(rep: &mut ReportBuilder, r: &Results, rc: &ReconfNumbers) {
     rep.heading("Three-spacecraft reconfiguration (ECS world)");
     rep.paragraph(
         "`scenes/papers/zhang2018/zhang2018_reconfiguration.ron`: chief at the formation centre, deputy1 20 km \
@@ -1043,13 +1219,17 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             "without (chief unprotected)",
             "guarantee",
         ],
-        &reconf_rows,
+        &rc.rows,
     );
     rep.figure(
         "separation_reconfiguration",
         "Three-spacecraft separations",
-        fig_reconf,
+        fig_reconf(r),
     );
+}
+
+/// Testbed notes: floating origin, f32 resolution, step.
+fn notes_section(rep: &mut ReportBuilder, r: &Results) {
     rep.heading("Testbed notes");
     rep.paragraph(format!(
         "Floating origin: the ECS world rides on the formation centre (f64, RK4 in `rot`), and \
@@ -1066,7 +1246,4 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
         r.pair.on.t_s.len() - 1,
         r.ecs_vs_rk4_m * 1e3
     ));
-    rep.write(out)
-        .map_err(|e| format!("cannot write the report: {e}"))?;
-    Ok(())
 }
