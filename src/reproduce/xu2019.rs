@@ -762,13 +762,18 @@ pub fn run(out: &Path) -> Result<(), String> {
     Ok(())
 }
 
-fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String> {
-    let p = Xu2019Params::paper();
-    let (s, e) = (&on_table(&r.simulation), &on_table(&r.experiment));
-    let dashed = LineStyle {
+/// Dashed line style of the variant and exact-distance curves.
+fn dashed() -> LineStyle {
+    LineStyle {
         dash: Dash::Dashed,
         ..Default::default()
-    };
+    }
+}
+
+/// Fig. 13 (path): both cases, the ghost-obstacle run and the last restart in the table plane.
+fn path_plot(r: &Results, s: &CaseRun, e: &CaseRun) -> Plot {
+    let p = Xu2019Params::paper();
+    let dashed = dashed();
     // Path in the plane.
     let obstacle: Vec<(f64, f64)> = p
         .obstacle
@@ -834,7 +839,13 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
             },
         );
     }
-    let states = Figure::new(
+    path
+}
+
+/// x(t), y(t), θ(t) of both cases.
+fn states_figure(s: &CaseRun, e: &CaseRun) -> Figure {
+    let p = Xu2019Params::paper();
+    Figure::new(
         "Chaser state vs time (lab frame; axes clipped to the approach, the rebound leaves them)",
     )
     .cols(1)
@@ -864,8 +875,13 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
             .line("simulation", pts(&s.t_s, &s.theta_deg))
             .line("experiment", pts(&e.t_s, &e.theta_deg))
             .hline(90.0, "goal 90°"),
-    );
-    let dist = Figure::new("Distances of the chaser to the constraints")
+    )
+}
+
+/// Radial distances (both forms) and the full-geometry distance to the obstacle.
+fn distances_figure(s: &CaseRun, e: &CaseRun) -> Figure {
+    let dashed = dashed();
+    Figure::new("Distances of the chaser to the constraints")
         .cols(2)
         .plot(
             Plot::new("Radial distance to the obstacle (centre of mass)")
@@ -903,9 +919,13 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
                 .line("simulation", pts(&s.t_s, &s.geometry_obstacle_m))
                 .line("experiment", pts(&e.t_s, &e.geometry_obstacle_m))
                 .hline(0.0, "contact"),
-        );
+        )
+}
+
+/// Valve activity and gas used by the experiment.
+fn valves_figure(e: &CaseRun) -> Figure {
     let gas_g: Vec<f64> = e.gas_kg.iter().map(|g| g * 1e3).collect();
-    let valves = Figure::new("Experiment: cold-gas valves")
+    Figure::new("Experiment: cold-gas valves")
         .cols(2)
         .plot(
             Plot::new("Open nozzles (mean over each 0.1 s)")
@@ -918,8 +938,11 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
                 .x_label("t (s)")
                 .y_label("gas used (g)")
                 .line("experiment", pts(&e.t_s, &gas_g)),
-        );
+        )
+}
 
+fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String> {
+    let (s, e) = (&on_table(&r.simulation), &on_table(&r.experiment));
     let mut rep = ReportBuilder::new(
         "Xu, Wen, Wei (2019): air-bearing rendezvous and docking with a superquadric obstacle and a heart-shaped target",
     );
@@ -949,98 +972,131 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
     rep.figure(
         "path",
         "Path in the plane with the obstacle, the heart keep-out and the target body",
-        Figure::new("Fig. 13 (path)").plot(path),
+        Figure::new("Fig. 13 (path)").plot(path_plot(r, s, e)),
     );
-    rep.figure("states", "x(t), y(t), θ(t) of both cases", states);
+    rep.figure(
+        "states",
+        "x(t), y(t), θ(t) of both cases",
+        states_figure(s, e),
+    );
     rep.figure(
         "distances",
         "Radial distances (both forms) and the full-geometry distance to the obstacle",
-        dist,
+        distances_figure(s, e),
     );
-    rep.figure("valves", "Valve activity and gas used (experiment)", valves);
+    rep.figure(
+        "valves",
+        "Valve activity and gas used (experiment)",
+        valves_figure(e),
+    );
+    numbers_section(&mut rep, s, e);
+    variants_section(&mut rep, r);
+    choices_section(&mut rep);
+    restarts_section(&mut rep, r);
+    rep.write(out)
+        .map_err(|e| format!("cannot write the report in {}: {e}", out.display()))?;
+    Ok(())
+}
+
+/// The numbers of both cases: settling, capture, distances, collisions, gas, steps.
+fn numbers_section(rep: &mut ReportBuilder, s: &CaseRun, e: &CaseRun) {
     rep.heading("Numbers");
+    let mut rows = settling_rows(s, e);
+    rows.extend(outcome_rows(s, e));
+    rep.table(&["quantity", "simulation", "experiment"], &rows);
+}
+
+/// Rows of the numbers table: settling times, magnet, docking.
+fn settling_rows(s: &CaseRun, e: &CaseRun) -> Vec<Vec<String>> {
     let ssim = settling(s);
     let sexp = settling(e);
     let f = |x: Option<f64>| x.map_or("n/a".into(), |x| format!("{x:.1}"));
-    rep.table(
-        &["quantity", "simulation", "experiment"],
-        &[
-            vec![
-                "x: 50 % / 90 % of the change (s)".into(),
-                format!("{} / {}", f(ssim[0][0]), f(ssim[0][1])),
-                format!("{} / {}", f(sexp[0][0]), f(sexp[0][1])),
-            ],
-            vec![
-                "y: 50 % / 90 % of the change (s)".into(),
-                format!("{} / {}", f(ssim[1][0]), f(ssim[1][1])),
-                format!("{} / {}", f(sexp[1][0]), f(sexp[1][1])),
-            ],
-            vec![
-                "θ: 50 % / 90 % of the change (s)".into(),
-                format!("{} / {}", f(ssim[2][0]), f(ssim[2][1])),
-                format!("{} / {}", f(sexp[2][0]), f(sexp[2][1])),
-            ],
-            vec![
-                "magnet on (law hands over) (s)".into(),
-                fmt_opt(s.magnet_on_s),
-                fmt_opt(e.magnet_on_s),
-            ],
-            vec![
-                "docking".into(),
-                format!("{}: {}", s.dock_state, s.dock_reason),
-                format!("{}: {}", e.dock_state, e.dock_reason),
-            ],
-            vec![
-                "min radial distance over the whole run, obstacle eq (8) / exact (m)".into(),
-                format!(
-                    "{:.4} / {:.4}",
-                    CaseRun::min(&s.radial_obstacle_eq8_m),
-                    CaseRun::min(&s.radial_obstacle_exact_m)
-                ),
-                format!(
-                    "{:.4} / {:.4}",
-                    CaseRun::min(&e.radial_obstacle_eq8_m),
-                    CaseRun::min(&e.radial_obstacle_exact_m)
-                ),
-            ],
-            vec![
-                "min full-geometry distance to the obstacle, whole run (m)".into(),
-                format!(
-                    "{:.4} ({}, {:.2} s)",
-                    s.min_geometry_obstacle.0, s.min_geometry_obstacle.1, s.min_geometry_obstacle.2
-                ),
-                format!(
-                    "{:.4} ({}, {:.2} s)",
-                    e.min_geometry_obstacle.0, e.min_geometry_obstacle.1, e.min_geometry_obstacle.2
-                ),
-            ],
-            vec![
-                "collisions (all pairs)".into(),
-                s.collisions.to_string(),
-                e.collisions.to_string(),
-            ],
-            vec![
-                "off the table".into(),
-                format!("{:?}", s.off_table),
-                format!("{:?}", e.off_table),
-            ],
-            vec![
-                "gas used (g)".into(),
-                "—".into(),
-                format!("{:.2}", e.gas_kg.last().copied().unwrap_or(0.0) * 1e3),
-            ],
-            vec![
-                "valve openings per nozzle (1-1 … 4-2)".into(),
-                "—".into(),
-                format!("{:?}", e.valve_openings),
-            ],
-            vec![
-                "steps / wall time".into(),
-                format!("{} / {:.1} s", s.steps, s.wall_s),
-                format!("{} / {:.1} s", e.steps, e.wall_s),
-            ],
+    vec![
+        vec![
+            "x: 50 % / 90 % of the change (s)".into(),
+            format!("{} / {}", f(ssim[0][0]), f(ssim[0][1])),
+            format!("{} / {}", f(sexp[0][0]), f(sexp[0][1])),
         ],
-    );
+        vec![
+            "y: 50 % / 90 % of the change (s)".into(),
+            format!("{} / {}", f(ssim[1][0]), f(ssim[1][1])),
+            format!("{} / {}", f(sexp[1][0]), f(sexp[1][1])),
+        ],
+        vec![
+            "θ: 50 % / 90 % of the change (s)".into(),
+            format!("{} / {}", f(ssim[2][0]), f(ssim[2][1])),
+            format!("{} / {}", f(sexp[2][0]), f(sexp[2][1])),
+        ],
+        vec![
+            "magnet on (law hands over) (s)".into(),
+            fmt_opt(s.magnet_on_s),
+            fmt_opt(e.magnet_on_s),
+        ],
+        vec![
+            "docking".into(),
+            format!("{}: {}", s.dock_state, s.dock_reason),
+            format!("{}: {}", e.dock_state, e.dock_reason),
+        ],
+    ]
+}
+
+/// Rows of the numbers table: distances, collisions, table, gas, valves, steps.
+fn outcome_rows(s: &CaseRun, e: &CaseRun) -> Vec<Vec<String>> {
+    vec![
+        vec![
+            "min radial distance over the whole run, obstacle eq (8) / exact (m)".into(),
+            format!(
+                "{:.4} / {:.4}",
+                CaseRun::min(&s.radial_obstacle_eq8_m),
+                CaseRun::min(&s.radial_obstacle_exact_m)
+            ),
+            format!(
+                "{:.4} / {:.4}",
+                CaseRun::min(&e.radial_obstacle_eq8_m),
+                CaseRun::min(&e.radial_obstacle_exact_m)
+            ),
+        ],
+        vec![
+            "min full-geometry distance to the obstacle, whole run (m)".into(),
+            format!(
+                "{:.4} ({}, {:.2} s)",
+                s.min_geometry_obstacle.0, s.min_geometry_obstacle.1, s.min_geometry_obstacle.2
+            ),
+            format!(
+                "{:.4} ({}, {:.2} s)",
+                e.min_geometry_obstacle.0, e.min_geometry_obstacle.1, e.min_geometry_obstacle.2
+            ),
+        ],
+        vec![
+            "collisions (all pairs)".into(),
+            s.collisions.to_string(),
+            e.collisions.to_string(),
+        ],
+        vec![
+            "off the table".into(),
+            format!("{:?}", s.off_table),
+            format!("{:?}", e.off_table),
+        ],
+        vec![
+            "gas used (g)".into(),
+            "—".into(),
+            format!("{:.2}", e.gas_kg.last().copied().unwrap_or(0.0) * 1e3),
+        ],
+        vec![
+            "valve openings per nozzle (1-1 … 4-2)".into(),
+            "—".into(),
+            format!("{:?}", e.valve_openings),
+        ],
+        vec![
+            "steps / wall time".into(),
+            format!("{} / {:.1} s", s.steps, s.wall_s),
+            format!("{} / {:.1} s", e.steps, e.wall_s),
+        ],
+    ]
+}
+
+/// The variants: law kept active, ghost obstacle, tuned inertia.
+fn variants_section(rep: &mut ReportBuilder, r: &Results) {
     rep.heading("Variants: law kept active, ghost obstacle, tuned inertia");
     let variant_row = |label: &str, run: &CaseRun| {
         vec![
@@ -1077,6 +1133,11 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
             ),
         ],
     );
+    variants_paragraph(rep, r);
+}
+
+/// What the variants show: the latch angle, the contacts' effect on the path, the inertia.
+fn variants_paragraph(rep: &mut ReportBuilder, r: &Results) {
     let dev = |a: &CaseRun, b: &CaseRun| {
         let t = a.obstacle_collisions.first().map_or(f64::INFINITY, |c| c.0);
         path_deviation_m(a, b, t)
@@ -1123,6 +1184,10 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
         lag_s(&r.experiment_tuned_iz, &r.simulation, 0),
         lag_s(&r.experiment_tuned_iz, &r.simulation, 1),
     ));
+}
+
+/// Choices where the paper is silent, and how to read the result.
+fn choices_section(rep: &mut ReportBuilder) {
     rep.heading("Choices where the paper is silent");
     rep.paragraph(
         "Geometry: both simulators are cylinders of radius 0.1 m (the nozzle lever arm 0.09 m \
@@ -1147,6 +1212,10 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
          row says what the mechanism did; where the capture fails, the events in \
          `<case>/events.jsonl` give the sequence (magnet on, contact, rebound or miss, and why).",
     );
+}
+
+/// Diagnostic (only when the simulation case was restarted): the restarts' outcomes.
+fn restarts_section(rep: &mut ReportBuilder, r: &Results) {
     if !r.restarts.is_empty() {
         rep.heading("Diagnostic: the capture is sensitive to the last millimetres");
         let rows: Vec<Vec<String>> = r
@@ -1176,7 +1245,4 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
              forces, rebound or miss, and why).",
         );
     }
-    rep.write(out)
-        .map_err(|e| format!("cannot write the report in {}: {e}", out.display()))?;
-    Ok(())
 }
