@@ -22,7 +22,8 @@
 use super::guo2016_ct::{CtRun, CtSetup, run_continuous, run_sampled};
 use crate::control::guo2016::{Guo2016Instance, SceneSpec};
 use crate::geometry::cissoid::Cissoid;
-use crate::report::{Claim, Color, Dash, Figure, LineStyle, Plot, ReportBuilder};
+use crate::report::ClaimKind::{BeyondThePaper, Paper};
+use crate::report::{Claim, Color, Dash, Figure, LineStyle, Plot, ReportBuilder, held_word};
 use crate::scene::{AttitudeSpec, LoadedScene, PartRole, load_scene_str};
 use crate::sim::monitor::shape_distance;
 use crate::sim::{BodyState, Part, Roster, SimBody, Simulation};
@@ -699,10 +700,6 @@ fn geometry_sentence(r: &CaseRun) -> String {
     )
 }
 
-fn held_word(h: bool) -> &'static str {
-    if h { "held" } else { "NOT held" }
-}
-
 /// One line on a plant run: how it ended and its numbers.
 pub fn ct_sentence(r: &CtRun) -> String {
     let end = match (r.period_s, r.first_outside_s, r.first_exit_at_sample_s) {
@@ -720,24 +717,31 @@ pub fn ct_sentence(r: &CtRun) -> String {
     )
 }
 
-/// The claims as measured.
-pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
-    use crate::report::Claim;
-    use crate::report::ClaimKind::{BeyondThePaper, Paper};
-    let c = &r.corridor;
-    let z = &r.no_avoidance;
-    let counts = campaign_counts(&r.campaign);
-    let ran = r.campaign.iter().filter(|c| c.run.is_some()).count();
-    let (nw, nw0) = (&r.ct_narrow.0, &r.ct_narrow.1);
-    let ct_held = |x: &CtRun| x.first_outside_s.is_none() && x.min_h_m2 > 0.0;
-    let conv_src = "ours: |r_e| < 1 cm and |σ_e| < 1e-4 — the paper says 'converge to zero' without a \
+/// Threshold source of the convergence claims.
+const CONV_SRC: &str = "ours: |r_e| < 1 cm and |σ_e| < 1e-4 — the paper says 'converge to zero' without a \
                     number; 1 cm and 1e-4 are over three orders below the initial errors (41 m, 0.1)";
-    let h_src = "paper: h > 0 at every instant (the corridor guarantee, eqs (31)–(35), Remark 3)";
-    let ct = &r.ct_reaching;
-    let ct0 = &r.ct_reaching_k2_0;
-    let zoh = |k: usize| r.sampled.get(k);
-    let zoh_text = |k: usize| {
-        zoh(k).map_or("—".to_string(), |x| {
+/// Threshold source of the corridor claims.
+const H_SRC: &str =
+    "paper: h > 0 at every instant (the corridor guarantee, eqs (31)–(35), Remark 3)";
+
+/// The claims of the paper, measured on `r`: the paper's gains, k2, the reaching variant, the
+/// campaign.
+pub fn claims(r: &Results) -> Vec<Claim> {
+    let mut out = paper_gain_claims(r);
+    out.extend(k2_claims(r));
+    out.extend(reaching_claims(r));
+    out.extend(campaign_claims(r));
+    out
+}
+
+/// The corridor held in continuous time: no event on h = 0 and h > 0 at every accepted point.
+fn ct_held(x: &CtRun) -> bool {
+    x.first_outside_s.is_none() && x.min_h_m2 > 0.0
+}
+
+/// The sampled run of index `k` of [`Results::sampled`], in words.
+fn zoh_text(r: &Results, k: usize) -> String {
+    r.sampled.get(k).map_or("—".to_string(), |x| {
             format!(
                 "{} ms: outside at a sample from {} (between samples from {}) over {SAMPLED_DURATION_S} s, final |r_e| {:.1} m, peak |F| {:.2e} N",
                 x.period_s.unwrap_or(f64::NAN) * 1e3,
@@ -747,7 +751,12 @@ pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
                 x.peak_force_n
             )
         })
-    };
+}
+
+/// The paper's gains: corridor, convergence, no collision.
+fn paper_gain_claims(r: &Results) -> Vec<Claim> {
+    let (c, nw) = (&r.corridor, &r.ct_narrow.0);
+    let (conv_src, h_src) = (CONV_SRC, H_SRC);
     vec![
         Claim::new(
             "guo2016-corridor-held",
@@ -790,6 +799,14 @@ pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
             geometry_sentence(c),
             c.first_contact_s.is_none(),
         ),
+    ]
+}
+
+/// What the barrier gain k2 changes.
+fn k2_claims(r: &Results) -> Vec<Claim> {
+    let z = &r.no_avoidance;
+    let (nw, nw0) = (&r.ct_narrow.0, &r.ct_narrow.1);
+    vec![
         Claim::new(
             "guo2016-k2-0-leaves-corridor",
             Paper,
@@ -832,6 +849,15 @@ pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
                 "NOT held"
             }
         )),
+    ]
+}
+
+/// The reaching variant: convergence, the corridor in continuous time and sampled at 100 Hz.
+fn reaching_claims(r: &Results) -> Vec<Claim> {
+    let (conv_src, h_src) = (CONV_SRC, H_SRC);
+    let (ct, ct0) = (&r.ct_reaching, &r.ct_reaching_k2_0);
+    let zoh_text = |k: usize| zoh_text(r, k);
+    vec![
         Claim::new(
             "guo2016-reaching-converges",
             BeyondThePaper,
@@ -899,24 +925,30 @@ pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
             opt_s(r.sampled_fixed_reference.first_exit_at_sample_s),
             held_word(ct_held(&r.ct_fixed_reference))
         )),
-        Claim::new(
-            "guo2016-campaign-corridor-keeps-wings-clear",
-            BeyondThePaper,
-            format!(
-                "Beyond the paper: whenever the point-mass corridor held, the chaser's full geometry stayed more than {PANEL_CLEARANCE_M} m from every target solar-wing part."
-            ),
-            None,
-            "ours: 0.5 m, half the chaser bus size (a margin a docking approach would keep)",
-            format!(
-                "{ran} runs (k_r = 1/s, k2 = 0.02, 100 Hz, seed {CAMPAIGN_SEED}): corridor held and wings clear {}, corridor held but a wing part within {PANEL_CLEARANCE_M} m {}, corridor left {}; {} starts refused (overlap at t = 0)",
-                counts[0],
-                counts[1],
-                counts[2] + counts[3],
-                counts[4]
-            ),
-            counts[1] == 0,
-        ),
     ]
+}
+
+/// The campaign: does the point-mass corridor keep the wings clear?
+fn campaign_claims(r: &Results) -> Vec<Claim> {
+    let counts = campaign_counts(&r.campaign);
+    let ran = r.campaign.iter().filter(|c| c.run.is_some()).count();
+    vec![Claim::new(
+        "guo2016-campaign-corridor-keeps-wings-clear",
+        BeyondThePaper,
+        format!(
+            "Beyond the paper: whenever the point-mass corridor held, the chaser's full geometry stayed more than {PANEL_CLEARANCE_M} m from every target solar-wing part."
+        ),
+        None,
+        "ours: 0.5 m, half the chaser bus size (a margin a docking approach would keep)",
+        format!(
+            "{ran} runs (k_r = 1/s, k2 = 0.02, 100 Hz, seed {CAMPAIGN_SEED}): corridor held and wings clear {}, corridor held but a wing part within {PANEL_CLEARANCE_M} m {}, corridor left {}; {} starts refused (overlap at t = 0)",
+            counts[0],
+            counts[1],
+            counts[2] + counts[3],
+            counts[4]
+        ),
+        counts[1] == 0,
+    )]
 }
 
 /// Runs per [`CampaignRun::category`].
