@@ -15,7 +15,7 @@ use crate::control::xu2015::{
 use crate::control::xu2015::{Xu2015Loop, Xu2015Sample};
 use crate::orbit::elliptic::{EllipticOrbit, RelStateTof, rk4_step_relative};
 use crate::report::ClaimKind::{BeyondThePaper, Paper};
-use crate::report::{Claim, Dash, Figure, LineStyle, Plot, ReportBuilder};
+use crate::report::{Claim, Figure, LineStyle, Plot, ReportBuilder, held_word};
 use crate::scene::{SceneError, load_scene_str};
 use crate::sim::Simulation;
 use nalgebra::Vector3;
@@ -754,10 +754,6 @@ fn beats(a: &CaseRun, p: &CaseRun) -> (bool, String) {
     )
 }
 
-fn held_word(h: bool) -> &'static str {
-    if h { "held" } else { "NOT held" }
-}
-
 /// The claims of the paper, measured on `r`.
 pub fn claims(r: &AllRuns) -> Vec<Claim> {
     let mut out = Vec::new();
@@ -1406,13 +1402,6 @@ fn series<'a>(
         .map(move |s| (s.t_s, f(s)))
 }
 
-fn dashed() -> LineStyle {
-    LineStyle {
-        dash: Dash::Dashed,
-        ..LineStyle::default()
-    }
-}
-
 /// The figures in report order: (file stem, caption, figure).
 pub fn figures(r: &AllRuns) -> Vec<(String, String, Figure)> {
     let mut figs: Vec<(String, String, Figure)> = Vec::new();
@@ -1438,7 +1427,11 @@ fn distance_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
                 .y_label("|ξ| [m]")
                 .log_y()
                 .line("ACCM", series(a, 0.0, |s| s.xi_tof_m.norm()))
-                .line_styled("PD", series(p, 0.0, |s| s.xi_tof_m.norm()), dashed()),
+                .line_styled(
+                    "PD",
+                    series(p, 0.0, |s| s.xi_tof_m.norm()),
+                    LineStyle::dashed(),
+                ),
         )
         .plot(
             Plot::new("terminal error |ξ − goal| over the run")
@@ -1446,7 +1439,7 @@ fn distance_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
                 .y_label("|ξ − goal| [m]")
                 .log_y()
                 .line("ACCM", series(a, 0.0, err))
-                .line_styled("PD", series(p, 0.0, err), dashed()),
+                .line_styled("PD", series(p, 0.0, err), LineStyle::dashed()),
         )
         .plot(
             Plot::new("ACCM, last 100 s")
@@ -1461,7 +1454,7 @@ fn distance_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
                 .line_styled(
                     "PD",
                     series(p, TERMINAL_FROM_S, move |s| 1e3 * err(s)),
-                    dashed(),
+                    LineStyle::dashed(),
                 ),
         );
     figs.push((
@@ -1485,14 +1478,15 @@ fn position_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
                 .x_label("t [s]")
                 .y_label(format!("ξ_{ax} [{unit}]"))
                 .line("ACCM", series(a, 0.0, move |s| k * s.xi_tof_m[i]))
-                .line_styled("PD", series(p, 0.0, move |s| k * s.xi_tof_m[i]), dashed())
+                .line_styled(
+                    "PD",
+                    series(p, 0.0, move |s| k * s.xi_tof_m[i]),
+                    LineStyle::dashed(),
+                )
                 .line_styled(
                     "reference",
                     series(a, 0.0, move |s| k * s.reference_tof_m[i]),
-                    LineStyle {
-                        dash: Dash::Dotted,
-                        ..LineStyle::default()
-                    },
+                    LineStyle::dotted(),
                 ),
         );
         fig.push(
@@ -1506,7 +1500,7 @@ fn position_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
                 .line_styled(
                     "PD",
                     series(p, TERMINAL_FROM_S, move |s| 1e3 * (s.xi_tof_m[i] - goal[i])),
-                    dashed(),
+                    LineStyle::dashed(),
                 ),
         );
     }
@@ -1528,7 +1522,11 @@ fn thrust_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
                 .x_label("t [s]")
                 .y_label(format!("u_{ax} [N]"))
                 .line("ACCM", series(a, 0.0, move |s| s.thrust_tof_n[i]))
-                .line_styled("PD", series(p, 0.0, move |s| s.thrust_tof_n[i]), dashed())
+                .line_styled(
+                    "PD",
+                    series(p, 0.0, move |s| s.thrust_tof_n[i]),
+                    LineStyle::dashed(),
+                )
                 .hline(5.0, "+5 N")
                 .hline(-5.0, "−5 N"),
         );
@@ -1569,6 +1567,14 @@ fn parameters_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
     ));
 }
 
+/// (t s, full-geometry chaser–target distance m) of a run, one sample per 0.1 s step.
+fn distance_points(c: &CaseRun) -> impl Iterator<Item = (f64, f64)> + '_ {
+    c.distance_m
+        .iter()
+        .enumerate()
+        .map(|(k, d)| (k as f64 * 0.1, *d))
+}
+
 /// Mass cases: terminal error, the x thrust at 110 kg against the force needed, distances.
 fn mass_cases_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
     let a = &r.nominal[0];
@@ -1588,7 +1594,7 @@ fn mass_cases_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
         .log_y();
     for (name, c) in cases {
         let st = if name.starts_with("PD") {
-            dashed()
+            LineStyle::dashed()
         } else {
             LineStyle::default()
         };
@@ -1604,7 +1610,7 @@ fn mass_cases_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
                 .x_label("t [s]")
                 .y_label("force [N]")
                 .line("ACCM u_x", series(pm, 0.0, |s| s.thrust_tof_n.x))
-                .line_styled("m_c F_t,x / m_t (needed)", need, dashed())
+                .line_styled("m_c F_t,x / m_t (needed)", need, LineStyle::dashed())
                 .hline(5.0, "+5 N")
                 .hline(-5.0, "−5 N"),
         )
@@ -1612,29 +1618,15 @@ fn mass_cases_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
             Plot::new("full-geometry chaser–target distance")
                 .x_label("t [s]")
                 .y_label("distance [m]")
-                .line(
-                    "100 kg ACCM",
-                    a.distance_m
-                        .iter()
-                        .enumerate()
-                        .map(|(k, d)| (k as f64 * 0.1, *d)),
-                )
+                .line("100 kg ACCM", distance_points(a))
                 .line(
                     "110 kg ACCM (real geometry)",
-                    r.m110_geometry[0]
-                        .distance_m
-                        .iter()
-                        .enumerate()
-                        .map(|(k, d)| (k as f64 * 0.1, *d)),
+                    distance_points(&r.m110_geometry[0]),
                 )
                 .line_styled(
                     "110 kg PD (real geometry)",
-                    r.m110_geometry[1]
-                        .distance_m
-                        .iter()
-                        .enumerate()
-                        .map(|(k, d)| (k as f64 * 0.1, *d)),
-                    dashed(),
+                    distance_points(&r.m110_geometry[1]),
+                    LineStyle::dashed(),
                 ),
         );
     figs.push((
