@@ -19,7 +19,7 @@ use crate::control::geng2015::{
 };
 use crate::control::geng2015::{Geng2015Loop, observation};
 use crate::report::ClaimKind::{BeyondThePaper, Paper};
-use crate::report::{Claim, Figure, Plot, ReportBuilder, compact_table};
+use crate::report::{Claim, Figure, Plot, ReportBuilder, compact_table, held_word as hw};
 use crate::scene::load_scene_file;
 use crate::sim::Simulation;
 use nalgebra::Vector6;
@@ -534,11 +534,6 @@ const COLS: [&str; 12] = [
     "Δωy °/s",
     "Δωz °/s",
 ];
-
-/// "held" or "NOT held".
-fn hw(h: bool) -> &'static str {
-    if h { "held" } else { "NOT held" }
-}
 
 /// Header cells `first…, COLS…, last…` of an accuracy table.
 fn acc_headers(first: &[&str], last: &[&str]) -> Vec<String> {
@@ -1614,10 +1609,7 @@ fn case_figure(r: &CaseResult) -> Figure {
         .x_label("t [s]")
         .y_label("|ρ| [m]")
         .log_y()
-        .line(
-            "|ρ|",
-            se.t.iter().zip(&se.port_distance_m).map(|(t, d)| (*t, *d)),
-        );
+        .line("|ρ|", port_distance_points(se));
     Figure::new(format!("{} ({:?})", r.name, r.law))
         .cols(3)
         .plot(p_rho)
@@ -1631,6 +1623,11 @@ fn case_figure(r: &CaseResult) -> Figure {
         .plot(p_sr)
 }
 
+/// (t s, port distance |ρ| m) of a run's series.
+fn port_distance_points(s: &Series) -> impl Iterator<Item = (f64, f64)> + '_ {
+    s.t.iter().zip(&s.port_distance_m).map(|(t, d)| (*t, *d))
+}
+
 /// Port distance of the paper-model run against the full-geometry run, first collision marked.
 fn full_geometry_figure(model: &CaseResult, full: &CaseResult) -> Figure {
     let mut p = Plot::new(format!(
@@ -1642,21 +1639,9 @@ fn full_geometry_figure(model: &CaseResult, full: &CaseResult) -> Figure {
     .log_y()
     .line(
         "paper model (5 cm spheres)",
-        model
-            .series
-            .t
-            .iter()
-            .zip(&model.series.port_distance_m)
-            .map(|(t, d)| (*t, *d)),
+        port_distance_points(&model.series),
     )
-    .line(
-        "full geometry",
-        full.series
-            .t
-            .iter()
-            .zip(&full.series.port_distance_m)
-            .map(|(t, d)| (*t, *d)),
-    );
+    .line("full geometry", port_distance_points(&full.series));
     if let Some((t, a, b)) = full.collisions.first() {
         p = p.vline(*t, format!("first collision {a}–{b}"));
     }
