@@ -12,15 +12,25 @@
 //! minimum separation is refined inside each step ([`refined_min_separation`]); the tests in
 //! `tests/val_zhang2018.rs` use the same functions.
 
-use crate::orbit::l2::{L2Centre, L2State};
+use crate::control::zhang2018::{
+    Drift, GameState, PlannedManeuver, PursuerRole, Zhang2018Params, bup_state, gamma_on_boundary,
+    los_angle_s5_rad, p_state, paper_initial_state_l2c, paper_initial_state_rot, rel_pos_m,
+    retrograde_path,
+};
+use crate::orbit::l2::{L2Centre, L2Params, L2State};
 use crate::report::ClaimKind::{BeyondThePaper, Paper};
 use crate::report::plot::PolygonStyle;
-use crate::report::{Claim, Color, Dash, Figure, LineStyle, PALETTE, Plot, ReportBuilder};
+use crate::report::{
+    Claim, Color, Dash, Figure, LineStyle, PALETTE, Plot, ReportBuilder, held_word,
+};
+use crate::reproduce::zhang2018_sim::{
+    boundary_value_history, collision_course_plan, simulate_reconfiguration,
+};
 use crate::scene::load_scene_file;
 use crate::sim::Simulation;
 use crate::sim::environment::L2Frame;
 use crate::sim::output::Diagnostics;
-use nalgebra::Vector3;
+use nalgebra::{Vector2, Vector3};
 use std::path::{Path, PathBuf};
 
 /// Every step of a run.
@@ -236,26 +246,38 @@ fn sign_changes(t: &[f64], v: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// Runs every case (a few seconds in release).
-pub fn compute() -> Result<Results, String> {
-    use crate::control::zhang2018::{
-        Drift, PlannedManeuver, PursuerRole, Zhang2018Params, bup_state, gamma_on_boundary,
-        los_angle_s5_rad, p_state, paper_initial_state_l2c, paper_initial_state_rot, rel_pos_m,
-        retrograde_path,
-    };
-    use crate::orbit::l2::L2Params;
-    use crate::reproduce::zhang2018_sim::{
-        boundary_value_history, collision_course_plan, simulate_reconfiguration,
-    };
-    use nalgebra::Vector2;
-    let l2 = L2Params::paper();
-    let p = Zhang2018Params::paper();
-    let x0 = paper_initial_state_rot(&l2);
+/// Zeros of `h` over the grid `t` of step `dt_s`, linearly interpolated between samples, s.
+fn interpolated_zeros(t: &[f64], h: &[f64], dt_s: f64) -> Vec<f64> {
+    (1..h.len())
+        .filter(|&k| h[k - 1] * h[k] <= 0.0)
+        .map(|k| t[k - 1] + dt_s * h[k - 1] / (h[k - 1] - h[k]))
+        .collect()
+}
 
-    // Fig. 2, Bevy-free (RK4 at 60 s over 20 days; the sign change is interpolated linearly
-    // between samples, the closest approach refined along the relative line).
-    let dt2 = 60.0;
-    let hist = boundary_value_history(&p, &x0, PursuerRole::PaperCooperative, dt2, 20 * 1440);
+/// Fig. 2 along the thrust-free scenario: H and separation, L2 model (RK4) and gravity-free.
+struct Fig2 {
+    /// (t s, H, separation m), L2 model.
+    fig2: Vec<(f64, f64, f64)>,
+    /// Sign changes and interpolated zeros of H, L2 model, s.
+    h_sign_changes_s: Vec<f64>,
+    h_zero_s: Vec<f64>,
+    /// Closest approach of the L2-model run (separation m, time s).
+    closest_approach: (f64, f64),
+    /// (t s, H, separation m), gravity-free; its zeros (s) and closest approach (m, s).
+    fig2_free: Vec<(f64, f64, f64)>,
+    h_zero_free_s: Vec<f64>,
+    closest_free: (f64, f64),
+}
+
+/// Time step of the Fig. 2 histories, s.
+const FIG2_DT_S: f64 = 60.0;
+
+/// Fig. 2, Bevy-free (RK4 at 60 s over 20 days; the sign change is interpolated linearly
+/// between samples, the closest approach refined along the relative line), and gravity-free.
+fn compute_fig2(p: &Zhang2018Params, x0: &GameState) -> Fig2 {
+    let x0 = *x0;
+    let dt2 = FIG2_DT_S;
+    let hist = boundary_value_history(p, &x0, PursuerRole::PaperCooperative, dt2, 20 * 1440);
     let mut x = x0;
     let mut fig2 = Vec::with_capacity(hist.len());
     let mut ca = (f64::INFINITY, 0.0);
@@ -278,12 +300,8 @@ pub fn compute() -> Result<Results, String> {
     let t2: Vec<f64> = fig2.iter().map(|r| r.0).collect();
     let h2: Vec<f64> = fig2.iter().map(|r| r.1).collect();
     let h_sign_changes_s = sign_changes(&t2, &h2);
-    let h_zero_s: Vec<f64> = (1..h2.len())
-        .filter(|&k| h2[k - 1] * h2[k] <= 0.0)
-        .map(|k| t2[k - 1] + dt2 * h2[k - 1] / (h2[k - 1] - h2[k]))
-        .collect();
-
-    // Fig. 2 gravity-free (the paper's stated setting): straight lines, μ terms of eq (12) zero.
+    let h_zero_s = interpolated_zeros(&t2, &h2, dt2);
+    // Gravity-free (the paper's stated setting): straight lines, μ terms of eq (12) zero.
     let mut pf = p.clone();
     pf.drift = Drift::ForceFree;
     let hist_free = boundary_value_history(&pf, &x0, PursuerRole::PaperCooperative, dt2, 20 * 1440);
@@ -295,15 +313,33 @@ pub fn compute() -> Result<Results, String> {
         })
         .collect();
     let hf: Vec<f64> = fig2_free.iter().map(|r| r.1).collect();
-    let h_zero_free_s: Vec<f64> = (1..hf.len())
-        .filter(|&k| hf[k - 1] * hf[k] <= 0.0)
-        .map(|k| t2[k - 1] + dt2 * hf[k - 1] / (hf[k - 1] - hf[k]))
-        .collect();
+    let h_zero_free_s = interpolated_zeros(&t2, &hf, dt2);
     let cf = crate::control::zhang2018::closest_approach(&x0);
     let closest_free = (cf.miss_m, cf.t_ca_s);
+    Fig2 {
+        fig2,
+        h_sign_changes_s,
+        h_zero_s,
+        closest_approach: ca,
+        fig2_free,
+        h_zero_free_s,
+        closest_free,
+    }
+}
 
-    // Fig. 2 in the ECS world, 10 days thrust-free at dt = 60 s, and its fidelity.
-    let pair = scene_path("zhang2018_pair.ron");
+/// Fig. 2 in the ECS world and its fidelity.
+struct Fig2Ecs {
+    /// (t s, H) every 6 h.
+    fig2_ecs: Vec<(f64, f64)>,
+    /// Sign changes of H, s.
+    h_sign_changes_ecs_s: Vec<f64>,
+    /// Largest separation difference from the rotating-frame RK4, m.
+    ecs_vs_rk4_m: f64,
+}
+
+/// Fig. 2 in the ECS world, 20 days thrust-free at dt = 60 s, against the rotating-frame RK4.
+fn compute_fig2_ecs(p: &Zhang2018Params, x0: &GameState, pair: &Path) -> Result<Fig2Ecs, String> {
+    let (x0, pair) = (*x0, pair.to_path_buf());
     let coast = run_scene(
         &pair,
         &[
@@ -338,11 +374,21 @@ pub fn compute() -> Result<Results, String> {
         }
     }
 
-    // Fig. 3: barrier path from the BUP at the paper's P state and line of sight.
+    Ok(Fig2Ecs {
+        fig2_ecs,
+        h_sign_changes_ecs_s,
+        ecs_vs_rk4_m,
+    })
+}
+
+/// Fig. 3: barrier path from the BUP at the paper's P state and line of sight: (τ s,
+/// F_p cos v* N, F_p sin v* N, v* unwrapped deg) and the sign changes of F_p cos v*.
+fn compute_fig3(p: &Zhang2018Params, x0: &GameState) -> (Vec<(f64, f64, f64, f64)>, usize) {
+    let x0 = *x0;
     let s5 = los_angle_s5_rad(&x0);
     let role = PursuerRole::Adversarial;
-    let xb = bup_state(&p, &p_state(&x0), s5, 0.0, role);
-    let path = retrograde_path(&p, &xb, &gamma_on_boundary(s5), role, 3600.0, 365 * 24);
+    let xb = bup_state(p, &p_state(&x0), s5, 0.0, role);
+    let path = retrograde_path(p, &xb, &gamma_on_boundary(s5), role, 3600.0, 365 * 24);
     let mut fig3 = Vec::with_capacity(path.len());
     let mut unwrapped = path[0].v_rad;
     for (k, smp) in path.iter().enumerate() {
@@ -359,10 +405,14 @@ pub fn compute() -> Result<Results, String> {
         ));
     }
     let fig3_sign_changes = fig3.windows(2).filter(|w| w[0].1 * w[1].1 < 0.0).count();
+    (fig3, fig3_sign_changes)
+}
 
-    // Eq (17): force-free barrier from the BUP with zero relative velocity stays on the circle.
-    // (Force-free, the absolute position is immaterial: the L2-centred numbers keep the
-    // round-off at ulp(9e7 m) = 1.5e-8 m.)
+/// Eq (17): force-free barrier from the BUP with zero relative velocity stays on the circle;
+/// the largest | |ρ| − l |, m. (Force-free, the absolute position is immaterial: the
+/// L2-centred numbers keep the round-off at ulp(9e7 m) = 1.5e-8 m.)
+fn eq17_circle_error_m(p: &Zhang2018Params) -> f64 {
+    let role = PursuerRole::Adversarial;
     let mut ff = p.clone();
     ff.drift = Drift::ForceFree;
     let base = p_state(&paper_initial_state_l2c());
@@ -376,6 +426,23 @@ pub fn compute() -> Result<Results, String> {
         }
     }
 
+    eq17_circle_err_m
+}
+
+/// Runs every case (a few seconds in release).
+pub fn compute() -> Result<Results, String> {
+    let l2 = L2Params::paper();
+    let p = Zhang2018Params::paper();
+    let x0 = paper_initial_state_rot(&l2);
+    let f2 = compute_fig2(&p, &x0);
+    let pair = scene_path("zhang2018_pair.ron");
+    let Fig2Ecs {
+        fig2_ecs,
+        h_sign_changes_ecs_s,
+        ecs_vs_rk4_m,
+    } = compute_fig2_ecs(&p, &x0, &pair)?;
+    let (fig3, fig3_sign_changes) = compute_fig3(&p, &x0);
+    let eq17_circle_err_m = eq17_circle_error_m(&p);
     // Closed loop in the ECS world.
     let on = run_scene(&pair, &[], None)?;
     let off = run_scene(&pair, &["controllers.1.0.avoid=false"], None)?;
@@ -391,15 +458,15 @@ pub fn compute() -> Result<Results, String> {
     let bf_off = simulate_reconfiguration(&p, &x0, &plan, &none, false, 10.0, t_end);
 
     Ok(Results {
-        fig2,
+        fig2: f2.fig2,
         fig2_ecs,
-        h_sign_changes_s,
-        h_zero_s,
-        fig2_free,
-        h_zero_free_s,
-        closest_free,
+        h_sign_changes_s: f2.h_sign_changes_s,
+        h_zero_s: f2.h_zero_s,
+        fig2_free: f2.fig2_free,
+        h_zero_free_s: f2.h_zero_free_s,
+        closest_free: f2.closest_free,
         h_sign_changes_ecs_s,
-        closest_approach: ca,
+        closest_approach: f2.closest_approach,
         ecs_vs_rk4_m,
         fig3,
         fig3_sign_changes,
@@ -466,6 +533,13 @@ struct PairNumbers<'a> {
     t_sign: f64,
     t_sign_ecs: f64,
     t_sign_free: f64,
+}
+
+impl PairNumbers<'_> {
+    /// (minimum separation m, its time s) with avoidance, then without.
+    fn separations(&self) -> (f64, f64, f64, f64) {
+        (self.min_on, self.t_on, self.min_off, self.t_off)
+    }
 }
 
 /// The pair-scene numbers of [`PairNumbers`].
@@ -599,7 +673,7 @@ fn claims_hamiltonian(r: &Results, n: &PairNumbers) -> Vec<Claim> {
         )
         .with_sensitivity(format!(
             "with the Sun–EMB gravity of eq (1) (L2 model): {} (sign change at {})",
-            if h_has_both { "held" } else { "NOT held" },
+            held_word(h_has_both),
             h_sign_text(&r.h_zero_s)
         )),
         Claim::new(
@@ -696,17 +770,8 @@ fn claims_barrier(r: &Results) -> Vec<Claim> {
 
 /// The avoidance law in the ECS world: the pair with and without it, the reconfiguration.
 fn claims_closed_loop(r: &Results, n: &PairNumbers, rc: &ReconfNumbers) -> Vec<Claim> {
-    let &PairNumbers {
-        min_on,
-        t_on,
-        min_off,
-        t_off,
-        g_on,
-        g_off,
-        first_engaged,
-        engaged_s,
-        ..
-    } = n;
+    let (min_on, t_on, min_off, t_off) = n.separations();
+    let (g_on, g_off, first_engaged, engaged_s) = (n.g_on, n.g_off, n.first_engaged, n.engaged_s);
     let (reconf_min_on, reconf_all_held, reconf_off_entered) =
         (rc.min_on, rc.all_held, &rc.off_entered);
     let (l, hour) = (L_M, HOUR_S);
@@ -813,10 +878,7 @@ fn fig2(r: &Results, t_sign: f64) -> Figure {
             .line_styled(
                 "gravity-free (the paper's §3 setting)",
                 r.fig2_free.iter().map(|x| (x.0 / day, x.1)),
-                LineStyle {
-                    dash: Dash::Dashed,
-                    ..LineStyle::default()
-                },
+                LineStyle::dashed(),
             )
             .hline_styled(
                 0.0,
@@ -840,10 +902,7 @@ fn fig2(r: &Results, t_sign: f64) -> Figure {
             .line_styled(
                 "separation, gravity-free",
                 r.fig2_free.iter().map(|x| (x.0 / day, x.2 / 1e3)),
-                LineStyle {
-                    dash: Dash::Dashed,
-                    ..LineStyle::default()
-                },
+                LineStyle::dashed(),
             )
             .hline(l / 1e3, "l = 5 km")
             .vline(r.closest_approach.1 / day, "closest approach"),
@@ -969,10 +1028,7 @@ fn fig_reconf(r: &Results) -> Figure {
                 fig_reconf = fig_reconf.line_styled(
                     format!("{}–{} without avoidance", names[a], names[b]),
                     series(&r.reconf.off.t_s, &off, 5, hour),
-                    LineStyle {
-                        dash: Dash::Dashed,
-                        ..LineStyle::default()
-                    },
+                    LineStyle::dashed(),
                 );
             }
         }
@@ -1112,17 +1168,8 @@ fn fig3_section(rep: &mut ReportBuilder, r: &Results) {
 
 /// The avoidance law on the paper's initial states.
 fn pair_section(rep: &mut ReportBuilder, r: &Results, n: &PairNumbers) {
-    let &PairNumbers {
-        min_on,
-        t_on,
-        min_off,
-        t_off,
-        g_on,
-        g_off,
-        first_engaged,
-        engaged_s,
-        ..
-    } = n;
+    let (min_on, t_on, min_off, t_off) = n.separations();
+    let (g_on, g_off, first_engaged, engaged_s) = (n.g_on, n.g_off, n.first_engaged, n.engaged_s);
     let hour = HOUR_S;
     rep.heading("Avoidance on the paper's initial states (ECS world)");
     rep.paragraph(
