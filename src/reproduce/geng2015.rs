@@ -15,7 +15,8 @@
 //! law; `<case>_full_geometry.png`: port distance, paper model vs full geometry).
 
 use crate::control::geng2015::{
-    BoundEnvelope, Geng2015Law, convergence_time_bound_s, disturbance_bounds, relative_state,
+    BoundEnvelope, Geng2015Law, Geng2015Params, convergence_time_bound_s, disturbance_bounds,
+    relative_state,
 };
 use crate::control::geng2015::{Geng2015Loop, observation};
 use crate::report::ClaimKind::{BeyondThePaper, Paper};
@@ -197,41 +198,10 @@ pub fn run_case(
     };
     let dt = sim.scene.dt_s;
     let calls = (duration / (dt * period as f64)).round() as u64;
-    let deg = 180.0 / std::f64::consts::PI;
     let mut se = Series::default();
     let mut rate_max: (f64, f64) = (0.0, 0.0);
     for k in 0..=calls {
-        let t = sim.t_s();
-        let (Some(sc), Some(st), Some(reference)) =
-            (sim.body(&chaser), sim.body(&target), sim.reference_state())
-        else {
-            return Err("bodies or reference orbit missing".into());
-        };
-        rate_max.0 = rate_max.0.max(sc.omega_rad_s.norm());
-        rate_max.1 = rate_max.1.max(st.omega_rad_s.norm());
-        let rel = relative_state(
-            &params,
-            &observation(t, reference, &(&sc).into(), &(&st).into()),
-        );
-        let (r, v) = (rel.rho_m, rel.rho_dot_m_s);
-        let (a, w) = (rel.q_r.imag() * 2.0 * deg, rel.omega_r_rad_s * deg);
-        se.t.push(t);
-        se.trans.push(Vector6::new(r.x, r.y, r.z, v.x, v.y, v.z));
-        // Chaser body frame F_bs: A_s = inertial → body (world axes are inertial).
-        let a_s = sc.att.inverse().to_rotation_matrix().into_inner();
-        let w_s = sc.att.inverse() * sc.omega_rad_s;
-        let rho_i = rel.a_f.transpose() * r;
-        let rho_i_dot = rel.a_f.transpose() * (v + rel.omega_f_rad_s.cross(&r));
-        let rb = a_s * rho_i;
-        let vb = a_s * rho_i_dot - w_s.cross(&rb);
-        se.trans_bs
-            .push(Vector6::new(rb.x, rb.y, rb.z, vb.x, vb.y, vb.z));
-        se.v_bs_hill_rate.push(a_s * (rel.a_f.transpose() * v));
-        se.rot.push(Vector6::new(a.x, a.y, a.z, w.x, w.y, w.z));
-        se.port_distance_m.push(r.norm());
-        let out_dir = rel.a_f * (st.att * params.target_port_body_m);
-        se.approach_cos
-            .push(r.dot(&out_dir) / (r.norm() * out_dir.norm()).max(f64::MIN_POSITIVE));
+        push_sample(&mut se, &mut rate_max, &sim, (&chaser, &target), &params)?;
         if k == calls {
             break;
         }
@@ -246,40 +216,11 @@ pub fn run_case(
         se.s_dot.push(d.s_dot);
     }
     let (t0, t1) = window_s;
-    let mut acc = [0.0; 13];
-    for i in 0..6 {
-        let x: Vec<f64> = se.trans.iter().map(|v| v[i]).collect();
-        acc[i] = accuracy(&se.t, &x, t0, t1);
-        let y: Vec<f64> = se.rot.iter().map(|v| v[i]).collect();
-        acc[6 + i] = accuracy(&se.t, &y, t0, t1);
-    }
-    acc[12] = accuracy(&se.t, &se.port_distance_m, t0, t1);
-    let mut acc_bs = [0.0; 6];
-    for (i, a) in acc_bs.iter_mut().enumerate() {
-        let x: Vec<f64> = se.trans_bs.iter().map(|v| v[i]).collect();
-        *a = accuracy(&se.t, &x, t0, t1);
-    }
-    let mut acc_bs_h = [0.0; 3];
-    for (i, a) in acc_bs_h.iter_mut().enumerate() {
-        let x: Vec<f64> = se.v_bs_hill_rate.iter().map(|v| v[i]).collect();
-        *a = accuracy(&se.t, &x, t0, t1);
-    }
+    let (acc, acc_bs, acc_bs_h) = window_accuracies(&se, window_s);
     let (sc, tv) = chattering(&se.t, &se.u, t0, t1);
     let cs = sim.contacts();
     let mon = sim.monitor();
-    let closest = mon
-        .min_per_pair
-        .iter()
-        .zip(&mon.pairs)
-        .min_by(|a, b| a.0.distance_m.total_cmp(&b.0.distance_m))
-        .map(|(m, p)| {
-            (
-                m.distance_m,
-                mon.part_name(p.a, m.part_a).to_string(),
-                mon.part_name(p.b, m.part_b).to_string(),
-                m.t_s,
-            )
-        });
+    let closest = closest_parts(&sim);
     let res = CaseResult {
         name: sim.scene.name.clone(),
         law,
@@ -311,6 +252,92 @@ pub fn run_case(
         },
     };
     Ok(res)
+}
+
+/// Samples the state at the current time into `se` (before the controller call) and updates
+/// the largest body rates seen.
+fn push_sample(
+    se: &mut Series,
+    rate_max: &mut (f64, f64),
+    sim: &Simulation,
+    (chaser, target): (&str, &str),
+    params: &Geng2015Params,
+) -> Result<(), String> {
+    let deg = 180.0 / std::f64::consts::PI;
+    let t = sim.t_s();
+    let (Some(sc), Some(st), Some(reference)) =
+        (sim.body(chaser), sim.body(target), sim.reference_state())
+    else {
+        return Err("bodies or reference orbit missing".into());
+    };
+    rate_max.0 = rate_max.0.max(sc.omega_rad_s.norm());
+    rate_max.1 = rate_max.1.max(st.omega_rad_s.norm());
+    let rel = relative_state(
+        params,
+        &observation(t, reference, &(&sc).into(), &(&st).into()),
+    );
+    let (r, v) = (rel.rho_m, rel.rho_dot_m_s);
+    let (a, w) = (rel.q_r.imag() * 2.0 * deg, rel.omega_r_rad_s * deg);
+    se.t.push(t);
+    se.trans.push(Vector6::new(r.x, r.y, r.z, v.x, v.y, v.z));
+    // Chaser body frame F_bs: A_s = inertial → body (world axes are inertial).
+    let a_s = sc.att.inverse().to_rotation_matrix().into_inner();
+    let w_s = sc.att.inverse() * sc.omega_rad_s;
+    let rho_i = rel.a_f.transpose() * r;
+    let rho_i_dot = rel.a_f.transpose() * (v + rel.omega_f_rad_s.cross(&r));
+    let rb = a_s * rho_i;
+    let vb = a_s * rho_i_dot - w_s.cross(&rb);
+    se.trans_bs
+        .push(Vector6::new(rb.x, rb.y, rb.z, vb.x, vb.y, vb.z));
+    se.v_bs_hill_rate.push(a_s * (rel.a_f.transpose() * v));
+    se.rot.push(Vector6::new(a.x, a.y, a.z, w.x, w.y, w.z));
+    se.port_distance_m.push(r.norm());
+    let out_dir = rel.a_f * (st.att * params.target_port_body_m);
+    se.approach_cos
+        .push(r.dot(&out_dir) / (r.norm() * out_dir.norm()).max(f64::MIN_POSITIVE));
+    Ok(())
+}
+
+/// |mean| + 3σ over the window of the Hill-frame columns and |ρ|, of the F_bs translation,
+/// and of the F_bs velocity read as the rotated Hill rate.
+fn window_accuracies(se: &Series, window_s: (f64, f64)) -> ([f64; 13], [f64; 6], [f64; 3]) {
+    let (t0, t1) = window_s;
+    let mut acc = [0.0; 13];
+    for i in 0..6 {
+        let x: Vec<f64> = se.trans.iter().map(|v| v[i]).collect();
+        acc[i] = accuracy(&se.t, &x, t0, t1);
+        let y: Vec<f64> = se.rot.iter().map(|v| v[i]).collect();
+        acc[6 + i] = accuracy(&se.t, &y, t0, t1);
+    }
+    acc[12] = accuracy(&se.t, &se.port_distance_m, t0, t1);
+    let mut acc_bs = [0.0; 6];
+    for (i, a) in acc_bs.iter_mut().enumerate() {
+        let x: Vec<f64> = se.trans_bs.iter().map(|v| v[i]).collect();
+        *a = accuracy(&se.t, &x, t0, t1);
+    }
+    let mut acc_bs_h = [0.0; 3];
+    for (i, a) in acc_bs_h.iter_mut().enumerate() {
+        let x: Vec<f64> = se.v_bs_hill_rate.iter().map(|v| v[i]).collect();
+        *a = accuracy(&se.t, &x, t0, t1);
+    }
+    (acc, acc_bs, acc_bs_h)
+}
+
+/// Closest approach over the run in full geometry: (distance m, part, part, t s).
+fn closest_parts(sim: &Simulation) -> Option<(f64, String, String, f64)> {
+    let mon = sim.monitor();
+    mon.min_per_pair
+        .iter()
+        .zip(&mon.pairs)
+        .min_by(|a, b| a.0.distance_m.total_cmp(&b.0.distance_m))
+        .map(|(m, p)| {
+            (
+                m.distance_m,
+                mon.part_name(p.a, m.part_a).to_string(),
+                mon.part_name(p.b, m.part_b).to_string(),
+                m.t_s,
+            )
+        })
 }
 
 /// Table 3 as printed (linear case first, then the periodic case), per law T1, M1, T2, M2:
