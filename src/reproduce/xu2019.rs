@@ -267,41 +267,13 @@ pub fn run_loaded(
     let mut last_theta: Option<f64> = None;
     let mut open_acc = 0.0;
     let mut sample = |sim: &Simulation, run: &mut CaseRun, open_mean: f64| {
-        let c = sim.body("chaser").expect("chaser");
-        let p = c.pos_m.xy();
-        let th = c.yaw_rad();
-        let th = match last_theta {
-            None => th,
-            Some(prev) => {
-                prev + (th - prev + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
-                    - std::f64::consts::PI
-            }
-        };
-        last_theta = Some(th);
-        run.t_s.push(sim.t_s());
-        run.x_m.push(p.x);
-        run.y_m.push(p.y);
-        run.theta_deg.push(th.to_degrees());
-        run.vel.push([c.vel_m_s.x, c.vel_m_s.y, c.omega_rad_s.z]);
-        run.radial_obstacle_eq8_m.push(
-            law.params
-                .obstacle
-                .radial_distance_m(p, RadialForm::PaperEq8),
+        push_sample(
+            run,
+            sim,
+            (&law.params, obstacle),
+            &mut last_theta,
+            open_mean,
         );
-        run.radial_obstacle_exact_m
-            .push(law.params.obstacle.radial_distance_m(p, RadialForm::Exact));
-        run.radial_heart_m
-            .push(law.params.heart.radial_distance_m(p));
-        let mon = sim.monitor();
-        let d = mon
-            .pairs
-            .iter()
-            .find(|q| q.a == 0 && Some(q.b) == obstacle)
-            .map_or(f64::NAN, |q| q.distance_m);
-        run.geometry_obstacle_m.push(d);
-        run.open_nozzles.push(open_mean);
-        let ctl = sim.law::<Xu2019Instance>(0).expect("an Xu2019 controller");
-        run.gas_kg.push(ctl.gas_used_kg);
     };
     sample(&sim, &mut run, 0.0);
     for _ in 0..n_samples {
@@ -320,6 +292,66 @@ pub fn run_loaded(
         sample(&sim, &mut run, open_acc / per_sample as f64);
     }
     let _ = open_acc;
+    read_final_state(&mut run, &sim, &law, goal);
+    read_contacts(&mut run, &sim, obstacle);
+    run.steps = sim.steps();
+    run.wall_s = sim.wall_s;
+    if out.is_some() {
+        sim.finish()
+            .map_err(|e| format!("cannot finish the outputs of {name}: {e}"))?;
+    }
+    Ok(run)
+}
+
+/// One sample of the chaser's state, distances, valves and gas into `run`; θ is unwrapped
+/// against the previous sample's (`last_theta`).
+fn push_sample(
+    run: &mut CaseRun,
+    sim: &Simulation,
+    (params, obstacle): (&Xu2019Params, Option<usize>),
+    last_theta: &mut Option<f64>,
+    open_mean: f64,
+) {
+    let c = sim.body("chaser").expect("chaser");
+    let p = c.pos_m.xy();
+    let th = c.yaw_rad();
+    let th = match *last_theta {
+        None => th,
+        Some(prev) => {
+            prev + (th - prev + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
+                - std::f64::consts::PI
+        }
+    };
+    *last_theta = Some(th);
+    run.t_s.push(sim.t_s());
+    run.x_m.push(p.x);
+    run.y_m.push(p.y);
+    run.theta_deg.push(th.to_degrees());
+    run.vel.push([c.vel_m_s.x, c.vel_m_s.y, c.omega_rad_s.z]);
+    run.radial_obstacle_eq8_m
+        .push(params.obstacle.radial_distance_m(p, RadialForm::PaperEq8));
+    run.radial_obstacle_exact_m
+        .push(params.obstacle.radial_distance_m(p, RadialForm::Exact));
+    run.radial_heart_m.push(params.heart.radial_distance_m(p));
+    let mon = sim.monitor();
+    let d = mon
+        .pairs
+        .iter()
+        .find(|q| q.a == 0 && Some(q.b) == obstacle)
+        .map_or(f64::NAN, |q| q.distance_m);
+    run.geometry_obstacle_m.push(d);
+    run.open_nozzles.push(open_mean);
+    let ctl = sim.law::<Xu2019Instance>(0).expect("an Xu2019 controller");
+    run.gas_kg.push(ctl.gas_used_kg);
+}
+
+/// The actuator, docking and goal outcome at the end of the run.
+fn read_final_state(
+    run: &mut CaseRun,
+    sim: &Simulation,
+    law: &Xu2019Controller,
+    goal: Vector3<f64>,
+) {
     let act = &sim
         .controllers()
         .slot_of::<Xu2019Instance>(0)
@@ -344,6 +376,10 @@ pub fn run_loaded(
                 && (th.to_radians() - goal.z).abs().to_degrees() < GOAL_ANGLE_TOL_DEG
         })
         .map(|(t, _)| *t);
+}
+
+/// The closest approach to the obstacle, the collisions and the off-table events.
+fn read_contacts(run: &mut CaseRun, sim: &Simulation, obstacle: Option<usize>) {
     let mon = sim.monitor();
     run.min_geometry_obstacle = (f64::NAN, "no obstacle body".into(), f64::NAN);
     if let Some(b) = obstacle
@@ -386,13 +422,6 @@ pub fn run_loaded(
             )
         })
         .collect();
-    run.steps = sim.steps();
-    run.wall_s = sim.wall_s;
-    if out.is_some() {
-        sim.finish()
-            .map_err(|e| format!("cannot finish the outputs of {name}: {e}"))?;
-    }
-    Ok(run)
 }
 
 /// Runs both cases (their scenes' durations), recording under `out/<case>/` if given.
