@@ -531,6 +531,22 @@ pub fn barrier_layer_m(c: &Cissoid, k2_m4: f64, r1: &Vector3<f64>) -> f64 {
     k2_m4.sqrt() / g.norm()
 }
 
+/// The law in the Bevy-free plant: continuous time and sampled, paper gains, the reaching
+/// variant, the narrow corridor and the fixed reference.
+struct CtRuns {
+    ct_paper: CtRun,
+    ct_reaching: CtRun,
+    ct_reaching_k2_0: CtRun,
+    sampled: Vec<CtRun>,
+    ct_narrow: (CtRun, CtRun),
+    ct_fixed_reference: CtRun,
+    sampled_fixed_reference: CtRun,
+    /// |ω_d| where the continuous-time reaching run leaves the corridor, rad/s.
+    omega_d_at_exit_rad_s: f64,
+    /// Thickness of the barrier layer at the end of that run, m.
+    barrier_layer_m: f64,
+}
+
 /// Runs every case and the campaign.
 pub fn compute() -> Result<Results, String> {
     let corridor = run_case(
@@ -567,6 +583,29 @@ pub fn compute() -> Result<Results, String> {
     let corridor_shape = spec_of(&load_bundled("scenes/papers/guo2016/guo2016_corridor.ron")?)
         .params(1.0, nalgebra::Matrix3::identity())
         .corridor();
+    let ct = ct_runs(&corridor_shape)?;
+    Ok(Results {
+        corridor,
+        no_avoidance,
+        reaching,
+        reaching_no_avoidance,
+        max_path_difference_m,
+        campaign,
+        corridor_shape,
+        ct_paper: ct.ct_paper,
+        ct_reaching: ct.ct_reaching,
+        ct_reaching_k2_0: ct.ct_reaching_k2_0,
+        sampled: ct.sampled,
+        ct_narrow: ct.ct_narrow,
+        barrier_layer_m: ct.barrier_layer_m,
+        ct_fixed_reference: ct.ct_fixed_reference,
+        sampled_fixed_reference: ct.sampled_fixed_reference,
+        omega_d_at_exit_rad_s: ct.omega_d_at_exit_rad_s,
+    })
+}
+
+/// The Bevy-free runs of [`CtRuns`].
+fn ct_runs(corridor_shape: &Cissoid) -> Result<CtRuns, String> {
     let setup = |l: &LoadedScene| CtSetup::from_scene(l);
     let paper_setup = setup(&load_bundled("scenes/papers/guo2016/guo2016_corridor.ron")?)?;
     let reach = setup(&reaching_variant(
@@ -609,6 +648,30 @@ pub fn compute() -> Result<Results, String> {
         })
         .collect();
     tick("sampled runs");
+    let ct_narrow = narrow_runs()?;
+    tick("narrow corridor");
+    let (ct_fixed_reference, sampled_fixed_reference) = fixed_reference_runs()?;
+    tick("fixed reference");
+    let omega_d_at_exit_rad_s = omega_d_rad_s(&reach.params, ct_reaching.t_end_s);
+    let barrier_layer_m = ct_reaching.samples.last().map_or(f64::NAN, |s| {
+        barrier_layer_m(corridor_shape, reach.params.k2_m4, &s.r1_m)
+    });
+    Ok(CtRuns {
+        ct_paper,
+        ct_reaching,
+        ct_reaching_k2_0,
+        sampled,
+        ct_narrow,
+        ct_fixed_reference,
+        sampled_fixed_reference,
+        omega_d_at_exit_rad_s,
+        barrier_layer_m,
+    })
+}
+
+/// Paper gains in continuous time with the narrow corridor (tan θ = 4.3), k2 = 0.02 and 0.
+fn narrow_runs() -> Result<(CtRun, CtRun), String> {
+    let setup = |l: &LoadedScene| CtSetup::from_scene(l);
     let narrow = |file: &str| -> Result<CtSetup, String> {
         let mut l = load_bundled(file)?;
         spec_mut(&mut l)
@@ -630,7 +693,13 @@ pub fn compute() -> Result<Results, String> {
             0.05,
         ),
     );
-    tick("narrow corridor");
+    Ok(ct_narrow)
+}
+
+/// The reaching variant with the desired attitude held fixed (σ_d ≡ 0): continuous time and
+/// sampled every 10 ms.
+fn fixed_reference_runs() -> Result<(CtRun, CtRun), String> {
+    let setup = |l: &LoadedScene| CtSetup::from_scene(l);
     let fixed = {
         let mut l = reaching_variant("scenes/papers/guo2016/guo2016_corridor.ron")?;
         *spec_mut(&mut l)
@@ -651,29 +720,7 @@ pub fn compute() -> Result<Results, String> {
         SAMPLED_DURATION_S,
         0.005,
     );
-    tick("fixed reference");
-    let omega_d_at_exit_rad_s = omega_d_rad_s(&reach.params, ct_reaching.t_end_s);
-    let barrier_layer_m = ct_reaching.samples.last().map_or(f64::NAN, |s| {
-        barrier_layer_m(&corridor_shape, reach.params.k2_m4, &s.r1_m)
-    });
-    Ok(Results {
-        corridor,
-        no_avoidance,
-        reaching,
-        reaching_no_avoidance,
-        max_path_difference_m,
-        campaign,
-        corridor_shape,
-        ct_paper,
-        ct_reaching,
-        ct_reaching_k2_0,
-        sampled,
-        ct_narrow,
-        barrier_layer_m,
-        ct_fixed_reference,
-        sampled_fixed_reference,
-        omega_d_at_exit_rad_s,
-    })
+    Ok((ct_fixed_reference, sampled_fixed_reference))
 }
 
 /// |ṙ1| at the sample nearest `t_s`, m/s.
