@@ -106,6 +106,11 @@ impl Claim {
     }
 }
 
+/// "held" or "NOT held": a verdict inside a claim's measured or sensitivity text.
+pub fn held_word(held: bool) -> &'static str {
+    if held { "held" } else { "NOT held" }
+}
+
 /// Claims held and in all, per kind, in [`ClaimKind::ALL`] order: `[(held, total); 2]`.
 pub fn tally(claims: &[Claim]) -> [(usize, usize); 2] {
     let mut t = [(0, 0); 2];

@@ -17,6 +17,9 @@ pub const CLAIMS_FILE: &str = "claims.json";
 #[derive(Debug, Clone)]
 enum Block {
     Heading(String),
+    Subheading(String),
+    Findings,
+    Raw(String),
     Paragraph(String),
     Table {
         headers: Vec<String>,
@@ -42,6 +45,7 @@ pub struct ReportBuilder {
     blocks: Vec<Block>,
     figures: Vec<(String, Figure)>,
     claims: Option<Vec<Claim>>,
+    findings: Option<Vec<String>>,
     svg: bool,
 }
 
@@ -80,6 +84,7 @@ impl ReportBuilder {
             blocks: Vec::new(),
             figures: Vec::new(),
             claims: None,
+            findings: None,
             svg: false,
         }
     }
@@ -96,9 +101,22 @@ impl ReportBuilder {
         self
     }
 
+    /// A third-level heading (`### text`).
+    pub fn subheading(&mut self, text: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Subheading(text.into()));
+        self
+    }
+
     /// A paragraph of Markdown text (inserted as given).
     pub fn paragraph(&mut self, text: impl Into<String>) -> &mut Self {
         self.blocks.push(Block::Paragraph(text.into()));
+        self
+    }
+
+    /// Markdown inserted exactly as given (not trimmed, no newline added) after the blank
+    /// line that separates blocks; `raw("")` ends a report with a blank line.
+    pub fn raw(&mut self, text: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Raw(text.into()));
         self
     }
 
@@ -126,6 +144,40 @@ impl ReportBuilder {
             self.blocks.push(Block::Claims);
         }
         self.claims = Some(claims.to_vec());
+        self
+    }
+
+    /// Appends one claim to the claims table, placing the table here if [`Self::claims`] has
+    /// not placed it yet. A report that computes its claims section by section places the
+    /// table first (`claims(&[])`) and adds each claim where it is measured.
+    pub fn claim(&mut self, claim: Claim) -> &mut Self {
+        if self.claims.is_none() {
+            self.blocks.push(Block::Claims);
+        }
+        self.claims.get_or_insert_with(Vec::new).push(claim);
+        self
+    }
+
+    /// The claim with this id, to amend (e.g. a sensitivity measured in a later section).
+    pub fn claim_mut(&mut self, id: &str) -> Option<&mut Claim> {
+        self.claims.as_mut()?.iter_mut().find(|c| c.id == id)
+    }
+
+    /// Places the findings list here: one `- finding` line per [`Self::finding`], in the
+    /// order they are added, wherever in the report they are measured.
+    pub fn findings(&mut self) -> &mut Self {
+        if self.findings.is_none() {
+            self.blocks.push(Block::Findings);
+            self.findings = Some(Vec::new());
+        }
+        self
+    }
+
+    /// Appends one finding (Markdown) to the findings list, placing the list here if
+    /// [`Self::findings`] has not placed it yet.
+    pub fn finding(&mut self, text: impl Into<String>) -> &mut Self {
+        self.findings();
+        self.findings.get_or_insert_with(Vec::new).push(text.into());
         self
     }
 
@@ -172,8 +224,17 @@ impl ReportBuilder {
                 Block::Heading(t) => {
                     let _ = writeln!(md, "## {t}");
                 }
+                Block::Subheading(t) => {
+                    let _ = writeln!(md, "### {t}");
+                }
                 Block::Paragraph(t) => {
                     let _ = writeln!(md, "{}", t.trim_end());
+                }
+                Block::Raw(t) => md.push_str(t),
+                Block::Findings => {
+                    for f in self.findings.as_deref().unwrap_or(&[]) {
+                        let _ = writeln!(md, "- {f}");
+                    }
                 }
                 Block::Code(t) => {
                     let _ = writeln!(md, "```\n{}\n```", t.trim_end());
@@ -287,6 +348,20 @@ pub fn claims_markdown(claims: &[Claim]) -> io::Result<String> {
         write_table(&mut md, &headers, &rows);
     }
     Ok(md)
+}
+
+/// A Markdown table with compact rules (`|---|`) whose header and cells are Markdown as given
+/// (the caller escapes `|`), one line per row, ending with a newline; for
+/// [`ReportBuilder::paragraph`] where a report's tables keep that layout.
+pub fn compact_table<S: AsRef<str>>(headers: &[S], rows: &[Vec<String>]) -> String {
+    let mut md = String::new();
+    let h: Vec<&str> = headers.iter().map(|h| h.as_ref()).collect();
+    let _ = writeln!(md, "| {} |", h.join(" | "));
+    let _ = writeln!(md, "|{}", "---|".repeat(h.len()));
+    for r in rows {
+        let _ = writeln!(md, "| {} |", r.join(" | "));
+    }
+    md
 }
 
 fn write_table(md: &mut String, headers: &[String], rows: &[Vec<String>]) {
@@ -408,5 +483,46 @@ mod tests {
         let mut r = ReportBuilder::new("t");
         r.image("abs", "/tmp/x.png");
         assert!(r.to_markdown().is_err());
+    }
+
+    /// Reference: the Markdown written out by hand. Claims and findings placed early and
+    /// filled by later sections appear where they were placed, in the order added.
+    #[test]
+    fn invariant_claims_and_findings_filled_later_render_where_placed() {
+        let mut r = ReportBuilder::new("t");
+        r.heading("Claims")
+            .claims(&[])
+            .heading("Findings")
+            .findings();
+        r.subheading("S").paragraph(compact_table(
+            &["a", "b\\|c"],
+            &[vec!["1".into(), "2".into()]],
+        ));
+        r.finding("first").claim(Claim::new(
+            "x",
+            ClaimKind::Paper,
+            "c",
+            None,
+            "ours: s",
+            "m",
+            true,
+        ));
+        r.finding("second").raw("");
+        if let Some(c) = r.claim_mut("x") {
+            c.measured = "m2".into();
+        }
+        let md = r.to_markdown().unwrap();
+        let claims = claims_markdown(r.claims_list().unwrap()).unwrap();
+        assert!(
+            claims.contains("| `x` | c | — | ours: s | m2 | ✔ held | — |\n"),
+            "{claims}"
+        );
+        assert_eq!(
+            md,
+            format!(
+                "# t\n\n## Claims\n\n{claims}\n## Findings\n\n- first\n- second\n\n### S\n\n\
+                 | a | b\\|c |\n|---|---|\n| 1 | 2 |\n\n"
+            )
+        );
     }
 }

@@ -31,9 +31,9 @@ pub mod run_plots;
 mod svg;
 mod ticks;
 
-pub use claims::{Claim, ClaimKind, read_claims_json, tally, write_claims_json};
+pub use claims::{Claim, ClaimKind, held_word, read_claims_json, tally, write_claims_json};
 pub use fsio::write_atomic;
-pub use markdown::{ReportBuilder, claims_markdown};
+pub use markdown::{ReportBuilder, claims_markdown, compact_table};
 pub use plot::{Color, Dash, Figure, Legend, LineStyle, PALETTE, Plot};
 pub use raster::svg_to_png;
 

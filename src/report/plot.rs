@@ -108,6 +108,24 @@ impl Default for LineStyle {
     }
 }
 
+impl LineStyle {
+    /// The default style, dashed.
+    pub fn dashed() -> Self {
+        Self {
+            dash: Dash::Dashed,
+            ..Self::default()
+        }
+    }
+
+    /// The default style, dotted.
+    pub fn dotted() -> Self {
+        Self {
+            dash: Dash::Dotted,
+            ..Self::default()
+        }
+    }
+}
+
 /// Style of a polygon.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PolygonStyle {

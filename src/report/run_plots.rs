@@ -165,6 +165,14 @@ fn roles(dir: &Path, bodies: &[String]) -> (String, String) {
         bodies.get(1).cloned().unwrap_or_default(),
     )
 }
+/// What the figure writers of [`plot_run`] share: the trajectory, its time column (s), the
+/// run's label and the output folder.
+struct Ctx<'a> {
+    traj: &'a Table,
+    t: Vec<f64>,
+    run: String,
+    out: &'a Path,
+}
 
 /// Draws the standard figures of the run in `dir` into `out` (created); returns the files.
 pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, String> {
@@ -186,155 +194,208 @@ pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, String> {
         .iter()
         .filter_map(|n| n.strip_suffix(".px_m").map(str::to_string))
         .collect();
-    let run = dir.display().to_string();
+    let cx = Ctx {
+        traj: &traj,
+        t,
+        run: dir.display().to_string(),
+        out,
+    };
     let mut written = Vec::new();
-    let (ch, tg) = roles(dir, &bodies);
+    if bodies.len() >= 2 {
+        relative_figures(&cx, roles(dir, &bodies), &mut written)?;
+    }
+    clearance_figure(&cx, &mut written)?;
+    docking_figure(&cx, dir, &mut written)?;
+    commands_figure(&cx, &bodies, &mut written)?;
+    Ok(written)
+}
+
+/// The chaser's position relative to the target in the target's body axes, range and range
+/// rate, per sample: `cp` the chaser's [p m; v m/s] columns, `tp` the target's and its
+/// attitude quaternion (w, x, y, z).
+fn relative_state(
+    t: &[f64],
+    cp: &[Vec<f64>],
+    tp: &[Vec<f64>],
+) -> (Vec<Vec<f64>>, Vec<f64>, Vec<f64>) {
+    let n = t.len();
+    let mut body: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(n)).collect();
+    let (mut range, mut rate) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    for i in 0..n {
+        let r = nalgebra::Vector3::new(
+            cp[0][i] - tp[0][i],
+            cp[1][i] - tp[1][i],
+            cp[2][i] - tp[2][i],
+        );
+        let v = nalgebra::Vector3::new(
+            cp[3][i] - tp[3][i],
+            cp[4][i] - tp[4][i],
+            cp[5][i] - tp[5][i],
+        );
+        let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+            tp[6][i], tp[7][i], tp[8][i], tp[9][i],
+        ));
+        let rb = q.inverse() * r;
+        for k in 0..3 {
+            body[k].push(rb[k]);
+        }
+        range.push(r.norm());
+        rate.push(if r.norm() > 0.0 {
+            r.dot(&v) / r.norm()
+        } else {
+            f64::NAN
+        });
+    }
+    (body, range, rate)
+}
+
+/// Relative state in the target's body frame (and the Hill frame when recorded), range and
+/// range rate, when both bodies' states are recorded.
+fn relative_figures(
+    cx: &Ctx,
+    (ch, tg): (String, String),
+    written: &mut Vec<PathBuf>,
+) -> Result<(), String> {
+    let (traj, t, out) = (cx.traj, &cx.t, cx.out);
     let get = |b: &str, c: &str| traj.col(&format!("{b}.{c}")).map(<[f64]>::to_vec);
-    // Relative state in the target's body frame (and the Hill frame when recorded).
-    if bodies.len() >= 2
-        && let (Some(cp), Some(tp)) = (
-            ["px_m", "py_m", "pz_m", "vx_m_s", "vy_m_s", "vz_m_s"]
-                .iter()
-                .map(|c| get(&ch, c))
-                .collect::<Option<Vec<_>>>(),
-            [
-                "px_m", "py_m", "pz_m", "vx_m_s", "vy_m_s", "vz_m_s", "qw", "qx", "qy", "qz",
-            ]
+    let (Some(cp), Some(tp)) = (
+        ["px_m", "py_m", "pz_m", "vx_m_s", "vy_m_s", "vz_m_s"]
             .iter()
-            .map(|c| get(&tg, c))
+            .map(|c| get(&ch, c))
             .collect::<Option<Vec<_>>>(),
+        [
+            "px_m", "py_m", "pz_m", "vx_m_s", "vy_m_s", "vz_m_s", "qw", "qx", "qy", "qz",
+        ]
+        .iter()
+        .map(|c| get(&tg, c))
+        .collect::<Option<Vec<_>>>(),
+    ) else {
+        return Ok(());
+    };
+    let (body, range, rate) = relative_state(t, &cp, &tp);
+    relative_position_figure(cx, (&ch, &tg), &body, written)?;
+    let run = &cx.run;
+    let fig = Figure::new(format!("{run}: range and range rate, {ch} to {tg}"))
+        .cols(1)
+        .plot(
+            Plot::new("range (centres of mass)")
+                .x_label("t [s]")
+                .y_label("range [m]")
+                .line("|r|", t.iter().copied().zip(range.iter().copied())),
         )
-    {
-        let n = t.len();
-        let mut body: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(n)).collect();
-        let (mut range, mut rate) = (Vec::with_capacity(n), Vec::with_capacity(n));
-        for i in 0..n {
-            let r = nalgebra::Vector3::new(
-                cp[0][i] - tp[0][i],
-                cp[1][i] - tp[1][i],
-                cp[2][i] - tp[2][i],
-            );
-            let v = nalgebra::Vector3::new(
-                cp[3][i] - tp[3][i],
-                cp[4][i] - tp[4][i],
-                cp[5][i] - tp[5][i],
-            );
-            let q = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
-                tp[6][i], tp[7][i], tp[8][i], tp[9][i],
-            ));
-            let rb = q.inverse() * r;
-            for k in 0..3 {
-                body[k].push(rb[k]);
-            }
-            range.push(r.norm());
-            rate.push(if r.norm() > 0.0 {
-                r.dot(&v) / r.norm()
-            } else {
-                f64::NAN
-            });
-        }
-        let xy = |a: usize, b: usize| body[a].iter().copied().zip(body[b].iter().copied());
-        let mut fig = Figure::new(format!("{run}: {ch} relative to {tg}"))
-            .cols(2)
-            .plot(
-                Plot::new(format!("{tg} body frame, x–y"))
-                    .x_label("x [m]")
-                    .y_label("y [m]")
-                    .equal_aspect()
-                    .line(format!("{ch} centre of mass"), xy(0, 1))
-                    .scatter("start", xy(0, 1).take(1)),
-            )
-            .plot(
-                Plot::new(format!("{tg} body frame, x–z"))
-                    .x_label("x [m]")
-                    .y_label("z [m]")
-                    .equal_aspect()
-                    .line(format!("{ch} centre of mass"), xy(0, 2))
-                    .scatter("start", xy(0, 2).take(1)),
-            );
-        let mut header: Vec<String> = ["t_s", "x_body_m", "y_body_m", "z_body_m"]
-            .map(String::from)
-            .to_vec();
-        let mut data = vec![t.clone(), body[0].clone(), body[1].clone(), body[2].clone()];
-        let hill: Option<Vec<Vec<f64>>> = ["hill_x_m", "hill_y_m", "hill_z_m"]
-            .iter()
-            .map(|c| Some((get(&ch, c)?, get(&tg, c)?)))
-            .map(|p| p.map(|(a, b)| a.iter().zip(&b).map(|(x, y)| x - y).collect()))
-            .collect();
-        if let Some(h) = hill {
-            let hp = |a: usize, b: usize| h[a].iter().copied().zip(h[b].iter().copied());
-            fig.push(
-                Plot::new("Hill frame, y (along-track) – x (radial)")
-                    .x_label("y along-track [m]")
-                    .y_label("x radial [m]")
-                    .equal_aspect()
-                    .line(format!("{ch} − {tg}"), hp(1, 0)),
-            );
-            fig.push(
-                Plot::new("Hill frame, y (along-track) – z (normal)")
-                    .x_label("y along-track [m]")
-                    .y_label("z normal [m]")
-                    .equal_aspect()
-                    .line(format!("{ch} − {tg}"), hp(1, 2)),
-            );
-            header.extend(["x_hill_m", "y_hill_m", "z_hill_m"].map(String::from));
-            data.extend(h);
-        }
-        write(out, "relative_position", &fig, &header, &data, &mut written)?;
-        let fig = Figure::new(format!("{run}: range and range rate, {ch} to {tg}"))
-            .cols(1)
-            .plot(
-                Plot::new("range (centres of mass)")
-                    .x_label("t [s]")
-                    .y_label("range [m]")
-                    .line("|r|", t.iter().copied().zip(range.iter().copied())),
-            )
-            .plot(
-                Plot::new("range rate")
-                    .x_label("t [s]")
-                    .y_label("range rate [m/s]")
-                    .hline(0.0, "0")
-                    .line("ṙ = r·v/|r|", t.iter().copied().zip(rate.iter().copied())),
-            );
-        write(
-            out,
-            "range",
-            &fig,
-            &["t_s", "range_m", "range_rate_m_s"].map(String::from),
-            &[t.clone(), range, rate],
-            &mut written,
-        )?;
+        .plot(
+            Plot::new("range rate")
+                .x_label("t [s]")
+                .y_label("range rate [m/s]")
+                .hline(0.0, "0")
+                .line("ṙ = r·v/|r|", t.iter().copied().zip(rate.iter().copied())),
+        );
+    write(
+        out,
+        "range",
+        &fig,
+        &["t_s", "range_m", "range_rate_m_s"].map(String::from),
+        &[t.clone(), range, rate],
+        written,
+    )?;
+    Ok(())
+}
+
+/// The chaser's path in the target's body frame, and in the Hill frame when recorded.
+fn relative_position_figure(
+    cx: &Ctx,
+    (ch, tg): (&str, &str),
+    body: &[Vec<f64>],
+    written: &mut Vec<PathBuf>,
+) -> Result<(), String> {
+    let (traj, t, run, out) = (cx.traj, &cx.t, &cx.run, cx.out);
+    let get = |b: &str, c: &str| traj.col(&format!("{b}.{c}")).map(<[f64]>::to_vec);
+    let xy = |a: usize, b: usize| body[a].iter().copied().zip(body[b].iter().copied());
+    let mut fig = Figure::new(format!("{run}: {ch} relative to {tg}"))
+        .cols(2)
+        .plot(
+            Plot::new(format!("{tg} body frame, x–y"))
+                .x_label("x [m]")
+                .y_label("y [m]")
+                .equal_aspect()
+                .line(format!("{ch} centre of mass"), xy(0, 1))
+                .scatter("start", xy(0, 1).take(1)),
+        )
+        .plot(
+            Plot::new(format!("{tg} body frame, x–z"))
+                .x_label("x [m]")
+                .y_label("z [m]")
+                .equal_aspect()
+                .line(format!("{ch} centre of mass"), xy(0, 2))
+                .scatter("start", xy(0, 2).take(1)),
+        );
+    let mut header: Vec<String> = ["t_s", "x_body_m", "y_body_m", "z_body_m"]
+        .map(String::from)
+        .to_vec();
+    let mut data = vec![t.clone(), body[0].clone(), body[1].clone(), body[2].clone()];
+    let hill: Option<Vec<Vec<f64>>> = ["hill_x_m", "hill_y_m", "hill_z_m"]
+        .iter()
+        .map(|c| Some((get(ch, c)?, get(tg, c)?)))
+        .map(|p| p.map(|(a, b)| a.iter().zip(&b).map(|(x, y)| x - y).collect()))
+        .collect();
+    if let Some(h) = hill {
+        let hp = |a: usize, b: usize| h[a].iter().copied().zip(h[b].iter().copied());
+        fig.push(
+            Plot::new("Hill frame, y (along-track) – x (radial)")
+                .x_label("y along-track [m]")
+                .y_label("x radial [m]")
+                .equal_aspect()
+                .line(format!("{ch} − {tg}"), hp(1, 0)),
+        );
+        fig.push(
+            Plot::new("Hill frame, y (along-track) – z (normal)")
+                .x_label("y along-track [m]")
+                .y_label("z normal [m]")
+                .equal_aspect()
+                .line(format!("{ch} − {tg}"), hp(1, 2)),
+        );
+        header.extend(["x_hill_m", "y_hill_m", "z_hill_m"].map(String::from));
+        data.extend(h);
     }
-    // Clearance and guarantee margins.
-    {
-        let mut p = Plot::new("minimum distance and guarantee margins")
-            .x_label("t [s]")
-            .y_label("distance, margin [m]")
-            .hline(0.0, "0");
-        let mut header = vec!["t_s".to_string()];
-        let mut data = vec![t.clone()];
-        let mut k = 0;
-        for (i, n) in traj.names.iter().enumerate() {
-            let label = if n == "min_distance_m" {
-                Some("minimum distance (full geometry)".to_string())
-            } else {
-                n.strip_prefix("guarantee.")
-                    .map(|g| format!("margin of {g}"))
-            };
-            if let Some(label) = label {
-                let pts = t.iter().copied().zip(traj.cols[i].iter().copied());
-                p = p.line_styled(label, pts, style(k));
-                k += 1;
-                header.push(n.clone());
-                data.push(traj.cols[i].clone());
-            }
-        }
-        if k > 0 {
-            let fig = Figure::new(format!("{run}: clearance")).cols(1).plot(p);
-            write(out, "clearance", &fig, &header, &data, &mut written)?;
+    write(out, "relative_position", &fig, &header, &data, written)?;
+    Ok(())
+}
+
+/// Minimum distance and guarantee margins.
+fn clearance_figure(cx: &Ctx, written: &mut Vec<PathBuf>) -> Result<(), String> {
+    let (traj, t, run, out) = (cx.traj, &cx.t, &cx.run, cx.out);
+    let mut p = Plot::new("minimum distance and guarantee margins")
+        .x_label("t [s]")
+        .y_label("distance, margin [m]")
+        .hline(0.0, "0");
+    let mut header = vec!["t_s".to_string()];
+    let mut data = vec![t.clone()];
+    let mut k = 0;
+    for (i, n) in traj.names.iter().enumerate() {
+        let label = if n == "min_distance_m" {
+            Some("minimum distance (full geometry)".to_string())
+        } else {
+            n.strip_prefix("guarantee.")
+                .map(|g| format!("margin of {g}"))
+        };
+        if let Some(label) = label {
+            let pts = t.iter().copied().zip(traj.cols[i].iter().copied());
+            p = p.line_styled(label, pts, style(k));
+            k += 1;
+            header.push(n.clone());
+            data.push(traj.cols[i].clone());
         }
     }
-    // Docking state and contact forces.
+    if k > 0 {
+        let fig = Figure::new(format!("{run}: clearance")).cols(1).plot(p);
+        write(out, "clearance", &fig, &header, &data, written)?;
+    }
+    Ok(())
+}
+
+/// Docking state and contact forces.
+fn docking_figure(cx: &Ctx, dir: &Path, written: &mut Vec<PathBuf>) -> Result<(), String> {
+    let (traj, t, run, out) = (cx.traj, &cx.t, &cx.run, cx.out);
     let contacts = dir.join("contacts.csv");
     let mut force_by_t: BTreeMap<u64, f64> = BTreeMap::new();
     if contacts.exists() {
@@ -373,9 +434,14 @@ pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, String> {
             header.push("dock.state".into());
             data.push(s.to_vec());
         }
-        write(out, "docking", &fig, &header, &data, &mut written)?;
+        write(out, "docking", &fig, &header, &data, written)?;
     }
-    // Commanded forces and torques.
+    Ok(())
+}
+
+/// Commanded forces and torques: the recorded columns that are not body states.
+fn commands_figure(cx: &Ctx, bodies: &[String], written: &mut Vec<PathBuf>) -> Result<(), String> {
+    let (traj, t, run, out) = (cx.traj, &cx.t, &cx.run, cx.out);
     let is_state = |n: &str| bodies.iter().any(|b| n.starts_with(&format!("{b}.")));
     let mut forces = Plot::new("forces").x_label("t [s]").y_label("force [N]");
     let mut torques = Plot::new("torques")
@@ -409,9 +475,9 @@ pub fn plot_run(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, String> {
         if nt > 0 {
             fig.push(torques);
         }
-        write(out, "commands", &fig, &header, &data, &mut written)?;
+        write(out, "commands", &fig, &header, &data, written)?;
     }
-    Ok(written)
+    Ok(())
 }
 
 /// The docking-state plot's title: every state code the run's `dock.state` column holds, with

@@ -15,10 +15,12 @@
 //! law; `<case>_full_geometry.png`: port distance, paper model vs full geometry).
 
 use crate::control::geng2015::{
-    BoundEnvelope, Geng2015Law, convergence_time_bound_s, disturbance_bounds, relative_state,
+    BoundEnvelope, Geng2015Law, Geng2015Params, convergence_time_bound_s, disturbance_bounds,
+    relative_state,
 };
 use crate::control::geng2015::{Geng2015Loop, observation};
-use crate::report::Claim;
+use crate::report::ClaimKind::{BeyondThePaper, Paper};
+use crate::report::{Claim, Figure, Plot, ReportBuilder, compact_table, held_word as hw};
 use crate::scene::load_scene_file;
 use crate::sim::Simulation;
 use nalgebra::Vector6;
@@ -196,41 +198,10 @@ pub fn run_case(
     };
     let dt = sim.scene.dt_s;
     let calls = (duration / (dt * period as f64)).round() as u64;
-    let deg = 180.0 / std::f64::consts::PI;
     let mut se = Series::default();
     let mut rate_max: (f64, f64) = (0.0, 0.0);
     for k in 0..=calls {
-        let t = sim.t_s();
-        let (Some(sc), Some(st), Some(reference)) =
-            (sim.body(&chaser), sim.body(&target), sim.reference_state())
-        else {
-            return Err("bodies or reference orbit missing".into());
-        };
-        rate_max.0 = rate_max.0.max(sc.omega_rad_s.norm());
-        rate_max.1 = rate_max.1.max(st.omega_rad_s.norm());
-        let rel = relative_state(
-            &params,
-            &observation(t, reference, &(&sc).into(), &(&st).into()),
-        );
-        let (r, v) = (rel.rho_m, rel.rho_dot_m_s);
-        let (a, w) = (rel.q_r.imag() * 2.0 * deg, rel.omega_r_rad_s * deg);
-        se.t.push(t);
-        se.trans.push(Vector6::new(r.x, r.y, r.z, v.x, v.y, v.z));
-        // Chaser body frame F_bs: A_s = inertial → body (world axes are inertial).
-        let a_s = sc.att.inverse().to_rotation_matrix().into_inner();
-        let w_s = sc.att.inverse() * sc.omega_rad_s;
-        let rho_i = rel.a_f.transpose() * r;
-        let rho_i_dot = rel.a_f.transpose() * (v + rel.omega_f_rad_s.cross(&r));
-        let rb = a_s * rho_i;
-        let vb = a_s * rho_i_dot - w_s.cross(&rb);
-        se.trans_bs
-            .push(Vector6::new(rb.x, rb.y, rb.z, vb.x, vb.y, vb.z));
-        se.v_bs_hill_rate.push(a_s * (rel.a_f.transpose() * v));
-        se.rot.push(Vector6::new(a.x, a.y, a.z, w.x, w.y, w.z));
-        se.port_distance_m.push(r.norm());
-        let out_dir = rel.a_f * (st.att * params.target_port_body_m);
-        se.approach_cos
-            .push(r.dot(&out_dir) / (r.norm() * out_dir.norm()).max(f64::MIN_POSITIVE));
+        push_sample(&mut se, &mut rate_max, &sim, (&chaser, &target), &params)?;
         if k == calls {
             break;
         }
@@ -245,40 +216,11 @@ pub fn run_case(
         se.s_dot.push(d.s_dot);
     }
     let (t0, t1) = window_s;
-    let mut acc = [0.0; 13];
-    for i in 0..6 {
-        let x: Vec<f64> = se.trans.iter().map(|v| v[i]).collect();
-        acc[i] = accuracy(&se.t, &x, t0, t1);
-        let y: Vec<f64> = se.rot.iter().map(|v| v[i]).collect();
-        acc[6 + i] = accuracy(&se.t, &y, t0, t1);
-    }
-    acc[12] = accuracy(&se.t, &se.port_distance_m, t0, t1);
-    let mut acc_bs = [0.0; 6];
-    for (i, a) in acc_bs.iter_mut().enumerate() {
-        let x: Vec<f64> = se.trans_bs.iter().map(|v| v[i]).collect();
-        *a = accuracy(&se.t, &x, t0, t1);
-    }
-    let mut acc_bs_h = [0.0; 3];
-    for (i, a) in acc_bs_h.iter_mut().enumerate() {
-        let x: Vec<f64> = se.v_bs_hill_rate.iter().map(|v| v[i]).collect();
-        *a = accuracy(&se.t, &x, t0, t1);
-    }
+    let (acc, acc_bs, acc_bs_h) = window_accuracies(&se, window_s);
     let (sc, tv) = chattering(&se.t, &se.u, t0, t1);
     let cs = sim.contacts();
     let mon = sim.monitor();
-    let closest = mon
-        .min_per_pair
-        .iter()
-        .zip(&mon.pairs)
-        .min_by(|a, b| a.0.distance_m.total_cmp(&b.0.distance_m))
-        .map(|(m, p)| {
-            (
-                m.distance_m,
-                mon.part_name(p.a, m.part_a).to_string(),
-                mon.part_name(p.b, m.part_b).to_string(),
-                m.t_s,
-            )
-        });
+    let closest = closest_parts(&sim);
     let res = CaseResult {
         name: sim.scene.name.clone(),
         law,
@@ -310,6 +252,92 @@ pub fn run_case(
         },
     };
     Ok(res)
+}
+
+/// Samples the state at the current time into `se` (before the controller call) and updates
+/// the largest body rates seen.
+fn push_sample(
+    se: &mut Series,
+    rate_max: &mut (f64, f64),
+    sim: &Simulation,
+    (chaser, target): (&str, &str),
+    params: &Geng2015Params,
+) -> Result<(), String> {
+    let deg = 180.0 / std::f64::consts::PI;
+    let t = sim.t_s();
+    let (Some(sc), Some(st), Some(reference)) =
+        (sim.body(chaser), sim.body(target), sim.reference_state())
+    else {
+        return Err("bodies or reference orbit missing".into());
+    };
+    rate_max.0 = rate_max.0.max(sc.omega_rad_s.norm());
+    rate_max.1 = rate_max.1.max(st.omega_rad_s.norm());
+    let rel = relative_state(
+        params,
+        &observation(t, reference, &(&sc).into(), &(&st).into()),
+    );
+    let (r, v) = (rel.rho_m, rel.rho_dot_m_s);
+    let (a, w) = (rel.q_r.imag() * 2.0 * deg, rel.omega_r_rad_s * deg);
+    se.t.push(t);
+    se.trans.push(Vector6::new(r.x, r.y, r.z, v.x, v.y, v.z));
+    // Chaser body frame F_bs: A_s = inertial → body (world axes are inertial).
+    let a_s = sc.att.inverse().to_rotation_matrix().into_inner();
+    let w_s = sc.att.inverse() * sc.omega_rad_s;
+    let rho_i = rel.a_f.transpose() * r;
+    let rho_i_dot = rel.a_f.transpose() * (v + rel.omega_f_rad_s.cross(&r));
+    let rb = a_s * rho_i;
+    let vb = a_s * rho_i_dot - w_s.cross(&rb);
+    se.trans_bs
+        .push(Vector6::new(rb.x, rb.y, rb.z, vb.x, vb.y, vb.z));
+    se.v_bs_hill_rate.push(a_s * (rel.a_f.transpose() * v));
+    se.rot.push(Vector6::new(a.x, a.y, a.z, w.x, w.y, w.z));
+    se.port_distance_m.push(r.norm());
+    let out_dir = rel.a_f * (st.att * params.target_port_body_m);
+    se.approach_cos
+        .push(r.dot(&out_dir) / (r.norm() * out_dir.norm()).max(f64::MIN_POSITIVE));
+    Ok(())
+}
+
+/// |mean| + 3σ over the window of the Hill-frame columns and |ρ|, of the F_bs translation,
+/// and of the F_bs velocity read as the rotated Hill rate.
+fn window_accuracies(se: &Series, window_s: (f64, f64)) -> ([f64; 13], [f64; 6], [f64; 3]) {
+    let (t0, t1) = window_s;
+    let mut acc = [0.0; 13];
+    for i in 0..6 {
+        let x: Vec<f64> = se.trans.iter().map(|v| v[i]).collect();
+        acc[i] = accuracy(&se.t, &x, t0, t1);
+        let y: Vec<f64> = se.rot.iter().map(|v| v[i]).collect();
+        acc[6 + i] = accuracy(&se.t, &y, t0, t1);
+    }
+    acc[12] = accuracy(&se.t, &se.port_distance_m, t0, t1);
+    let mut acc_bs = [0.0; 6];
+    for (i, a) in acc_bs.iter_mut().enumerate() {
+        let x: Vec<f64> = se.trans_bs.iter().map(|v| v[i]).collect();
+        *a = accuracy(&se.t, &x, t0, t1);
+    }
+    let mut acc_bs_h = [0.0; 3];
+    for (i, a) in acc_bs_h.iter_mut().enumerate() {
+        let x: Vec<f64> = se.v_bs_hill_rate.iter().map(|v| v[i]).collect();
+        *a = accuracy(&se.t, &x, t0, t1);
+    }
+    (acc, acc_bs, acc_bs_h)
+}
+
+/// Closest approach over the run in full geometry: (distance m, part, part, t s).
+fn closest_parts(sim: &Simulation) -> Option<(f64, String, String, f64)> {
+    let mon = sim.monitor();
+    mon.min_per_pair
+        .iter()
+        .zip(&mon.pairs)
+        .min_by(|a, b| a.0.distance_m.total_cmp(&b.0.distance_m))
+        .map(|(m, p)| {
+            (
+                m.distance_m,
+                mon.part_name(p.a, m.part_a).to_string(),
+                mon.part_name(p.b, m.part_b).to_string(),
+                m.t_s,
+            )
+        })
 }
 
 /// Table 3 as printed (linear case first, then the periodic case), per law T1, M1, T2, M2:
@@ -510,36 +538,79 @@ fn e3(x: f64) -> String {
     }
 }
 
-/// Runs the paper's cases and writes REPORT.md, the series CSVs and claims.json into `out`.
-pub fn run(out: &Path) -> Result<(), String> {
-    use Geng2015Law::*;
-    let laws = [T1, M1, T2, M2];
-    let mut findings: Vec<String> = vec![];
-    let mut md = String::new();
-    let mut claims = vec![];
-    let _ = writeln!(
-        md,
-        "# Geng, Chen, Liang (2015): twisting and modified twisting on coupled docking-port dynamics\n"
-    );
-    let _ = writeln!(
-        md,
-        "Full testbed runs (Bevy pipeline, f64 rigid-body truth, rapier contacts, full-geometry \
-         monitor) of the bundled scenes `scenes/papers/geng2015/geng2015_*.ron`: Table 1 orbits (the target's \
-         orbit is the reference orbit; the chaser's own elements put it 36.6 m away), target \
-         tumbling at [−3, 2, 3] °/s, point-mass gravity, environment gravity-gradient torque, the \
-         paper's a_d and T_d on both bodies, dt = 0.01 s, controller period 50 ms (command held), \
-         per-axis saturation 48 N and 0.8 N·m. The accuracy tables use the paper's model: each \
-         body's geometry replaced by a 5 cm sphere at its centre of mass (`--set \
-         bodies.NAME.parts=[Bus(name: \"com_sphere\", shape: Sphere(radius_m: 0.05))]`); the \
-         full geometry of the scene files is flown in the contact section. ρ in the target's Hill frame (x radial, y \
-         along-track, z normal); angles 2·q_rv (deg); ω_r = ω_s − A(q_r)ω_t (deg/s, chaser axes). \
-         Accuracy = |mean| + 3σ over the paper's windows (T: 150–200 s, M: 50–100 s).\n"
-    );
-    // ---- Table 3 and the other disturbance forms: the paper's model (no geometry) for the
-    // accuracies, the full geometry for the contacts.
+/// The four laws, in the order of the report's rows.
+const LAWS: [Geng2015Law; 4] = [
+    Geng2015Law::T1,
+    Geng2015Law::M1,
+    Geng2015Law::T2,
+    Geng2015Law::M2,
+];
+
+/// The 12 accuracy columns of Tables 3–7 (Δ|ρ| is a 13th, testbed only).
+const COLS: [&str; 12] = [
+    "Δρx m",
+    "Δρy m",
+    "Δρz m",
+    "ΔVx m/s",
+    "ΔVy m/s",
+    "ΔVz m/s",
+    "Δφ °",
+    "Δθ °",
+    "Δψ °",
+    "Δωx °/s",
+    "Δωy °/s",
+    "Δωz °/s",
+];
+
+/// Header cells `first…, COLS…, last…` of an accuracy table.
+fn acc_headers(first: &[&str], last: &[&str]) -> Vec<String> {
+    first
+        .iter()
+        .chain(COLS.iter())
+        .chain(last)
+        .map(|s| s.to_string())
+        .collect()
+}
+
+/// The Table 3 and other-form runs of every law: the paper's model and the full geometry.
+struct Runs {
+    /// `--set` overrides of the paper's model ([`paper_model_overrides`]).
+    pm: Vec<String>,
+    /// Paper-model runs per (law, disturbance form).
+    t3: Vec<((Geng2015Law, &'static str), CaseResult)>,
+    /// Full-geometry runs per (law, disturbance form).
+    full: Vec<((Geng2015Law, &'static str), CaseResult)>,
+}
+
+impl Runs {
+    /// The paper-model run of a law and disturbance form.
+    fn get(&self, law: Geng2015Law, form: &str) -> &CaseResult {
+        &self
+            .t3
+            .iter()
+            .find(|((l, f), _)| *l == law && *f == form)
+            .expect("case ran")
+            .1
+    }
+
+    /// The full-geometry run of a law under the linear a_d.
+    fn full_linear(&self, law: Geng2015Law) -> &CaseResult {
+        &self
+            .full
+            .iter()
+            .find(|((l, fm), _)| *l == law && *fm == "linear")
+            .expect("case ran")
+            .1
+    }
+}
+
+/// Runs every law under the four disturbance forms, paper model and full geometry, and writes
+/// the series CSVs of the Table 3 runs.
+fn run_cases(out: &Path) -> Result<Runs, String> {
+    let laws = LAWS;
     let pm = paper_model_overrides();
-    let mut t3: Vec<((Geng2015Law, &str), CaseResult)> = vec![];
-    let mut full: Vec<((Geng2015Law, &str), CaseResult)> = vec![];
+    let mut t3: Vec<((Geng2015Law, &'static str), CaseResult)> = vec![];
+    let mut full: Vec<((Geng2015Law, &'static str), CaseResult)> = vec![];
     for form in ["linear", "periodic", "cosine", "sine"] {
         for law in laws {
             let path = scene_file(law, form, None);
@@ -563,26 +634,54 @@ pub fn run(out: &Path) -> Result<(), String> {
             full.push(((law, form), res));
         }
     }
-    let get = |law: Geng2015Law, form: &str| {
-        &t3.iter()
-            .find(|((l, f), _)| *l == law && *f == form)
-            .expect("case ran")
-            .1
-    };
-    let cols = [
-        "Δρx m",
-        "Δρy m",
-        "Δρz m",
-        "ΔVx m/s",
-        "ΔVy m/s",
-        "ΔVz m/s",
-        "Δφ °",
-        "Δθ °",
-        "Δψ °",
-        "Δωx °/s",
-        "Δωy °/s",
-        "Δωz °/s",
-    ];
+    Ok(Runs { pm, t3, full })
+}
+
+/// Title of the report.
+const TITLE: &str =
+    "Geng, Chen, Liang (2015): twisting and modified twisting on coupled docking-port dynamics";
+
+/// The set-up paragraph at the top of the report.
+const INTRO: &str = "Full testbed runs (Bevy pipeline, f64 rigid-body truth, rapier contacts, full-geometry \
+         monitor) of the bundled scenes `scenes/papers/geng2015/geng2015_*.ron`: Table 1 orbits (the target's \
+         orbit is the reference orbit; the chaser's own elements put it 36.6 m away), target \
+         tumbling at [−3, 2, 3] °/s, point-mass gravity, environment gravity-gradient torque, the \
+         paper's a_d and T_d on both bodies, dt = 0.01 s, controller period 50 ms (command held), \
+         per-axis saturation 48 N and 0.8 N·m. The accuracy tables use the paper's model: each \
+         body's geometry replaced by a 5 cm sphere at its centre of mass (`--set \
+         bodies.NAME.parts=[Bus(name: \"com_sphere\", shape: Sphere(radius_m: 0.05))]`); the \
+         full geometry of the scene files is flown in the contact section. ρ in the target's Hill frame (x radial, y \
+         along-track, z normal); angles 2·q_rv (deg); ω_r = ω_s − A(q_r)ω_t (deg/s, chaser axes). \
+         Accuracy = |mean| + 3σ over the paper's windows (T: 150–200 s, M: 50–100 s).";
+
+/// Runs the paper's cases and writes REPORT.md, the series CSVs and claims.json into `out`.
+pub fn run(out: &Path) -> Result<(), String> {
+    let runs = run_cases(out)?;
+    let mut rep = ReportBuilder::new(TITLE);
+    rep.paragraph(INTRO);
+    rep.heading("Claims").claims(&[]);
+    rep.heading("Findings").findings();
+    table3_section(&mut rep, &runs);
+    figures_section(&mut rep, &runs);
+    other_forms_section(&mut rep, &runs);
+    chattering_section(&mut rep, &runs);
+    let chat = Chattering::measure(&runs);
+    table3_claims(&mut rep, &runs);
+    mismatch_section(&mut rep, &runs);
+    chat.claim(&mut rep);
+    inertia_section(&mut rep, &runs)?;
+    contacts_section(&mut rep, &runs);
+    truth_step_section(&mut rep, &runs)?;
+    eq10_section(&mut rep, &runs);
+    // The report has always ended with a blank line.
+    rep.raw("");
+    rep.write(out)
+        .map_err(|e| format!("{}: {e}", out.display()))?;
+    Ok(())
+}
+
+/// Table 3, both cases: paper / testbed (F_bs) / testbed (Hill) per cell.
+fn table3_section(rep: &mut ReportBuilder, runs: &Runs) {
     for (form, label, linear) in [
         ("linear", "a_d = a_d0(1 + 0.5t) on both bodies", true),
         (
@@ -591,20 +690,20 @@ pub fn run(out: &Path) -> Result<(), String> {
             false,
         ),
     ] {
-        let _ = writeln!(
-            md,
-            "## Table 3 — {label}\n\nPosition and velocity cells: paper / testbed in the chaser \
+        rep.heading(format!("Table 3 — {label}"));
+        rep.paragraph(
+            "Position and velocity cells: paper / testbed in the chaser \
              body frame F_bs (the frame of the paper's Figs 2 and 7; V = rate seen in F_bs) / \
              testbed in the target Hill frame. Angle and rate cells: paper / testbed. Δ|ρ| (port \
-             distance) is testbed only: the paper's column is lost in its text.\n"
+             distance) is testbed only: the paper's column is lost in its text.",
         );
-        let _ = writeln!(md, "| law | {} | Δ\\|ρ\\| m |", cols.join(" | "));
-        let _ = writeln!(md, "|---|{}---|", "---|".repeat(12));
-        for law in laws {
-            let r = get(law, form);
-            let p = paper_table3(law, linear);
-            let cells: Vec<String> = (0..12)
-                .map(|i| {
+        let rows: Vec<Vec<String>> = LAWS
+            .iter()
+            .map(|&law| {
+                let r = runs.get(law, form);
+                let p = paper_table3(law, linear);
+                let mut row = vec![format!("{law:?}")];
+                row.extend((0..12).map(|i| {
                     if i < 6 {
                         format!(
                             "{} / {} / {}",
@@ -615,49 +714,62 @@ pub fn run(out: &Path) -> Result<(), String> {
                     } else {
                         format!("{} / {}", e3(p[i]), e3(r.accuracy[i]))
                     }
-                })
-                .collect();
-            let _ = writeln!(
-                md,
-                "| {law:?} | {} | {} |",
-                cells.join(" | "),
-                e3(r.accuracy[12])
-            );
-        }
-        md.push('\n');
+                }));
+                row.push(e3(r.accuracy[12]));
+                row
+            })
+            .collect();
+        rep.paragraph(compact_table(
+            &acc_headers(&["law"], &["Δ\\|ρ\\| m"]),
+            &rows,
+        ));
     }
-    // ---- Figures (the paper's Figs 2–11 for every law, linear a_d).
-    let _ = writeln!(
-        md,
-        "## Figures (linear a_d, paper model)\n\nPer law: ρ and ρ̇ (target Hill frame), port \
+}
+
+/// The paper's Figs 2–11 for every law, linear a_d.
+fn figures_section(rep: &mut ReportBuilder, runs: &Runs) {
+    rep.heading("Figures (linear a_d, paper model)");
+    rep.paragraph(
+        "Per law: ρ and ρ̇ (target Hill frame), port \
          distance |ρ| (log), relative attitude angles 2·q_rv and ω_r (chaser axes), force and \
          torque commands (chaser body axes), sliding variables — the content of the paper's \
-         Figs 2–11 (which show M1 and M2).\n"
+         Figs 2–11 (which show M1 and M2).",
     );
-    for law in laws {
-        let r = get(law, "linear");
-        let file = format!("{}.png", r.name);
-        plot_case(out, r, &file)?;
-        let _ = writeln!(md, "![{law:?}, linear a_d]({file})\n");
+    for law in LAWS {
+        let r = runs.get(law, "linear");
+        rep.figure(
+            r.name.clone(),
+            format!("{law:?}, linear a_d"),
+            case_figure(r),
+        );
     }
-    let _ = writeln!(
-        md,
-        "## Same laws, a_d = a_d0[1 + cos 0.5t] and a_d0[1 + sin 0.5t] on both bodies (testbed only)\n"
+}
+
+/// The cosine and sine disturbance forms (testbed only).
+fn other_forms_section(rep: &mut ReportBuilder, runs: &Runs) {
+    rep.heading(
+        "Same laws, a_d = a_d0[1 + cos 0.5t] and a_d0[1 + sin 0.5t] on both bodies (testbed only)",
     );
-    let _ = writeln!(md, "| law | form | {} | Δ\\|ρ\\| m |", cols.join(" | "));
-    let _ = writeln!(md, "|---|---|{}---|", "---|".repeat(12));
+    let mut rows = vec![];
     for form in ["cosine", "sine"] {
-        for law in laws {
-            let r = get(law, form);
-            let cells: Vec<String> = (0..13).map(|i| e3(r.accuracy[i])).collect();
-            let _ = writeln!(md, "| {law:?} | {form} | {} |", cells.join(" | "));
+        for law in LAWS {
+            let r = runs.get(law, form);
+            let mut row = vec![format!("{law:?}"), form.to_string()];
+            row.extend((0..13).map(|i| e3(r.accuracy[i])));
+            rows.push(row);
         }
     }
-    md.push('\n');
-    // ---- Chattering.
-    let _ = writeln!(
-        md,
-        "## Actuator chattering over the accuracy window\n\nThe paper's claim is qualitative: \
+    rep.paragraph(compact_table(
+        &acc_headers(&["law", "form"], &["Δ\\|ρ\\| m"]),
+        &rows,
+    ));
+}
+
+/// Sign changes and total variation of the command per channel over the accuracy window.
+fn chattering_section(rep: &mut ReportBuilder, runs: &Runs) {
+    rep.heading("Actuator chattering over the accuracy window");
+    rep.paragraph(
+        "The paper's claim is qualitative: \
          M1 and M2 are \"far superior\" to T1 and T2 \"in eliminating the actuator chattering\" \
          (§3, Figs 5 and 10), and the modified twisting \"can significantly weaken the \
          chattering caused by high-frequency switching\" (§4); it gives no number. Measured per \
@@ -666,36 +778,46 @@ pub fn run(out: &Path) -> Result<(), String> {
          but not judged: at the 50 ms control period a channel can change sign at most 20 \
          times per second, a twisting command switching at almost every period sits at that \
          cap, so the count saturates and cannot rank laws that both switch fast. Cells: sign \
-         changes /s / Σ|Δu| per s.\n"
+         changes /s / Σ|Δu| per s.",
     );
-    let _ = writeln!(md, "| case | law | Fx | Fy | Fz | Tx | Ty | Tz |");
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
+    let mut rows = vec![];
     for form in ["linear", "periodic"] {
-        for law in laws {
-            let r = get(law, form);
-            let cells: Vec<String> = (0..6)
-                .map(|i| format!("{:.1} / {:.2e}", r.sign_changes_per_s[i], r.tv_per_s[i]))
-                .collect();
-            let _ = writeln!(md, "| {form} | {law:?} | {} |", cells.join(" | "));
+        for law in LAWS {
+            let r = runs.get(law, form);
+            let mut row = vec![form.to_string(), format!("{law:?}")];
+            row.extend(
+                (0..6).map(|i| format!("{:.1} / {:.2e}", r.sign_changes_per_s[i], r.tv_per_s[i])),
+            );
+            rows.push(row);
         }
     }
-    md.push('\n');
-    // ---- Claims on Table 3, read in F_bs (the paper's figures) with the other readings as
-    // sensitivity.
-    use crate::report::ClaimKind::{BeyondThePaper, Paper};
-    let frames = [TransFrame::Body, TransFrame::Hill, TransFrame::BodyHillRate];
-    // Per frame: (m1_t1_ok, m2_t2_ok, m1m2_pos_ok, m2m1_vel_ok, texts m1t1, m2t2, m1m2).
-    #[allow(clippy::type_complexity)]
-    let mut verdicts: Vec<(
-        bool,
-        bool,
-        bool,
-        bool,
-        Vec<String>,
-        Vec<String>,
-        Vec<String>,
-    )> = vec![];
-    for frame in frames {
+    rep.paragraph(compact_table(
+        &["case", "law", "Fx", "Fy", "Fz", "Tx", "Ty", "Tz"],
+        &rows,
+    ));
+}
+
+/// The Table 3 comparisons between laws read in one frame, over both Table 3 cases.
+struct FrameVerdict {
+    /// M1 at least 5× better than T1 on every position axis.
+    m1_t1: bool,
+    /// M2 better than T2 on every position and velocity axis.
+    m2_t2: bool,
+    /// M1 better than M2 on every position axis.
+    m1_m2_pos: bool,
+    /// M2 better than M1 on every velocity axis.
+    m2_m1_vel: bool,
+    /// The ratios behind each verdict, one text per case.
+    txt_m1_t1: Vec<String>,
+    txt_m2_t2: Vec<String>,
+    txt_m1_m2: Vec<String>,
+}
+
+impl FrameVerdict {
+    /// The verdicts with the accuracies read in `frame`.
+    fn new(runs: &Runs, frame: TransFrame) -> Self {
+        use Geng2015Law::*;
+        let get = |law: Geng2015Law, form: &str| runs.get(law, form);
         let (mut a, mut b, mut c, mut d) = (true, true, true, true);
         let (mut ta, mut tb, mut tc) = (vec![], vec![], vec![]);
         for form in ["linear", "periodic"] {
@@ -718,155 +840,251 @@ pub fn run(out: &Path) -> Result<(), String> {
                 "{form}: M2/M1 Δρ = {r_pos:.2?}, M1/M2 ΔV = {r_vel:.2?}"
             ));
         }
-        verdicts.push((a, b, c, d, ta, tb, tc));
-    }
-    let hw = |h: bool| if h { "held" } else { "NOT held" };
-    let sens = |k: usize| -> String {
-        frames
-            .iter()
-            .zip(&verdicts)
-            .skip(1)
-            .map(|(f, v)| {
-                let (h, txt) = match k {
-                    0 => (v.0, &v.4),
-                    1 => (v.1, &v.5),
-                    _ => (v.2 && v.3, &v.6),
-                };
-                format!("{}: {} ({})", f.label(), hw(h), txt.join("; "))
-            })
-            .collect::<Vec<_>>()
-            .join(" | ")
-    };
-    let vb = &verdicts[0];
-    let vh = &verdicts[1];
-    let _ = writeln!(
-        md,
-        "Ratios in F_bs: {}; {}; {}. In the Hill frame: {}; {}; {}.\n",
-        vb.4.join(", "),
-        vb.5.join(", "),
-        vb.6.join(", "),
-        vh.4.join(", "),
-        vh.5.join(", "),
-        vh.6.join(", ")
-    );
-    let mut tv_ok = true;
-    let mut tv_any = true;
-    let mut sc_ok = true;
-    let mut chat_meas = vec![];
-    for form in ["linear", "periodic"] {
-        for (a, b) in [
-            (get(T1, form), get(M1, form)),
-            (get(T2, form), get(M2, form)),
-        ] {
-            let tv: Vec<f64> = (0..6).map(|i| a.tv_per_s[i] / b.tv_per_s[i]).collect();
-            tv_ok &= tv.iter().all(|r| *r >= 5.0);
-            tv_any &= tv.iter().all(|r| *r > 1.0);
-            sc_ok &= (0..6).all(|i| a.sign_changes_per_s[i] > b.sign_changes_per_s[i]);
-            chat_meas.push(format!(
-                "{form} {:?}/{:?}: Σ|Δu| reduction {:.1?}×",
-                a.law, b.law, tv
-            ));
+        Self {
+            m1_t1: a,
+            m2_t2: b,
+            m1_m2_pos: c,
+            m2_m1_vel: d,
+            txt_m1_t1: ta,
+            txt_m2_t2: tb,
+            txt_m1_m2: tc,
         }
     }
-    {
-        let dev = |law: Geng2015Law| {
-            (6..12)
-                .map(|i| (get(law, "linear").accuracy[i] / paper_table3(law, true)[i] - 1.0).abs())
-                .fold(0.0, f64::max)
-        };
-        findings.push(format!(
-            "T1 and M1 reproduce Table 3's rotation columns within {:.0} % (T1) and {:.0} % \
-             (M1) of the paper; position and velocity (F_bs) within the factors of the \
-             Table 3 comparison below. M1 is more accurate than T1 in position (F_bs) by {}.",
-            100.0 * dev(T1),
-            100.0 * dev(M1),
-            vb.4.join(", ")
-        ));
-        findings.push(format!(
-            "Read in F_bs (the paper's frame), M2 {} T2 on every position and velocity axis \
-             ({}); read in the Hill frame it {} ({}). M1 {} M2 on position on every axis and M2 \
-             {} M1 on velocity on every axis in F_bs ({}).",
-            if vb.1 { "beats" } else { "does not beat" },
-            vb.5.join("; "),
-            if vh.1 { "does too" } else { "does not" },
-            vh.5.join("; "),
-            if vb.2 { "beats" } else { "does not beat" },
-            if vb.3 { "beats" } else { "does not beat" },
-            vb.6.join("; ")
-        ));
-        let range = |a: Geng2015Law, b: Geng2015Law, ch: std::ops::Range<usize>| {
-            let mut lo = f64::INFINITY;
-            let mut hi = f64::NEG_INFINITY;
-            for form in ["linear", "periodic"] {
-                for i in ch.clone() {
-                    let r = get(a, form).tv_per_s[i] / get(b, form).tv_per_s[i];
-                    lo = lo.min(r);
-                    hi = hi.max(r);
-                }
-            }
-            format!("{lo:.1}–{hi:.1}×")
-        };
-        findings.push(format!(
-            "Chattering: the total variation of the command drops {} from T1 to M1 on every \
-             channel, {} from T2 to M2 on the forces and {} on the torques (table below).",
-            range(T1, M1, 0..6),
-            range(T2, M2, 0..3),
-            range(T2, M2, 3..6),
-        ));
+
+    /// The verdict `k` (0: M1 vs T1, 1: M2 vs T2, else M1/M2) and its ratios.
+    fn verdict(&self, k: usize) -> (bool, &[String]) {
+        match k {
+            0 => (self.m1_t1, &self.txt_m1_t1),
+            1 => (self.m2_t2, &self.txt_m2_t2),
+            _ => (self.m1_m2_pos && self.m2_m1_vel, &self.txt_m1_m2),
+        }
     }
-    claims.push(
+}
+
+/// The frames Table 3 is read in: F_bs first (the paper's figures), then the other readings.
+const FRAMES: [TransFrame; 3] = [TransFrame::Body, TransFrame::Hill, TransFrame::BodyHillRate];
+
+/// Sensitivity text of verdict `k`: its value under the other frame readings.
+fn frame_sensitivity(verdicts: &[FrameVerdict], k: usize) -> String {
+    FRAMES
+        .iter()
+        .zip(verdicts)
+        .skip(1)
+        .map(|(f, v)| {
+            let (h, txt) = v.verdict(k);
+            format!("{}: {} ({})", f.label(), hw(h), txt.join("; "))
+        })
+        .collect::<Vec<_>>()
+        .join(" | ")
+}
+
+/// Total variation and sign changes of the command, T vs M, both Table 3 cases.
+struct Chattering {
+    /// At least 5× less total variation on every channel.
+    tv_ok: bool,
+    /// Less total variation on every channel.
+    tv_any: bool,
+    /// Fewer sign changes per second on every channel.
+    sc_ok: bool,
+    /// The reductions per case and law pair.
+    meas: Vec<String>,
+}
+
+impl Chattering {
+    /// Measures T1/M1 and T2/M2 over the Table 3 runs.
+    fn measure(runs: &Runs) -> Self {
+        use Geng2015Law::*;
+        let get = |law: Geng2015Law, form: &str| runs.get(law, form);
+        let mut tv_ok = true;
+        let mut tv_any = true;
+        let mut sc_ok = true;
+        let mut chat_meas = vec![];
+        for form in ["linear", "periodic"] {
+            for (a, b) in [
+                (get(T1, form), get(M1, form)),
+                (get(T2, form), get(M2, form)),
+            ] {
+                let tv: Vec<f64> = (0..6).map(|i| a.tv_per_s[i] / b.tv_per_s[i]).collect();
+                tv_ok &= tv.iter().all(|r| *r >= 5.0);
+                tv_any &= tv.iter().all(|r| *r > 1.0);
+                sc_ok &= (0..6).all(|i| a.sign_changes_per_s[i] > b.sign_changes_per_s[i]);
+                chat_meas.push(format!(
+                    "{form} {:?}/{:?}: Σ|Δu| reduction {:.1?}×",
+                    a.law, b.law, tv
+                ));
+            }
+        }
+        Self {
+            tv_ok,
+            tv_any,
+            sc_ok,
+            meas: chat_meas,
+        }
+    }
+
+    /// The chattering claim.
+    fn claim(&self, rep: &mut ReportBuilder) {
+        let (tv_ok, tv_any, sc_ok, chat_meas) = (self.tv_ok, self.tv_any, self.sc_ok, &self.meas);
+        rep.claim(
+        Claim::new(
+            "chattering_total_variation",
+            Paper,
+            "M1/M2 chatter far less than T1/T2: the total variation of the command per second is at least 5× lower on every actuator channel (both Table 3 cases).",
+            Some("M1, M2 'far superior' to T1, T2 in eliminating actuator chattering (§3, Figs 5, 10; no number given)"),
+            "ours: 'far superior' read as at least 5× less Σ|Δu| per second on every channel (the paper gives no number; sign changes per second are not judged: capped at 20/s by the 50 ms period)",
+            chat_meas.join("; "),
+            tv_ok,
+        )
+        .with_sensitivity(format!(
+            "'less' read as any reduction (ratio > 1 on every channel): {}; fewer sign changes per second on every channel: {}",
+            hw(tv_any),
+            hw(sc_ok)
+        )),
+    );
+    }
+}
+
+/// The Table 3 claims between laws (F_bs, other frames as sensitivity), their ratios and
+/// the findings on Table 3 and chattering.
+fn table3_claims(rep: &mut ReportBuilder, runs: &Runs) {
+    let verdicts: Vec<FrameVerdict> = FRAMES.iter().map(|f| FrameVerdict::new(runs, *f)).collect();
+    let (vb, vh) = (&verdicts[0], &verdicts[1]);
+    rep.paragraph(format!(
+        "Ratios in F_bs: {}; {}; {}. In the Hill frame: {}; {}; {}.",
+        vb.txt_m1_t1.join(", "),
+        vb.txt_m2_t2.join(", "),
+        vb.txt_m1_m2.join(", "),
+        vh.txt_m1_t1.join(", "),
+        vh.txt_m2_t2.join(", "),
+        vh.txt_m1_m2.join(", ")
+    ));
+    table3_findings(rep, runs, vb, vh);
+    let sens = |k: usize| frame_sensitivity(&verdicts, k);
+    rep.claim(
         Claim::new(
             "m1_vs_t1_position",
             Paper,
             "M1 position accuracy is at least 5× better than T1 on every axis (both Table 3 cases), read in the chaser body frame F_bs.",
             Some("T1 ≈ 2.6–4.2e-4 m, M1 ≈ 2.7–2.9e-5 m (≈ 10×)"),
             "ours: 5×, half the ≈ 10× ratio of the printed values (the paper says 'far superior')",
-            vb.4.join("; "),
-            vb.0,
+            vb.txt_m1_t1.join("; "),
+            vb.m1_t1,
         )
         .with_sensitivity(sens(0)),
     );
-    claims.push(
+    rep.claim(
         Claim::new(
             "m2_vs_t2",
             Paper,
             "M2 is more accurate than T2 on every position and velocity axis (both Table 3 cases), read in the chaser body frame F_bs.",
             Some("M2 better than T2 in every column of Table 3"),
             "paper: Table 3, M2's value below T2's in every column",
-            vb.5.join("; "),
-            vb.1,
+            vb.txt_m2_t2.join("; "),
+            vb.m2_t2,
         )
         .with_sensitivity(sens(1)),
     );
-    claims.push(
+    rep.claim(
         Claim::new(
             "m1_m2_position_velocity",
             Paper,
             "M1 beats M2 on position while M2 beats M1 on velocity, on every axis (both cases), read in F_bs.",
             Some("Table 3 and §2.3: M1 position 2.7–2.9e-5 m < M2 0.4–1.1e-4 m; M2 velocity ≈ 4e-4 m/s < M1 ≈ 8.5e-4 m/s"),
             "paper: Table 3, the order of the M1 and M2 values in each column",
-            vb.6.join("; "),
-            vb.2 && vb.3,
+            vb.txt_m1_m2.join("; "),
+            vb.m1_m2_pos && vb.m2_m1_vel,
         )
         .with_sensitivity(sens(2)),
     );
-    // (c) How far the testbed's numbers are from the printed ones, per law.
-    let factor_range = |law: Geng2015Law, cols: std::ops::Range<usize>, frame: TransFrame| {
+}
+
+/// Findings: Table 3 against the paper, M2 vs T2 per frame, the chattering reduction.
+fn table3_findings(rep: &mut ReportBuilder, runs: &Runs, vb: &FrameVerdict, vh: &FrameVerdict) {
+    use Geng2015Law::*;
+    let get = |law: Geng2015Law, form: &str| runs.get(law, form);
+    let dev = |law: Geng2015Law| {
+        (6..12)
+            .map(|i| (get(law, "linear").accuracy[i] / paper_table3(law, true)[i] - 1.0).abs())
+            .fold(0.0, f64::max)
+    };
+    rep.finding(format!(
+        "T1 and M1 reproduce Table 3's rotation columns within {:.0} % (T1) and {:.0} % \
+             (M1) of the paper; position and velocity (F_bs) within the factors of the \
+             Table 3 comparison below. M1 is more accurate than T1 in position (F_bs) by {}.",
+        100.0 * dev(T1),
+        100.0 * dev(M1),
+        vb.txt_m1_t1.join(", ")
+    ));
+    rep.finding(format!(
+        "Read in F_bs (the paper's frame), M2 {} T2 on every position and velocity axis \
+             ({}); read in the Hill frame it {} ({}). M1 {} M2 on position on every axis and M2 \
+             {} M1 on velocity on every axis in F_bs ({}).",
+        if vb.m2_t2 { "beats" } else { "does not beat" },
+        vb.txt_m2_t2.join("; "),
+        if vh.m2_t2 { "does too" } else { "does not" },
+        vh.txt_m2_t2.join("; "),
+        if vb.m1_m2_pos {
+            "beats"
+        } else {
+            "does not beat"
+        },
+        if vb.m2_m1_vel {
+            "beats"
+        } else {
+            "does not beat"
+        },
+        vb.txt_m1_m2.join("; ")
+    ));
+    let range = |a: Geng2015Law, b: Geng2015Law, ch: std::ops::Range<usize>| {
         let mut lo = f64::INFINITY;
-        let mut hi: f64 = 0.0;
-        for (form, lin) in [("linear", true), ("periodic", false)] {
-            let r = get(law, form);
-            let tr = translational_accuracy(r, frame);
-            let p = paper_table3(law, lin);
-            for i in cols.clone() {
-                let m = if i < 6 { tr[i] } else { r.accuracy[i] };
-                let q = m / p[i];
-                lo = lo.min(q);
-                hi = hi.max(q);
+        let mut hi = f64::NEG_INFINITY;
+        for form in ["linear", "periodic"] {
+            for i in ch.clone() {
+                let r = get(a, form).tv_per_s[i] / get(b, form).tv_per_s[i];
+                lo = lo.min(r);
+                hi = hi.max(r);
             }
         }
-        (lo, hi)
+        format!("{lo:.1}–{hi:.1}×")
     };
+    rep.finding(format!(
+        "Chattering: the total variation of the command drops {} from T1 to M1 on every \
+             channel, {} from T2 to M2 on the forces and {} on the torques (table below).",
+        range(T1, M1, 0..6),
+        range(T2, M2, 0..3),
+        range(T2, M2, 3..6),
+    ));
+}
+
+/// Testbed / paper over the three axes and both Table 3 cases, per law, columns `cols`.
+fn factor_range(
+    runs: &Runs,
+    law: Geng2015Law,
+    cols: std::ops::Range<usize>,
+    frame: TransFrame,
+) -> (f64, f64) {
+    let get = |law: Geng2015Law, form: &str| runs.get(law, form);
+    let mut lo = f64::INFINITY;
+    let mut hi: f64 = 0.0;
+    for (form, lin) in [("linear", true), ("periodic", false)] {
+        let r = get(law, form);
+        let tr = translational_accuracy(r, frame);
+        let p = paper_table3(law, lin);
+        for i in cols.clone() {
+            let m = if i < 6 { tr[i] } else { r.accuracy[i] };
+            let q = m / p[i];
+            lo = lo.min(q);
+            hi = hi.max(q);
+        }
+    }
+    (lo, hi)
+}
+
+/// How far the testbed's Table 3 is from the printed one, and the two match claims.
+fn mismatch_section(rep: &mut ReportBuilder, runs: &Runs) {
+    use Geng2015Law::*;
+    let laws = LAWS;
+    let factor_range = |law, cols, frame| factor_range(runs, law, cols, frame);
     let mut mismatch_rows = vec![];
     let mut match_ok = [true; 2];
     let mut match_txt = [vec![], vec![]];
@@ -904,26 +1122,25 @@ pub fn run(out: &Path) -> Result<(), String> {
             f2(om)
         ));
     }
-    let _ = writeln!(
-        md,
-        "## How far the testbed's Table 3 is from the printed one\n\nTestbed / paper, range \
+    rep.heading("How far the testbed's Table 3 is from the printed one");
+    rep.paragraph(
+        "Testbed / paper, range \
          over the three axes and both Table 3 cases (1 = the printed value). The T2 and M2 \
          rows are off by about 3× or more under every reading tried (F_bs, F_bs axes with the \
          Hill rate, Hill): T2's angles come out far below the printed values, M2's above — \
          see the factors. The law, gains (Table 2), disturbances and windows are the paper's; \
          of what the paper leaves open, the frame of Table 3 (three readings, here) and the \
          truth step (50 ms, below) were varied, without closing the gap. Reported, not \
-         resolved.\n"
+         resolved.",
     );
-    let _ = writeln!(
-        md,
-        "| law | Δρ F_bs | ΔV F_bs | Δρ Hill | ΔV Hill | angles | rates | worst factor (F_bs) |"
+    let mut table = String::from(
+        "| law | Δρ F_bs | ΔV F_bs | Δρ Hill | ΔV Hill | angles | rates | worst factor (F_bs) |\n\
+         |---|---|---|---|---|---|---|---|\n",
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
     for row in &mismatch_rows {
-        let _ = writeln!(md, "{row}");
+        let _ = writeln!(table, "{row}");
     }
-    md.push('\n');
+    rep.paragraph(table);
     for (g, (id, label)) in [
         ("t1_m1_match_table3", "T1 and M1"),
         ("t2_m2_match_table3", "T2 and M2"),
@@ -931,7 +1148,7 @@ pub fn run(out: &Path) -> Result<(), String> {
     .iter()
     .enumerate()
     {
-        claims.push(Claim::new(
+        rep.claim(Claim::new(
             *id,
             Paper,
             format!("The testbed's {label} accuracies (F_bs) agree with every printed Table 3 value of those laws within a factor 3."),
@@ -941,57 +1158,49 @@ pub fn run(out: &Path) -> Result<(), String> {
             match_ok[g],
         ));
     }
-    claims.push(
-        Claim::new(
-            "chattering_total_variation",
-            Paper,
-            "M1/M2 chatter far less than T1/T2: the total variation of the command per second is at least 5× lower on every actuator channel (both Table 3 cases).",
-            Some("M1, M2 'far superior' to T1, T2 in eliminating actuator chattering (§3, Figs 5, 10; no number given)"),
-            "ours: 'far superior' read as at least 5× less Σ|Δu| per second on every channel (the paper gives no number; sign changes per second are not judged: capped at 20/s by the 50 ms period)",
-            chat_meas.join("; "),
-            tv_ok,
-        )
-        .with_sensitivity(format!(
-            "'less' read as any reduction (ratio > 1 on every channel): {}; fewer sign changes per second on every channel: {}",
-            hw(tv_any),
-            hw(sc_ok)
-        )),
-    );
-    // ---- Inertia robustness (Tables 4–7).
-    let _ = writeln!(
-        md,
-        "## Robustness to ±10 % inertia (Tables 4–7), window 70–100 s\n\nThe bodies carry the \
+}
+
+/// |mean| + 3σ of the nominal run over the inertia window, per accuracy column.
+fn nominal_accuracy(nominal: &CaseResult) -> Vec<f64> {
+    (0..13)
+        .map(|i| {
+            let x: Vec<f64> = if i < 6 {
+                nominal.series.trans.iter().map(|v| v[i]).collect()
+            } else if i < 12 {
+                nominal.series.rot.iter().map(|v| v[i - 6]).collect()
+            } else {
+                nominal.series.port_distance_m.clone()
+            };
+            accuracy(&nominal.series.t, &x, INERTIA_WINDOW.0, INERTIA_WINDOW.1)
+        })
+        .collect()
+}
+
+/// Tables 4–7: the ±10 % inertia runs against the paper and the nominal run.
+fn inertia_section(rep: &mut ReportBuilder, runs: &Runs) -> Result<(), String> {
+    use Geng2015Law::*;
+    rep.heading("Robustness to ±10 % inertia (Tables 4–7), window 70–100 s");
+    rep.paragraph(
+        "The bodies carry the \
          perturbed inertia; the controller keeps the nominal J_s, J_t. Each cell: paper / \
          testbed (— where the paper's text lost the value). Last column: testbed / nominal-run \
-         ratio range over the 12 columns (nominal run measured over the same 70–100 s).\n"
+         ratio range over the 12 columns (nominal run measured over the same 70–100 s).",
     );
     let mut mag_ok = true;
     let mut mag_meas = vec![];
     for (tag, label) in INERTIA_TAGS {
-        let _ = writeln!(md, "### {label}\n");
-        let _ = writeln!(
-            md,
-            "| case | law | {} | Δ\\|ρ\\| m | ratio to nominal |",
-            cols.join(" | ")
-        );
-        let _ = writeln!(md, "|---|---|{}---|---|", "---|".repeat(12));
+        rep.subheading(label);
+        let mut rows = vec![];
         for (form, linear) in [("linear", true), ("periodic", false)] {
             for law in [M1, M2] {
-                let r = run_case(&scene_file(law, form, Some(tag)), &pm, None, INERTIA_WINDOW)?;
+                let r = run_case(
+                    &scene_file(law, form, Some(tag)),
+                    &runs.pm,
+                    None,
+                    INERTIA_WINDOW,
+                )?;
                 eprintln!("geng2015: {} done", r.name);
-                let nominal = get(law, form);
-                let nom_acc: Vec<f64> = (0..13)
-                    .map(|i| {
-                        let x: Vec<f64> = if i < 6 {
-                            nominal.series.trans.iter().map(|v| v[i]).collect()
-                        } else if i < 12 {
-                            nominal.series.rot.iter().map(|v| v[i - 6]).collect()
-                        } else {
-                            nominal.series.port_distance_m.clone()
-                        };
-                        accuracy(&nominal.series.t, &x, INERTIA_WINDOW.0, INERTIA_WINDOW.1)
-                    })
-                    .collect();
+                let nom_acc = nominal_accuracy(runs.get(law, form));
                 let ratios: Vec<f64> = (0..12).map(|i| r.accuracy[i] / nom_acc[i]).collect();
                 let (lo, hi) = ratios
                     .iter()
@@ -1000,20 +1209,19 @@ pub fn run(out: &Path) -> Result<(), String> {
                 mag_ok &= lo > 0.1 && hi < 10.0;
                 mag_meas.push(format!("{tag} {form} {law:?}: {lo:.2}–{hi:.2}"));
                 let p = paper_inertia(tag, law, linear);
-                let cells: Vec<String> = (0..12)
-                    .map(|i| format!("{} / {}", e3(p[i]), e3(r.accuracy[i])))
-                    .collect();
-                let _ = writeln!(
-                    md,
-                    "| {form} | {law:?} | {} | {} | {lo:.2}–{hi:.2} |",
-                    cells.join(" | "),
-                    e3(r.accuracy[12])
-                );
+                let mut row = vec![form.to_string(), format!("{law:?}")];
+                row.extend((0..12).map(|i| format!("{} / {}", e3(p[i]), e3(r.accuracy[i]))));
+                row.push(e3(r.accuracy[12]));
+                row.push(format!("{lo:.2}–{hi:.2}"));
+                rows.push(row);
             }
         }
-        md.push('\n');
+        rep.paragraph(compact_table(
+            &acc_headers(&["case", "law"], &["Δ\\|ρ\\| m", "ratio to nominal"]),
+            &rows,
+        ));
     }
-    claims.push(Claim::new(
+    rep.claim(Claim::new(
         "inertia_robustness",
         Paper,
         "Under ±10 % inertia (model nominal) every M1/M2 accuracy stays within a factor 10 of the nominal run (same order of magnitude).",
@@ -1022,10 +1230,87 @@ pub fn run(out: &Path) -> Result<(), String> {
         mag_meas.join("; "),
         mag_ok,
     ));
-    // ---- Contacts and geometry.
+    Ok(())
+}
+
+/// Appends one run's row to the contacts table and its verdict to the ports claim.
+fn contact_row(
+    md: &mut String,
+    meet_ok: &mut bool,
+    meet_meas: &mut Vec<String>,
+    (law, form): (Geng2015Law, &str),
+    r: &CaseResult,
+) {
+    let fin = *r.series.port_distance_m.last().unwrap_or(&f64::NAN);
+    let coll = if r.collisions.is_empty() {
+        "none".to_string()
+    } else {
+        let (t, a, b) = &r.collisions[0];
+        format!("{} (first: {a}–{b} at {t:.2} s)", r.collisions.len())
+    };
+    let touched = if r.touched_parts.is_empty() {
+        "none".to_string()
+    } else {
+        let mut v: Vec<String> = r
+            .touched_parts
+            .iter()
+            .take(6)
+            .map(|(p, f)| format!("{p} ({f:.0})"))
+            .collect();
+        if r.touched_parts.len() > 6 {
+            v.push(format!("… {} more", r.touched_parts.len() - 6));
+        }
+        v.join(", ")
+    };
+    let t_contact = r.first_contact_s.unwrap_or(f64::INFINITY);
+    // Where the chaser port was relative to the target port's face at the first contact.
+    let cos_at_contact = r
+        .series
+        .t
+        .iter()
+        .zip(&r.series.approach_cos)
+        .rfind(|(t, _)| **t <= t_contact)
+        .map(|(_, c)| *c)
+        .unwrap_or(f64::NAN);
+    // Closest port approach before the first contact.
+    let (rho_min, t_min) = r
+        .series
+        .t
+        .iter()
+        .zip(&r.series.port_distance_m)
+        .filter(|(t, _)| **t < t_contact)
+        .fold((f64::INFINITY, 0.0), |(m, tm), (t, d)| {
+            if *d < m { (*d, *t) } else { (m, tm) }
+        });
+    let closest = r
+        .closest
+        .as_ref()
+        .map(|(d, a, b, t)| format!("{d:.4} m, {a}–{b} at {t:.2} s"))
+        .unwrap_or_default();
+    *meet_ok &= r.collisions.is_empty() && fin < 1e-3;
+    meet_meas.push(format!(
+            "{form} {law:?}: {} collisions, first {}; closest port approach before contact {rho_min:.3} m at {t_min:.2} s; cos(ρ, target port axis) there {cos_at_contact:.2}; final |ρ| {fin:.2e} m",
+            r.collisions.len(),
+            r.collisions
+                .first()
+                .map(|(t, a, b)| format!("{a}–{b} at {t:.2} s"))
+                .unwrap_or("none".into())
+        ));
     let _ = writeln!(
         md,
-        "## Do the ports meet, and does anything else touch?\n\nFull geometry: chaser bus, two \
+        "| {form} | {law:?} | {} | {rho_min:.3} m at {t_min:.2} s | {cos_at_contact:.2} | {} | {coll} | {touched} | {closest} |",
+        e3(fin),
+        r.first_contact_s
+            .map(|t| format!("{t:.2}"))
+            .unwrap_or("none".into())
+    );
+}
+
+/// Do the ports meet, and does anything else touch? Full geometry against the paper model.
+fn contacts_section(rep: &mut ReportBuilder, runs: &Runs) {
+    rep.heading("Do the ports meet, and does anything else touch?");
+    rep.paragraph(
+        "Full geometry: chaser bus, two \
          solar wings and docking cone (tip = P_s); target bus, two wings, antenna and slot \
          (bottom = P_t; 0.18 m deep, so that seated the chaser's bus face, where the 0.20 m \
          cone stands, is 2 cm outside the slot rim — with the earlier 0.20 m slot it was flush \
@@ -1035,82 +1320,19 @@ pub fn run(out: &Path) -> Result<(), String> {
          The last column but one gives cos(ρ, outward target port \
          axis) at the first contact: negative = the chaser port is behind the target port's \
          face. The paper's laws converge ρ axis by axis in the Hill frame with no approach \
-         corridor, so the chaser closes from wherever it is while the target turns at 4.7 °/s.\n"
+         corridor, so the chaser closes from wherever it is while the target turns at 4.7 °/s."
     );
-    let _ = writeln!(
-        md,
-        "| case | law | final \\|ρ\\| m | closest port approach before contact | cos(ρ, port axis) at contact | first contact s | collisions | touched parts (peak N) | closest approach (parts) |"
+    let mut table = String::from(
+        "| case | law | final \\|ρ\\| m | closest port approach before contact | cos(ρ, port axis) at contact | first contact s | collisions | touched parts (peak N) | closest approach (parts) |\n\
+         |---|---|---|---|---|---|---|---|---|\n",
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|");
     let mut meet_ok = true;
     let mut meet_meas = vec![];
-    for ((law, form), r) in &full {
-        let fin = *r.series.port_distance_m.last().unwrap_or(&f64::NAN);
-        let coll = if r.collisions.is_empty() {
-            "none".to_string()
-        } else {
-            let (t, a, b) = &r.collisions[0];
-            format!("{} (first: {a}–{b} at {t:.2} s)", r.collisions.len())
-        };
-        let touched = if r.touched_parts.is_empty() {
-            "none".to_string()
-        } else {
-            let mut v: Vec<String> = r
-                .touched_parts
-                .iter()
-                .take(6)
-                .map(|(p, f)| format!("{p} ({f:.0})"))
-                .collect();
-            if r.touched_parts.len() > 6 {
-                v.push(format!("… {} more", r.touched_parts.len() - 6));
-            }
-            v.join(", ")
-        };
-        let t_contact = r.first_contact_s.unwrap_or(f64::INFINITY);
-        // Where the chaser port was relative to the target port's face at the first contact.
-        let cos_at_contact = r
-            .series
-            .t
-            .iter()
-            .zip(&r.series.approach_cos)
-            .rfind(|(t, _)| **t <= t_contact)
-            .map(|(_, c)| *c)
-            .unwrap_or(f64::NAN);
-        // Closest port approach before the first contact.
-        let (rho_min, t_min) = r
-            .series
-            .t
-            .iter()
-            .zip(&r.series.port_distance_m)
-            .filter(|(t, _)| **t < t_contact)
-            .fold((f64::INFINITY, 0.0), |(m, tm), (t, d)| {
-                if *d < m { (*d, *t) } else { (m, tm) }
-            });
-        let closest = r
-            .closest
-            .as_ref()
-            .map(|(d, a, b, t)| format!("{d:.4} m, {a}–{b} at {t:.2} s"))
-            .unwrap_or_default();
-        meet_ok &= r.collisions.is_empty() && fin < 1e-3;
-        meet_meas.push(format!(
-            "{form} {law:?}: {} collisions, first {}; closest port approach before contact {rho_min:.3} m at {t_min:.2} s; cos(ρ, target port axis) there {cos_at_contact:.2}; final |ρ| {fin:.2e} m",
-            r.collisions.len(),
-            r.collisions
-                .first()
-                .map(|(t, a, b)| format!("{a}–{b} at {t:.2} s"))
-                .unwrap_or("none".into())
-        ));
-        let _ = writeln!(
-            md,
-            "| {form} | {law:?} | {} | {rho_min:.3} m at {t_min:.2} s | {cos_at_contact:.2} | {} | {coll} | {touched} | {closest} |",
-            e3(fin),
-            r.first_contact_s
-                .map(|t| format!("{t:.2}"))
-                .unwrap_or("none".into())
-        );
+    for ((law, form), r) in &runs.full {
+        contact_row(&mut table, &mut meet_ok, &mut meet_meas, (*law, form), r);
     }
-    md.push('\n');
-    // The paper-model runs: no contact by construction, how close do the centres come?
+    rep.paragraph(table);
+    let t3 = &runs.t3;
     let pm_min = t3
         .iter()
         .map(|(_, r)| r.min_clearance_non_docking_m)
@@ -1119,53 +1341,21 @@ pub fn run(out: &Path) -> Result<(), String> {
         .iter()
         .map(|(_, r)| *r.series.port_distance_m.last().unwrap_or(&f64::NAN))
         .fold(0.0, f64::max);
-    let _ = writeln!(
-        md,
+    rep.paragraph(format!(
         "Paper-model runs (5 cm spheres): largest final |ρ| {} m over the 16 runs; the spheres \
-         never came closer than {pm_min:.3} m.\n",
+         never came closer than {pm_min:.3} m.",
         e3(pm_final)
-    );
-    for law in laws {
-        let model = get(law, "linear");
-        let f = &full
-            .iter()
-            .find(|((l, fm), _)| *l == law && *fm == "linear")
-            .expect("case ran")
-            .1;
-        let file = format!("{}_full_geometry.png", f.name);
-        plot_full_geometry(out, model, f, &file)?;
-        let _ = writeln!(md, "![{law:?}: paper model vs full geometry]({file})\n");
+    ));
+    for law in LAWS {
+        let f = runs.full_linear(law);
+        rep.figure(
+            format!("{}_full_geometry", f.name),
+            format!("{law:?}: paper model vs full geometry"),
+            full_geometry_figure(runs.get(law, "linear"), f),
+        );
     }
-    {
-        let n_coll = full
-            .iter()
-            .filter(|(_, r)| !r.collisions.is_empty())
-            .count();
-        let firsts: Vec<String> = laws
-            .iter()
-            .map(|l| {
-                let r = &full
-                    .iter()
-                    .find(|((x, f), _)| x == l && *f == "linear")
-                    .expect("ran")
-                    .1;
-                r.collisions
-                    .first()
-                    .map(|(t, a, b)| format!("{l:?} {a}–{b} at {t:.1} s"))
-                    .unwrap_or(format!("{l:?} none"))
-            })
-            .collect();
-        findings.push(format!(
-            "Full geometry: {n_coll} of {} runs collide before the ports meet (linear a_d: {}); \
-             the chaser comes at the port from beside or behind the tumbling target and the \
-             laws have no approach corridor. With 5 cm spheres (the paper's model) every run \
-             docks to ≤ {} m.",
-            full.len(),
-            firsts.join("; "),
-            e3(pm_final)
-        ));
-    }
-    claims.push(Claim::new(
+    contacts_finding(rep, runs, pm_final);
+    rep.claim(Claim::new(
         "ports_meet_no_collision",
         BeyondThePaper,
         "Flying the full geometry, the ports meet (final |ρ| < 1 mm) and no part other than the docking cone and slot touches the other spacecraft, in every run (4 laws × 4 disturbance forms).",
@@ -1178,19 +1368,55 @@ pub fn run(out: &Path) -> Result<(), String> {
         ),
         meet_ok,
     ));
-    // ---- Truth-step sensitivity: dt = controller period = 50 ms.
-    let _ = writeln!(
-        md,
-        "## Sensitivity to the truth step\n\nThe same paper-model runs with the simulation \
+}
+
+/// Finding: how many full-geometry runs collide, and the first collision per law.
+fn contacts_finding(rep: &mut ReportBuilder, runs: &Runs, pm_final: f64) {
+    let (laws, full) = (LAWS, &runs.full);
+    let n_coll = full
+        .iter()
+        .filter(|(_, r)| !r.collisions.is_empty())
+        .count();
+    let firsts: Vec<String> = laws
+        .iter()
+        .map(|l| {
+            let r = &full
+                .iter()
+                .find(|((x, f), _)| x == l && *f == "linear")
+                .expect("ran")
+                .1;
+            r.collisions
+                .first()
+                .map(|(t, a, b)| format!("{l:?} {a}–{b} at {t:.1} s"))
+                .unwrap_or(format!("{l:?} none"))
+        })
+        .collect();
+    rep.finding(format!(
+        "Full geometry: {n_coll} of {} runs collide before the ports meet (linear a_d: {}); \
+             the chaser comes at the port from beside or behind the tumbling target and the \
+             laws have no approach corridor. With 5 cm spheres (the paper's model) every run \
+             docks to ≤ {} m.",
+        full.len(),
+        firsts.join("; "),
+        e3(pm_final)
+    ));
+}
+
+/// The paper-model runs again with the truth step at the 50 ms controller period.
+fn truth_step_section(rep: &mut ReportBuilder, runs: &Runs) -> Result<(), String> {
+    use Geng2015Law::*;
+    let (laws, pm) = (LAWS, &runs.pm);
+    let get = |law: Geng2015Law, form: &str| runs.get(law, form);
+    rep.heading("Sensitivity to the truth step");
+    rep.paragraph(
+        "The same paper-model runs with the simulation \
          step raised to the 50 ms controller period (`--set dt_s=0.05`), i.e. the plant \
          integrated at the control rate as a 50 ms fixed-step simulation would. Ratio T2/M2 of \
-         the position and velocity accuracies in F_bs (> 1: M2 better).\n"
+         the position and velocity accuracies in F_bs (> 1: M2 better).",
     );
-    let _ = writeln!(
-        md,
-        "| case | dt s | T2/M2 Δρ x y z | T2/M2 ΔV x y z | T1/M1 Δρ x y z |"
+    let mut md = String::from(
+        "| case | dt s | T2/M2 Δρ x y z | T2/M2 ΔV x y z | T1/M1 Δρ x y z |\n|---|---|---|---|---|\n",
     );
-    let _ = writeln!(md, "|---|---|---|---|---|");
     let mut coarse_meas = vec![];
     for form in ["linear", "periodic"] {
         let mut coarse = vec![];
@@ -1235,29 +1461,30 @@ pub fn run(out: &Path) -> Result<(), String> {
             ));
         }
     }
-    md.push('\n');
-    for c in claims.iter_mut() {
-        if c.id == "m2_vs_t2" {
-            c.sensitivity = Some(format!(
-                "{} | truth step (F_bs): {}",
-                c.sensitivity.clone().unwrap_or_default(),
-                coarse_meas.join("; ")
-            ));
-        }
+    rep.paragraph(md);
+    if let Some(c) = rep.claim_mut("m2_vs_t2") {
+        c.sensitivity = Some(format!(
+            "{} | truth step (F_bs): {}",
+            c.sensitivity.clone().unwrap_or_default(),
+            coarse_meas.join("; ")
+        ));
     }
-    // ---- Eq (10).
-    let _ = writeln!(
-        md,
-        "## Eq (10) convergence-time bound vs observed\n\nPer channel of M1 (loop 12, bound D) \
+    Ok(())
+}
+
+/// The eq (10) convergence-time bound against the observed convergence, per channel.
+fn eq10_section(rep: &mut ReportBuilder, runs: &Runs) {
+    use Geng2015Law::*;
+    rep.heading("Eq (10) convergence-time bound vs observed");
+    rep.paragraph(
+        "Per channel of M1 (loop 12, bound D) \
          and M2 (loop 14, bound χ), γ minimising the bound; (x0, y0) = (s(0), ṡ(0)) of the run. \
          Observed: the last time |s_i| exceeds 10× its window accuracy (|mean| + 3σ of s_i over \
-         the window). The bound ignores saturation, which is active during the approach.\n"
+         the window). The bound ignores saturation, which is active during the approach.",
     );
-    let _ = writeln!(
-        md,
-        "| case | law | channel | eq (10) bound s | observed s |"
+    let mut md = String::from(
+        "| case | law | channel | eq (10) bound s | observed s |\n|---|---|---|---|---|\n",
     );
-    let _ = writeln!(md, "|---|---|---|---|---|");
     let mut eq10_ok = true;
     let mut eq10_n = (0usize, 0usize);
     let mut eq10_range = (f64::INFINITY, f64::NEG_INFINITY);
@@ -1265,7 +1492,7 @@ pub fn run(out: &Path) -> Result<(), String> {
     let mut eq10_meas = vec![];
     for form in ["linear", "periodic"] {
         for law in [M1, M2] {
-            let r = get(law, form);
+            let r = runs.get(law, form);
             for i in 0..6 {
                 let s: Vec<f64> = r.series.s.iter().map(|v| v[i]).collect();
                 let band = 10.0 * accuracy(&r.series.t[..s.len()], &s, r.window_s.0, r.window_s.1);
@@ -1294,8 +1521,8 @@ pub fn run(out: &Path) -> Result<(), String> {
             }
         }
     }
-    md.push('\n');
-    findings.push(format!(
+    rep.paragraph(md);
+    rep.finding(format!(
         "Eq (10): where its premises hold ({} of {} channels; they fail for M1 translation \
          under the linear a_d, whose bound D grows with t) the bound is {}–{} s against an \
          observed {:.0}–{:.0} s: it holds but says nothing useful at these gains.",
@@ -1306,7 +1533,7 @@ pub fn run(out: &Path) -> Result<(), String> {
         eq10_obs.0,
         eq10_obs.1
     ));
-    claims.push(Claim::new(
+    rep.claim(Claim::new(
         "eq10_bound",
         Paper,
         "Where its premises hold, the eq (10) bound is not smaller than the observed convergence time of the channel.",
@@ -1315,20 +1542,6 @@ pub fn run(out: &Path) -> Result<(), String> {
         eq10_meas.join("; "),
         eq10_ok,
     ));
-    // ---- Claims summary, placed after the introduction.
-    let mut summary = String::from("## Claims\n\n");
-    summary.push_str(&crate::report::claims_markdown(&claims).map_err(|e| e.to_string())?);
-    summary.push_str("\n## Findings\n\n");
-    for f in &findings {
-        let _ = writeln!(summary, "- {f}");
-    }
-    summary.push('\n');
-    let cut = md.find("## Table 3").unwrap_or(md.len());
-    md.insert_str(cut, &summary);
-    write_file(&out.join("REPORT.md"), md.as_bytes())?;
-    crate::report::write_claims_json(&out.join("claims.json"), &claims)
-        .map_err(|e| e.to_string())?;
-    Ok(())
 }
 
 fn write_file(path: &Path, bytes: &[u8]) -> Result<(), String> {
@@ -1362,8 +1575,7 @@ fn write_csv(path: &Path, s: &Series) -> Result<(), String> {
 
 /// Figures 2–11 of the paper for one run (3 × 3 panels): ρ, ρ̇, angles, ω_r, forces, torques,
 /// sliding variables (translation, rotation), port distance (log).
-fn plot_case(out: &Path, r: &CaseResult, file: &str) -> Result<(), String> {
-    use crate::report::{Figure, Plot};
+fn case_figure(r: &CaseResult) -> Figure {
     let se = &r.series;
     let n = se.u.len();
     let col = |v: &[Vector6<f64>], i: usize, scale: f64| -> Vec<(f64, f64)> {
@@ -1424,10 +1636,7 @@ fn plot_case(out: &Path, r: &CaseResult, file: &str) -> Result<(), String> {
         .x_label("t [s]")
         .y_label("|ρ| [m]")
         .log_y()
-        .line(
-            "|ρ|",
-            se.t.iter().zip(&se.port_distance_m).map(|(t, d)| (*t, *d)),
-        );
+        .line("|ρ|", port_distance_points(se));
     Figure::new(format!("{} ({:?})", r.name, r.law))
         .cols(3)
         .plot(p_rho)
@@ -1439,18 +1648,15 @@ fn plot_case(out: &Path, r: &CaseResult, file: &str) -> Result<(), String> {
         .plot(p_t)
         .plot(p_st)
         .plot(p_sr)
-        .write_png(&out.join(file))
-        .map_err(|e| format!("{file}: {e}"))
+}
+
+/// (t s, port distance |ρ| m) of a run's series.
+fn port_distance_points(s: &Series) -> impl Iterator<Item = (f64, f64)> + '_ {
+    s.t.iter().zip(&s.port_distance_m).map(|(t, d)| (*t, *d))
 }
 
 /// Port distance of the paper-model run against the full-geometry run, first collision marked.
-fn plot_full_geometry(
-    out: &Path,
-    model: &CaseResult,
-    full: &CaseResult,
-    file: &str,
-) -> Result<(), String> {
-    use crate::report::Plot;
+fn full_geometry_figure(model: &CaseResult, full: &CaseResult) -> Figure {
     let mut p = Plot::new(format!(
         "{:?}: port distance, paper model vs full geometry",
         model.law
@@ -1460,24 +1666,11 @@ fn plot_full_geometry(
     .log_y()
     .line(
         "paper model (5 cm spheres)",
-        model
-            .series
-            .t
-            .iter()
-            .zip(&model.series.port_distance_m)
-            .map(|(t, d)| (*t, *d)),
+        port_distance_points(&model.series),
     )
-    .line(
-        "full geometry",
-        full.series
-            .t
-            .iter()
-            .zip(&full.series.port_distance_m)
-            .map(|(t, d)| (*t, *d)),
-    );
+    .line("full geometry", port_distance_points(&full.series));
     if let Some((t, a, b)) = full.collisions.first() {
         p = p.vline(*t, format!("first collision {a}–{b}"));
     }
-    p.write_png(&out.join(file))
-        .map_err(|e| format!("{file}: {e}"))
+    p.into_figure()
 }

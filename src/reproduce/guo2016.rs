@@ -22,6 +22,8 @@
 use super::guo2016_ct::{CtRun, CtSetup, run_continuous, run_sampled};
 use crate::control::guo2016::{Guo2016Instance, SceneSpec};
 use crate::geometry::cissoid::Cissoid;
+use crate::report::ClaimKind::{BeyondThePaper, Paper};
+use crate::report::{Claim, Color, Dash, Figure, LineStyle, Plot, ReportBuilder, held_word};
 use crate::scene::{AttitudeSpec, LoadedScene, PartRole, load_scene_str};
 use crate::sim::monitor::shape_distance;
 use crate::sim::{BodyState, Part, Roster, SimBody, Simulation};
@@ -529,6 +531,22 @@ pub fn barrier_layer_m(c: &Cissoid, k2_m4: f64, r1: &Vector3<f64>) -> f64 {
     k2_m4.sqrt() / g.norm()
 }
 
+/// The law in the Bevy-free plant: continuous time and sampled, paper gains, the reaching
+/// variant, the narrow corridor and the fixed reference.
+struct CtRuns {
+    ct_paper: CtRun,
+    ct_reaching: CtRun,
+    ct_reaching_k2_0: CtRun,
+    sampled: Vec<CtRun>,
+    ct_narrow: (CtRun, CtRun),
+    ct_fixed_reference: CtRun,
+    sampled_fixed_reference: CtRun,
+    /// |ω_d| where the continuous-time reaching run leaves the corridor, rad/s.
+    omega_d_at_exit_rad_s: f64,
+    /// Thickness of the barrier layer at the end of that run, m.
+    barrier_layer_m: f64,
+}
+
 /// Runs every case and the campaign.
 pub fn compute() -> Result<Results, String> {
     let corridor = run_case(
@@ -565,6 +583,29 @@ pub fn compute() -> Result<Results, String> {
     let corridor_shape = spec_of(&load_bundled("scenes/papers/guo2016/guo2016_corridor.ron")?)
         .params(1.0, nalgebra::Matrix3::identity())
         .corridor();
+    let ct = ct_runs(&corridor_shape)?;
+    Ok(Results {
+        corridor,
+        no_avoidance,
+        reaching,
+        reaching_no_avoidance,
+        max_path_difference_m,
+        campaign,
+        corridor_shape,
+        ct_paper: ct.ct_paper,
+        ct_reaching: ct.ct_reaching,
+        ct_reaching_k2_0: ct.ct_reaching_k2_0,
+        sampled: ct.sampled,
+        ct_narrow: ct.ct_narrow,
+        barrier_layer_m: ct.barrier_layer_m,
+        ct_fixed_reference: ct.ct_fixed_reference,
+        sampled_fixed_reference: ct.sampled_fixed_reference,
+        omega_d_at_exit_rad_s: ct.omega_d_at_exit_rad_s,
+    })
+}
+
+/// The Bevy-free runs of [`CtRuns`].
+fn ct_runs(corridor_shape: &Cissoid) -> Result<CtRuns, String> {
     let setup = |l: &LoadedScene| CtSetup::from_scene(l);
     let paper_setup = setup(&load_bundled("scenes/papers/guo2016/guo2016_corridor.ron")?)?;
     let reach = setup(&reaching_variant(
@@ -607,6 +648,30 @@ pub fn compute() -> Result<Results, String> {
         })
         .collect();
     tick("sampled runs");
+    let ct_narrow = narrow_runs()?;
+    tick("narrow corridor");
+    let (ct_fixed_reference, sampled_fixed_reference) = fixed_reference_runs()?;
+    tick("fixed reference");
+    let omega_d_at_exit_rad_s = omega_d_rad_s(&reach.params, ct_reaching.t_end_s);
+    let barrier_layer_m = ct_reaching.samples.last().map_or(f64::NAN, |s| {
+        barrier_layer_m(corridor_shape, reach.params.k2_m4, &s.r1_m)
+    });
+    Ok(CtRuns {
+        ct_paper,
+        ct_reaching,
+        ct_reaching_k2_0,
+        sampled,
+        ct_narrow,
+        ct_fixed_reference,
+        sampled_fixed_reference,
+        omega_d_at_exit_rad_s,
+        barrier_layer_m,
+    })
+}
+
+/// Paper gains in continuous time with the narrow corridor (tan θ = 4.3), k2 = 0.02 and 0.
+fn narrow_runs() -> Result<(CtRun, CtRun), String> {
+    let setup = |l: &LoadedScene| CtSetup::from_scene(l);
     let narrow = |file: &str| -> Result<CtSetup, String> {
         let mut l = load_bundled(file)?;
         spec_mut(&mut l)
@@ -628,7 +693,13 @@ pub fn compute() -> Result<Results, String> {
             0.05,
         ),
     );
-    tick("narrow corridor");
+    Ok(ct_narrow)
+}
+
+/// The reaching variant with the desired attitude held fixed (σ_d ≡ 0): continuous time and
+/// sampled every 10 ms.
+fn fixed_reference_runs() -> Result<(CtRun, CtRun), String> {
+    let setup = |l: &LoadedScene| CtSetup::from_scene(l);
     let fixed = {
         let mut l = reaching_variant("scenes/papers/guo2016/guo2016_corridor.ron")?;
         *spec_mut(&mut l)
@@ -649,29 +720,7 @@ pub fn compute() -> Result<Results, String> {
         SAMPLED_DURATION_S,
         0.005,
     );
-    tick("fixed reference");
-    let omega_d_at_exit_rad_s = omega_d_rad_s(&reach.params, ct_reaching.t_end_s);
-    let barrier_layer_m = ct_reaching.samples.last().map_or(f64::NAN, |s| {
-        barrier_layer_m(&corridor_shape, reach.params.k2_m4, &s.r1_m)
-    });
-    Ok(Results {
-        corridor,
-        no_avoidance,
-        reaching,
-        reaching_no_avoidance,
-        max_path_difference_m,
-        campaign,
-        corridor_shape,
-        ct_paper,
-        ct_reaching,
-        ct_reaching_k2_0,
-        sampled,
-        ct_narrow,
-        barrier_layer_m,
-        ct_fixed_reference,
-        sampled_fixed_reference,
-        omega_d_at_exit_rad_s,
-    })
+    Ok((ct_fixed_reference, sampled_fixed_reference))
 }
 
 /// |ṙ1| at the sample nearest `t_s`, m/s.
@@ -698,10 +747,6 @@ fn geometry_sentence(r: &CaseRun) -> String {
     )
 }
 
-fn held_word(h: bool) -> &'static str {
-    if h { "held" } else { "NOT held" }
-}
-
 /// One line on a plant run: how it ended and its numbers.
 pub fn ct_sentence(r: &CtRun) -> String {
     let end = match (r.period_s, r.first_outside_s, r.first_exit_at_sample_s) {
@@ -719,24 +764,31 @@ pub fn ct_sentence(r: &CtRun) -> String {
     )
 }
 
-/// The claims as measured.
-pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
-    use crate::report::Claim;
-    use crate::report::ClaimKind::{BeyondThePaper, Paper};
-    let c = &r.corridor;
-    let z = &r.no_avoidance;
-    let counts = campaign_counts(&r.campaign);
-    let ran = r.campaign.iter().filter(|c| c.run.is_some()).count();
-    let (nw, nw0) = (&r.ct_narrow.0, &r.ct_narrow.1);
-    let ct_held = |x: &CtRun| x.first_outside_s.is_none() && x.min_h_m2 > 0.0;
-    let conv_src = "ours: |r_e| < 1 cm and |σ_e| < 1e-4 — the paper says 'converge to zero' without a \
+/// Threshold source of the convergence claims.
+const CONV_SRC: &str = "ours: |r_e| < 1 cm and |σ_e| < 1e-4 — the paper says 'converge to zero' without a \
                     number; 1 cm and 1e-4 are over three orders below the initial errors (41 m, 0.1)";
-    let h_src = "paper: h > 0 at every instant (the corridor guarantee, eqs (31)–(35), Remark 3)";
-    let ct = &r.ct_reaching;
-    let ct0 = &r.ct_reaching_k2_0;
-    let zoh = |k: usize| r.sampled.get(k);
-    let zoh_text = |k: usize| {
-        zoh(k).map_or("—".to_string(), |x| {
+/// Threshold source of the corridor claims.
+const H_SRC: &str =
+    "paper: h > 0 at every instant (the corridor guarantee, eqs (31)–(35), Remark 3)";
+
+/// The claims of the paper, measured on `r`: the paper's gains, k2, the reaching variant, the
+/// campaign.
+pub fn claims(r: &Results) -> Vec<Claim> {
+    let mut out = paper_gain_claims(r);
+    out.extend(k2_claims(r));
+    out.extend(reaching_claims(r));
+    out.extend(campaign_claims(r));
+    out
+}
+
+/// The corridor held in continuous time: no event on h = 0 and h > 0 at every accepted point.
+fn ct_held(x: &CtRun) -> bool {
+    x.first_outside_s.is_none() && x.min_h_m2 > 0.0
+}
+
+/// The sampled run of index `k` of [`Results::sampled`], in words.
+fn zoh_text(r: &Results, k: usize) -> String {
+    r.sampled.get(k).map_or("—".to_string(), |x| {
             format!(
                 "{} ms: outside at a sample from {} (between samples from {}) over {SAMPLED_DURATION_S} s, final |r_e| {:.1} m, peak |F| {:.2e} N",
                 x.period_s.unwrap_or(f64::NAN) * 1e3,
@@ -746,7 +798,12 @@ pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
                 x.peak_force_n
             )
         })
-    };
+}
+
+/// The paper's gains: corridor, convergence, no collision.
+fn paper_gain_claims(r: &Results) -> Vec<Claim> {
+    let (c, nw) = (&r.corridor, &r.ct_narrow.0);
+    let (conv_src, h_src) = (CONV_SRC, H_SRC);
     vec![
         Claim::new(
             "guo2016-corridor-held",
@@ -789,6 +846,14 @@ pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
             geometry_sentence(c),
             c.first_contact_s.is_none(),
         ),
+    ]
+}
+
+/// What the barrier gain k2 changes.
+fn k2_claims(r: &Results) -> Vec<Claim> {
+    let z = &r.no_avoidance;
+    let (nw, nw0) = (&r.ct_narrow.0, &r.ct_narrow.1);
+    vec![
         Claim::new(
             "guo2016-k2-0-leaves-corridor",
             Paper,
@@ -831,6 +896,15 @@ pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
                 "NOT held"
             }
         )),
+    ]
+}
+
+/// The reaching variant: convergence, the corridor in continuous time and sampled at 100 Hz.
+fn reaching_claims(r: &Results) -> Vec<Claim> {
+    let (conv_src, h_src) = (CONV_SRC, H_SRC);
+    let (ct, ct0) = (&r.ct_reaching, &r.ct_reaching_k2_0);
+    let zoh_text = |k: usize| zoh_text(r, k);
+    vec![
         Claim::new(
             "guo2016-reaching-converges",
             BeyondThePaper,
@@ -898,24 +972,30 @@ pub fn claims(r: &Results) -> Vec<crate::report::Claim> {
             opt_s(r.sampled_fixed_reference.first_exit_at_sample_s),
             held_word(ct_held(&r.ct_fixed_reference))
         )),
-        Claim::new(
-            "guo2016-campaign-corridor-keeps-wings-clear",
-            BeyondThePaper,
-            format!(
-                "Beyond the paper: whenever the point-mass corridor held, the chaser's full geometry stayed more than {PANEL_CLEARANCE_M} m from every target solar-wing part."
-            ),
-            None,
-            "ours: 0.5 m, half the chaser bus size (a margin a docking approach would keep)",
-            format!(
-                "{ran} runs (k_r = 1/s, k2 = 0.02, 100 Hz, seed {CAMPAIGN_SEED}): corridor held and wings clear {}, corridor held but a wing part within {PANEL_CLEARANCE_M} m {}, corridor left {}; {} starts refused (overlap at t = 0)",
-                counts[0],
-                counts[1],
-                counts[2] + counts[3],
-                counts[4]
-            ),
-            counts[1] == 0,
-        ),
     ]
+}
+
+/// The campaign: does the point-mass corridor keep the wings clear?
+fn campaign_claims(r: &Results) -> Vec<Claim> {
+    let counts = campaign_counts(&r.campaign);
+    let ran = r.campaign.iter().filter(|c| c.run.is_some()).count();
+    vec![Claim::new(
+        "guo2016-campaign-corridor-keeps-wings-clear",
+        BeyondThePaper,
+        format!(
+            "Beyond the paper: whenever the point-mass corridor held, the chaser's full geometry stayed more than {PANEL_CLEARANCE_M} m from every target solar-wing part."
+        ),
+        None,
+        "ours: 0.5 m, half the chaser bus size (a margin a docking approach would keep)",
+        format!(
+            "{ran} runs (k_r = 1/s, k2 = 0.02, 100 Hz, seed {CAMPAIGN_SEED}): corridor held and wings clear {}, corridor held but a wing part within {PANEL_CLEARANCE_M} m {}, corridor left {}; {} starts refused (overlap at t = 0)",
+            counts[0],
+            counts[1],
+            counts[2] + counts[3],
+            counts[4]
+        ),
+        counts[1] == 0,
+    )]
 }
 
 /// Runs per [`CampaignRun::category`].
@@ -1010,14 +1090,7 @@ pub fn write(out: &Path, r: &Results, wall_s: f64) -> Result<Vec<crate::report::
     Ok(claims)
 }
 
-fn build_report(
-    r: &Results,
-    claims: &[crate::report::Claim],
-    wall_s: f64,
-) -> crate::report::ReportBuilder {
-    use crate::report::{Color, Dash, Figure, LineStyle, Plot, ReportBuilder};
-    let c = &r.corridor;
-    let z = &r.no_avoidance;
+fn build_report(r: &Results, claims: &[Claim], wall_s: f64) -> ReportBuilder {
     let mut rep = ReportBuilder::new(
         "Guo, Song, Li (2016): coupled sliding-mode control with an elliptic-cissoid corridor",
     );
@@ -1034,6 +1107,27 @@ fn build_report(
     );
     rep.heading("Claims");
     rep.claims(claims);
+    choices_section(&mut rep);
+    findings_section(&mut rep, r);
+    continuous_time_section(&mut rep, r);
+    path_section(&mut rep, r);
+    time_histories_section(&mut rep, r);
+    reaching_variant_section(&mut rep, r);
+    campaign_section(&mut rep, r);
+    campaign_summary(&mut rep, r);
+    campaign_runs_table(&mut rep, r);
+    rep.heading("How to rerun");
+    rep.code(format!(
+        "rpod reproduce guo2016 --out DIR      # this report ({wall_s:.1} s of wall time here)\n\
+         rpod run scenes/papers/guo2016/guo2016_corridor.ron   # trajectory.csv with guo2016.* columns\n\
+         rpod run scenes/papers/guo2016/guo2016_corridor.ron --set controllers.0.0.reaching_gain_per_s=1.0  # the extra case (σ(0) as in the scene)\n\
+         cargo test --release --test val_guo2016"
+    ));
+    rep
+}
+
+/// The choices the report makes where the paper is silent.
+fn choices_section(rep: &mut ReportBuilder) {
     rep.heading("Choices where the paper is silent");
     rep.paragraph(
         "- tan θ = 5 (θ ≈ 78.7°): r0 read in the target frame is inside the corridor only for \
@@ -1056,7 +1150,11 @@ fn build_report(
          chaser 1 m cube bus, docking cone (0.2 m) on +x, wings along ±y to 2.75 m. At r_e = 0 \
          the cone tip is 0.3 m from the slot mouth.",
     );
+}
 
+/// The findings: the paper's gains, k2 = 0, the reaching variant, the law in continuous time.
+fn findings_section(rep: &mut ReportBuilder, r: &Results) {
+    let (c, z) = (&r.corridor, &r.no_avoidance);
     rep.heading("Findings");
     let ct = &r.ct_reaching;
     let ctf = &r.ct_fixed_reference;
@@ -1137,6 +1235,51 @@ fn build_report(
         opt_s(r.sampled_fixed_reference.first_exit_at_sample_s),
         geometry_sentence(&r.reaching),
     ));
+}
+
+/// One row of the continuous-time vs sampled table.
+fn ct_row(x: &CtRun) -> Vec<String> {
+    vec![
+        x.label.clone(),
+        match (x.period_s, x.first_outside_s, x.first_exit_at_sample_s) {
+            (None, Some(t), _) => format!("left at {t:.4} s (event h = 0)"),
+            (None, None, _) => format!("inside to {:.1} s", x.t_end_s),
+            (Some(_), _, Some(t)) => format!("left, seen at the sample at {t:.2} s"),
+            (Some(_), _, None) => format!("inside to {:.1} s", x.t_end_s),
+        },
+        if x.min_h_m2 == f64::NEG_INFINITY {
+            "−∞ (beyond the plane x = 2a)".to_string()
+        } else {
+            format!("{:.3e}", x.min_h_m2)
+        },
+        format!("{:.3}", x.final_r_e_m),
+        format!("{:.3e}", x.peak_force_n),
+        x.stats.accepted.to_string(),
+    ]
+}
+
+/// The corridor function h of the continuous-time and sampled runs over [t_min, t_max].
+fn h_plot(title: &str, runs: &[&CtRun], t_min: f64, t_max: f64) -> Plot {
+    let mut p = Plot::new(title)
+        .x_label("t (s)")
+        .y_label("h (m²), log")
+        .log_y()
+        .x_range(t_min, t_max);
+    for x in runs {
+        p = p.line(
+            x.label.clone(),
+            x.samples
+                .iter()
+                .filter(|s| s.t_s >= t_min && s.t_s <= t_max && s.h_m2 > 0.0)
+                .map(|s| (s.t_s, s.h_m2)),
+        );
+    }
+    p
+}
+
+/// The same law in continuous time and sampled, in the Bevy-free plant.
+fn continuous_time_section(rep: &mut ReportBuilder, r: &Results) {
+    let (ct, ctf) = (&r.ct_reaching, &r.ct_fixed_reference);
     rep.heading("Continuous time and sampled, side by side (Bevy-free plant)");
     rep.paragraph(
         "The same law in an independent f64 plant (`src/reproduce/guo2016_ct.rs`: target orbit \
@@ -1149,25 +1292,7 @@ fn build_report(
          k2 = 0.02 unless noted.",
     );
     let mut rows: Vec<Vec<String>> = Vec::new();
-    let row = |x: &CtRun| {
-        vec![
-            x.label.clone(),
-            match (x.period_s, x.first_outside_s, x.first_exit_at_sample_s) {
-                (None, Some(t), _) => format!("left at {t:.4} s (event h = 0)"),
-                (None, None, _) => format!("inside to {:.1} s", x.t_end_s),
-                (Some(_), _, Some(t)) => format!("left, seen at the sample at {t:.2} s"),
-                (Some(_), _, None) => format!("inside to {:.1} s", x.t_end_s),
-            },
-            if x.min_h_m2 == f64::NEG_INFINITY {
-                "−∞ (beyond the plane x = 2a)".to_string()
-            } else {
-                format!("{:.3e}", x.min_h_m2)
-            },
-            format!("{:.3}", x.final_r_e_m),
-            format!("{:.3e}", x.peak_force_n),
-            x.stats.accepted.to_string(),
-        ]
-    };
+    let row = ct_row;
     for x in [ct, &r.ct_reaching_k2_0, ctf]
         .into_iter()
         .chain(r.sampled.iter())
@@ -1187,23 +1312,6 @@ fn build_report(
         ],
         &rows,
     );
-    let h_plot = |title: &str, runs: &[&CtRun], t_min: f64, t_max: f64| {
-        let mut p = Plot::new(title)
-            .x_label("t (s)")
-            .y_label("h (m²), log")
-            .log_y()
-            .x_range(t_min, t_max);
-        for x in runs {
-            p = p.line(
-                x.label.clone(),
-                x.samples
-                    .iter()
-                    .filter(|s| s.t_s >= t_min && s.t_s <= t_max && s.h_m2 > 0.0)
-                    .map(|s| (s.t_s, s.h_m2)),
-            );
-        }
-        p
-    };
     rep.figure(
         "continuous_vs_sampled",
         "corridor function h(t), continuous time and sampled",
@@ -1223,58 +1331,95 @@ fn build_report(
                 REACHING_DURATION_S,
             )),
     );
+}
 
-    // Paths in the meridian plane of the target frame.
-    let shape = &r.corridor_shape;
-    let wing = |p: Plot| {
-        p.polygon(
-            "target wing panels (x = 0.6 m)",
-            [(0.585, 0.9), (0.615, 0.9), (0.615, 4.6), (0.585, 4.6)],
-            Color::RED,
-        )
-        .polygon(
-            "target bus",
-            [(-0.8, 0.0), (0.8, 0.0), (0.8, 0.85), (-0.8, 0.85)],
-            Color::GRAY,
-        )
-    };
-    let gray = LineStyle {
+/// The target's wing panels and bus drawn on a meridian-plane plot.
+fn wing(p: Plot) -> Plot {
+    p.polygon(
+        "target wing panels (x = 0.6 m)",
+        [(0.585, 0.9), (0.615, 0.9), (0.615, 4.6), (0.585, 4.6)],
+        Color::RED,
+    )
+    .polygon(
+        "target bus",
+        [(-0.8, 0.0), (0.8, 0.0), (0.8, 0.85), (-0.8, 0.85)],
+        Color::GRAY,
+    )
+}
+
+/// The corridor wall's line style.
+fn gray_dashed() -> LineStyle {
+    LineStyle {
         color: Some(Color::DARK_GRAY),
         width_px: 1.5,
         dash: Dash::Dashed,
-    };
-    let path_plot = |title: &str, x_max: f64, rho_max: f64| {
-        let mut p = Plot::new(title)
-            .x_label("x, target docking axis (m)")
-            .y_label("ρ = √(y² + z²), target frame (m)")
-            .x_range(-1.0, x_max)
-            .y_range(0.0, rho_max)
-            .equal_aspect()
-            .line_styled(
-                "corridor wall (tan θ = 5, a = 25 m); inside is below it",
-                corridor_curve(shape, x_max, 1.3 * rho_max),
-                gray,
-            );
-        for run in [c, z, &r.reaching, &r.reaching_no_avoidance] {
-            p = p.line(
-                run.label.clone(),
-                run.samples
-                    .iter()
-                    .map(|s| (s.r1_target_m.x, rho(&s.r1_target_m))),
-            );
-        }
-        let end = |run: &CaseRun| {
-            run.samples
-                .last()
-                .map(|s| (s.r1_target_m.x, rho(&s.r1_target_m)))
-        };
-        p = p.scatter(
-            "paper gains: where the chaser stops (both k2)",
-            [end(c), end(z)].into_iter().flatten(),
+    }
+}
+
+/// Chaser paths in the meridian plane with the corridor wall, the stop points and r_d.
+fn path_plot(r: &Results, title: &str, x_max: f64, rho_max: f64) -> Plot {
+    let (c, z, shape, gray) = (
+        &r.corridor,
+        &r.no_avoidance,
+        &r.corridor_shape,
+        gray_dashed(),
+    );
+    let mut p = Plot::new(title)
+        .x_label("x, target docking axis (m)")
+        .y_label("ρ = √(y² + z²), target frame (m)")
+        .x_range(-1.0, x_max)
+        .y_range(0.0, rho_max)
+        .equal_aspect()
+        .line_styled(
+            "corridor wall (tan θ = 5, a = 25 m); inside is below it",
+            corridor_curve(shape, x_max, 1.3 * rho_max),
+            gray,
         );
-        p = p.scatter("r_d (hold point, 2 m out)", [(2.0, 0.0)]);
-        wing(p)
+    for run in [c, z, &r.reaching, &r.reaching_no_avoidance] {
+        p = p.line(
+            run.label.clone(),
+            run.samples
+                .iter()
+                .map(|s| (s.r1_target_m.x, rho(&s.r1_target_m))),
+        );
+    }
+    let end = |run: &CaseRun| {
+        run.samples
+            .last()
+            .map(|s| (s.r1_target_m.x, rho(&s.r1_target_m)))
     };
+    p = p.scatter(
+        "paper gains: where the chaser stops (both k2)",
+        [end(c), end(z)].into_iter().flatten(),
+    );
+    p = p.scatter("r_d (hold point, 2 m out)", [(2.0, 0.0)]);
+    wing(p)
+}
+
+/// Corridor margin or full-geometry distance of the four runs over the first 20 s.
+fn margin_plot(r: &Results, title: &str, f: &dyn Fn(&Sample) -> f64, y: &str) -> Plot {
+    let (c, z) = (&r.corridor, &r.no_avoidance);
+    let mut p = Plot::new(title)
+        .x_label("t (s)")
+        .y_label(y)
+        .x_range(0.0, 20.0);
+    for run in [c, z, &r.reaching, &r.reaching_no_avoidance] {
+        p = p.line(
+            run.label.clone(),
+            run.samples
+                .iter()
+                .filter(|s| s.t_s <= 20.0)
+                .map(|s| (s.t_s, f(s))),
+        );
+    }
+    p.hline(0.0, "")
+}
+
+/// Paths in the meridian plane of the target frame, and the corridor margin over time.
+fn path_section(rep: &mut ReportBuilder, r: &Results) {
+    let path_plot = |title: &str, x_max: f64, rho_max: f64| path_plot(r, title, x_max, rho_max);
+    let margin_plot =
+        |title: &str, f: &dyn Fn(&Sample) -> f64, y: &str| margin_plot(r, title, f, y);
     rep.heading("Path and corridor (meridian plane of the target frame)");
     rep.figure(
         "path_corridor",
@@ -1289,22 +1434,6 @@ fn build_report(
         "The paper-gain runs (k2 = 0.02 and 0, on top of each other) stop near the start; the \
          reaching-variant runs cut straight through the wall towards r_d = (2, 0) m.",
     );
-    let margin_plot = |title: &str, f: &dyn Fn(&Sample) -> f64, y: &str| {
-        let mut p = Plot::new(title)
-            .x_label("t (s)")
-            .y_label(y)
-            .x_range(0.0, 20.0);
-        for run in [c, z, &r.reaching, &r.reaching_no_avoidance] {
-            p = p.line(
-                run.label.clone(),
-                run.samples
-                    .iter()
-                    .filter(|s| s.t_s <= 20.0)
-                    .map(|s| (s.t_s, f(s))),
-            );
-        }
-        p.hline(0.0, "")
-    };
     rep.figure(
         "corridor_margin",
         "distance to the corridor wall and full-geometry distance vs time",
@@ -1322,7 +1451,11 @@ fn build_report(
                 "distance (m)",
             )),
     );
+}
 
+/// Time histories of the paper-gain runs (the paper's Figs 5–10).
+fn time_histories_section(rep: &mut ReportBuilder, r: &Results) {
+    let (c, z) = (&r.corridor, &r.no_avoidance);
     rep.heading("Time histories, paper gains (equivalent of the paper's Figs 5–10)");
     let runs = [c, z];
     let xyz = ["x", "y", "z"];
@@ -1392,6 +1525,11 @@ fn build_report(
             ["F_x", "F_y", "F_z"],
         ),
     );
+}
+
+/// The extra case, not in the paper: the reaching term k_r = 1/s.
+fn reaching_variant_section(rep: &mut ReportBuilder, r: &Results) {
+    let xyz = ["x", "y", "z"];
     rep.heading("Extra case, not in the paper: reaching term k_r = 1/s");
     rep.paragraph(
         "`reaching_gain_per_s: 1.0` adds −β⁻¹k_r M S to the law, so the closed loop has \
@@ -1409,8 +1547,11 @@ fn build_report(
             xyz,
         ),
     );
+}
 
-    // Campaign.
+/// The campaign: set-up, outcome counts and the outcome map.
+fn campaign_section(rep: &mut ReportBuilder, r: &Results) {
+    let (shape, gray) = (&r.corridor_shape, gray_dashed());
     let counts = campaign_counts(&r.campaign);
     rep.heading("Beyond the paper: does the point-mass corridor keep the panels clear?");
     rep.paragraph(format!(
@@ -1454,6 +1595,11 @@ fn build_report(
         "campaign outcome map",
         wing(camp_plot).into_figure(),
     );
+}
+
+/// What the campaign's runs did: corridor exits, straight lines, tilts, forces, wing distances.
+fn campaign_summary(rep: &mut ReportBuilder, r: &Results) {
+    let shape = &r.corridor_shape;
     let ran: Vec<&CaseRun> = r.campaign.iter().filter_map(|c| c.run.as_ref()).collect();
     let left: Vec<&&CaseRun> = ran.iter().filter(|c| !c.corridor_held).collect();
     let closest_wing = ran
@@ -1520,6 +1666,10 @@ fn build_report(
         ran.len() - left.len(),
         ran.len()
     ));
+}
+
+/// One row per campaign run.
+fn campaign_runs_table(rep: &mut ReportBuilder, r: &Results) {
     let run_rows: Vec<Vec<String>> = r
         .campaign
         .iter()
@@ -1573,12 +1723,4 @@ fn build_report(
         ],
         &run_rows,
     );
-    rep.heading("How to rerun");
-    rep.code(format!(
-        "rpod reproduce guo2016 --out DIR      # this report ({wall_s:.1} s of wall time here)\n\
-         rpod run scenes/papers/guo2016/guo2016_corridor.ron   # trajectory.csv with guo2016.* columns\n\
-         rpod run scenes/papers/guo2016/guo2016_corridor.ron --set controllers.0.0.reaching_gain_per_s=1.0  # the extra case (σ(0) as in the scene)\n\
-         cargo test --release --test val_guo2016"
-    ));
-    rep
 }

@@ -14,9 +14,8 @@ use crate::control::xu2015::{
 };
 use crate::control::xu2015::{Xu2015Loop, Xu2015Sample};
 use crate::orbit::elliptic::{EllipticOrbit, RelStateTof, rk4_step_relative};
-use crate::report::{
-    Claim, Dash, Figure, LineStyle, Plot, claims_markdown, write_atomic, write_claims_json,
-};
+use crate::report::ClaimKind::{BeyondThePaper, Paper};
+use crate::report::{Claim, Figure, LineStyle, Plot, ReportBuilder, held_word};
 use crate::scene::{SceneError, load_scene_str};
 use crate::sim::Simulation;
 use nalgebra::Vector3;
@@ -755,13 +754,21 @@ fn beats(a: &CaseRun, p: &CaseRun) -> (bool, String) {
     )
 }
 
-fn held_word(h: bool) -> &'static str {
-    if h { "held" } else { "NOT held" }
-}
-
 /// The claims of the paper, measured on `r`.
 pub fn claims(r: &AllRuns) -> Vec<Claim> {
-    use crate::report::ClaimKind::{BeyondThePaper, Paper};
+    let mut out = Vec::new();
+    accm_vs_pd_claims(r, &mut out);
+    per_axis_claim(r, &mut out);
+    thrust_claim(r, &mut out);
+    authority_claim(r, &mut out);
+    mass_claims(r, &mut out);
+    bound_claim(r, &mut out);
+    geometry_claim(r, &mut out);
+    out
+}
+
+/// ACCM against the golden-section-equivalent PD and the tuned PD, at 100 and 90 kg.
+fn accm_vs_pd_claims(r: &AllRuns, out: &mut Vec<Claim>) {
     let better_src = "ours: 'more accurate' = smaller RMS |ξ − goal| over the last 100 s; \
                       'comparable force' = RMS thrust within 1 % (the paper gives neither number)";
     let t = &r.tuning;
@@ -769,7 +776,6 @@ pub fn claims(r: &AllRuns) -> Vec<Claim> {
         "k_p = {:.2} s⁻², k_d = {:.2} s⁻¹ (ω_n = {:.2} rad/s, ζ = {:.2})",
         t.kp_s2, t.kd_s, t.omega_n_rad_s, t.zeta
     );
-    let mut out = Vec::new();
     let tf = &r.tuning_free;
     for (pair, tuned, free, m) in [
         (&r.nominal, &r.tuned_pd[0], &r.tuned_free_pd[0], 100),
@@ -829,6 +835,10 @@ pub fn claims(r: &AllRuns) -> Vec<Claim> {
             )),
         );
     }
+}
+
+/// ACCM's terminal error against PD's on every axis.
+fn per_axis_claim(r: &AllRuns, out: &mut Vec<Claim>) {
     let axis = |pr: [(&CaseRun, &CaseRun); 2]| {
         pr.iter().all(|(a, p)| {
             let (a, p) = (a.terminal_max_axis_m(), p.terminal_max_axis_m());
@@ -864,6 +874,10 @@ pub fn claims(r: &AllRuns) -> Vec<Claim> {
             held_word(axis_tuned)
         )),
     );
+}
+
+/// The 5 N thrust limit over every run.
+fn thrust_claim(r: &AllRuns, out: &mut Vec<Claim>) {
     let all: Vec<&CaseRun> = [&r.nominal, &r.m90, &r.m110_geometry, &r.m110_point_mass]
         .iter()
         .flat_map(|p| p.iter())
@@ -889,18 +903,12 @@ pub fn claims(r: &AllRuns) -> Vec<Claim> {
         ),
         umax <= 5.0 + 1e-12,
     ));
-    let auth = |c: &CaseRun| {
-        [
-            worst(c, "thrust_authority_x"),
-            worst(c, "thrust_authority_y"),
-            worst(c, "thrust_authority_z"),
-        ]
-    };
-    let (a90, a100, a110) = (
-        auth(&r.m90[0]),
-        auth(&r.nominal[0]),
-        auth(&r.m110_point_mass[0]),
-    );
+}
+
+/// The thrust authority against the target's maneuver at 90 and 100 kg.
+fn authority_claim(r: &AllRuns, out: &mut Vec<Claim>) {
+    let auth = authority_margins;
+    let (a90, a100) = (auth(&r.m90[0]), auth(&r.nominal[0]));
     let a_t180 = auth(&r.target_mass[0].1[0]);
     out.push(
         Claim::new(
@@ -921,6 +929,20 @@ pub fn claims(r: &AllRuns) -> Vec<Claim> {
             worst(&r.target_mass[1].1[0], "thrust_authority_x")
         )),
     );
+}
+
+/// Worst thrust-authority margins (x, y, z) of a run, m/s².
+fn authority_margins(c: &CaseRun) -> [f64; 3] {
+    [
+        worst(c, "thrust_authority_x"),
+        worst(c, "thrust_authority_y"),
+        worst(c, "thrust_authority_z"),
+    ]
+}
+
+/// ±10 % mass read as the chaser's (110 kg) and as the target's (180/220 kg).
+fn mass_claims(r: &AllRuns, out: &mut Vec<Claim>) {
+    let a110 = authority_margins(&r.m110_point_mass[0]);
     let (pa, pp) = (&r.m110_point_mass[0], &r.m110_point_mass[1]);
     let b = &r.bound_m110;
     let keeps = |c: &CaseRun| c.terminal_rms_m() < 10.0 * r.nominal[0].terminal_rms_m();
@@ -984,6 +1006,11 @@ pub fn claims(r: &AllRuns) -> Vec<Claim> {
             held_word(keeps(pa) && keeps(&r.m90[0]))
         )),
     );
+}
+
+/// The thrust-limited lower bound on the terminal x error at 110 kg.
+fn bound_claim(r: &AllRuns, out: &mut Vec<Claim>) {
+    let b = &r.bound_m110;
     out.push(Claim::new(
         "m110-bound-exceeds-goal",
         BeyondThePaper,
@@ -1002,6 +1029,10 @@ pub fn claims(r: &AllRuns) -> Vec<Claim> {
         ),
         b.single_peak_m > 0.01,
     ));
+}
+
+/// The 110 kg runs with the real geometry stay clear of the target.
+fn geometry_claim(r: &AllRuns, out: &mut Vec<Claim>) {
     let (ga, gp) = (&r.m110_geometry[0], &r.m110_geometry[1]);
     let col = |c: &CaseRun| {
         c.summary["collisions"]
@@ -1029,29 +1060,39 @@ pub fn claims(r: &AllRuns) -> Vec<Claim> {
         ),
         ga.first_collision_s().is_none() && gp.first_collision_s().is_none(),
     ));
-    out
 }
 
 /// Runs the paper's cases and writes REPORT.md, plots and claims.json into `out`.
 pub fn run(out: &Path) -> Result<(), String> {
     let runs = run_all(Some(&out.join("cases")))?;
     let cl = claims(&runs);
-    write_claims_json(&out.join("claims.json"), &cl).map_err(|e| e.to_string())?;
-    let figures = write_figures(out, &runs)?;
-    let md = report_markdown(&runs, &cl, &figures);
-    write_atomic(&out.join("REPORT.md"), md.as_bytes()).map_err(|e| e.to_string())?;
+    report(&runs, &cl).write(out).map_err(|e| e.to_string())?;
     Ok(())
 }
 
-/// REPORT.md text.
-fn report_markdown(r: &AllRuns, cl: &[Claim], figures: &[(String, String)]) -> String {
+/// The report: claims, set-up, the cases table, the figures, then the comparisons (which run
+/// the measurement-noise cases).
+fn report(r: &AllRuns, cl: &[Claim]) -> ReportBuilder {
+    let mut rep = ReportBuilder::new(
+        "Xu & Hu (2015): ACCM vs PD, rendezvous with a maneuvering target on an e = 0.7 orbit",
+    );
+    rep.heading("Claims");
+    rep.claims(cl);
+    rep.raw(method_text());
+    rep.heading("Cases");
+    rep.paragraph(cases_table(r));
+    rep.heading("Figures");
+    for (stem, caption, fig) in figures(r) {
+        rep.paragraph(caption);
+        rep.figure(stem.clone(), stem, fig);
+    }
+    rep.raw(comparison_text(r));
+    rep
+}
+
+/// The cases table: terminal accuracy, thrust, saturation, collisions per run.
+fn cases_table(r: &AllRuns) -> String {
     let mut s = String::new();
-    s.push_str("# Xu & Hu (2015): ACCM vs PD, rendezvous with a maneuvering target on an e = 0.7 orbit\n\n");
-    s.push_str("## Claims\n\n");
-    s.push_str(&claims_markdown(cl).unwrap_or_else(|e| format!("(claims table: {e})\n")));
-    s.push('\n');
-    s.push_str(&method_text());
-    s.push_str("\n## Cases\n\n");
     s.push_str("| case | chaser kg | terminal RMS m | terminal max m | max per axis (x, y, z) m | RMS thrust N | x saturated (last 100 s) | first collision s | min distance m |\n|---|---|---|---|---|---|---|---|---|\n");
     let rows: [(&str, &CaseRun); 15] = [
         ("ACCM", &r.nominal[0]),
@@ -1089,12 +1130,6 @@ fn report_markdown(r: &AllRuns, cl: &[Claim], figures: &[(String, String)]) -> S
                 .map_or("?".into(), |d| format!("{d:.3}"))
         ));
     }
-    s.push_str("\n## Figures\n");
-    for (file, caption) in figures {
-        let alt = file.trim_end_matches(".png");
-        s.push_str(&format!("\n{caption}\n\n![{alt}]({file})\n"));
-    }
-    s.push_str(&comparison_text(r));
     s
 }
 
@@ -1139,7 +1174,7 @@ fn comparison_text(r: &AllRuns) -> String {
         .fold(0.0, f64::max);
     let da = model_difference_bound_m_s2(0.1, 90.0);
     let mut s = format!(
-        "\n## ECS run vs the f64 relative model\n\n\
+        "## ECS run vs the f64 relative model\n\n\
 The law's author measured the closed loop on the paper's relative model in the tof (RK4 at \
 0.1 s, thrust held in the rotating frame). The ECS plant differs from it only by: thrust and \
 maneuver held fixed in the inertial frame over a step while the tof turns by ḟ dt (≤ {:.1e} rad \
@@ -1367,18 +1402,21 @@ fn series<'a>(
         .map(move |s| (s.t_s, f(s)))
 }
 
-fn dashed() -> LineStyle {
-    LineStyle {
-        dash: Dash::Dashed,
-        ..LineStyle::default()
-    }
+/// The figures in report order: (file stem, caption, figure).
+pub fn figures(r: &AllRuns) -> Vec<(String, String, Figure)> {
+    let mut figs: Vec<(String, String, Figure)> = Vec::new();
+    distance_figure(r, &mut figs);
+    position_figure(r, &mut figs);
+    thrust_figure(r, &mut figs);
+    parameters_figure(r, &mut figs);
+    mass_cases_figure(r, &mut figs);
+    figs
 }
 
-/// Writes the figures into `out`; returns (file, caption) in report order.
-pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, String> {
+/// Fig. 2: relative distance, with zooms on the last 100 s.
+fn distance_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
     let (a, p) = (&r.nominal[0], &r.nominal[1]);
     let goal = a.goal_tof_m;
-    let mut figs: Vec<(String, String, Figure)> = Vec::new();
     let err = move |s: &Xu2015Sample| (s.xi_tof_m - goal).norm();
     // Fig. 2: relative distance, with zooms on the last 100 s.
     let fig = Figure::new("Relative distance |ξ| (target orbital frame), chaser 100 kg")
@@ -1389,7 +1427,11 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
                 .y_label("|ξ| [m]")
                 .log_y()
                 .line("ACCM", series(a, 0.0, |s| s.xi_tof_m.norm()))
-                .line_styled("PD", series(p, 0.0, |s| s.xi_tof_m.norm()), dashed()),
+                .line_styled(
+                    "PD",
+                    series(p, 0.0, |s| s.xi_tof_m.norm()),
+                    LineStyle::dashed(),
+                ),
         )
         .plot(
             Plot::new("terminal error |ξ − goal| over the run")
@@ -1397,7 +1439,7 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
                 .y_label("|ξ − goal| [m]")
                 .log_y()
                 .line("ACCM", series(a, 0.0, err))
-                .line_styled("PD", series(p, 0.0, err), dashed()),
+                .line_styled("PD", series(p, 0.0, err), LineStyle::dashed()),
         )
         .plot(
             Plot::new("ACCM, last 100 s")
@@ -1412,7 +1454,7 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
                 .line_styled(
                     "PD",
                     series(p, TERMINAL_FROM_S, move |s| 1e3 * err(s)),
-                    dashed(),
+                    LineStyle::dashed(),
                 ),
         );
     figs.push((
@@ -1420,7 +1462,12 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
         "Relative distance (paper Fig. 2) with the last 100 s of each controller".into(),
         fig,
     ));
-    // Fig. 3: relative position per axis, full run and last 100 s.
+}
+
+/// Fig. 3: relative position per axis, full run and last 100 s.
+fn position_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
+    let (a, p) = (&r.nominal[0], &r.nominal[1]);
+    let goal = a.goal_tof_m;
     let mut fig =
         Figure::new("Relative position ξ per axis (target orbital frame), chaser 100 kg").cols(2);
     for (i, ax) in ["x", "y", "z"].iter().enumerate() {
@@ -1431,14 +1478,15 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
                 .x_label("t [s]")
                 .y_label(format!("ξ_{ax} [{unit}]"))
                 .line("ACCM", series(a, 0.0, move |s| k * s.xi_tof_m[i]))
-                .line_styled("PD", series(p, 0.0, move |s| k * s.xi_tof_m[i]), dashed())
+                .line_styled(
+                    "PD",
+                    series(p, 0.0, move |s| k * s.xi_tof_m[i]),
+                    LineStyle::dashed(),
+                )
                 .line_styled(
                     "reference",
                     series(a, 0.0, move |s| k * s.reference_tof_m[i]),
-                    LineStyle {
-                        dash: Dash::Dotted,
-                        ..LineStyle::default()
-                    },
+                    LineStyle::dotted(),
                 ),
         );
         fig.push(
@@ -1452,7 +1500,7 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
                 .line_styled(
                     "PD",
                     series(p, TERMINAL_FROM_S, move |s| 1e3 * (s.xi_tof_m[i] - goal[i])),
-                    dashed(),
+                    LineStyle::dashed(),
                 ),
         );
     }
@@ -1462,7 +1510,11 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
             .into(),
         fig,
     ));
-    // Fig. 4: thrust.
+}
+
+/// Fig. 4: thrust.
+fn thrust_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
+    let (a, p) = (&r.nominal[0], &r.nominal[1]);
     let mut fig = Figure::new("Chaser thrust u (target orbital frame), chaser 100 kg, limit ±5 N");
     for (i, ax) in ["x", "y", "z"].iter().enumerate() {
         fig.push(
@@ -1470,7 +1522,11 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
                 .x_label("t [s]")
                 .y_label(format!("u_{ax} [N]"))
                 .line("ACCM", series(a, 0.0, move |s| s.thrust_tof_n[i]))
-                .line_styled("PD", series(p, 0.0, move |s| s.thrust_tof_n[i]), dashed())
+                .line_styled(
+                    "PD",
+                    series(p, 0.0, move |s| s.thrust_tof_n[i]),
+                    LineStyle::dashed(),
+                )
                 .hline(5.0, "+5 N")
                 .hline(-5.0, "−5 N"),
         );
@@ -1480,7 +1536,11 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
         "Control thrust (paper Fig. 4), ACCM and PD".into(),
         fig,
     ));
-    // Identified parameters.
+}
+
+/// ACCM's identified characteristic parameters.
+fn parameters_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
+    let a = &r.nominal[0];
     let mut fig = Figure::new("ACCM identified characteristic parameters, chaser 100 kg");
     let est = |k: usize, i: usize| {
         series(a, 0.0, move |s| {
@@ -1505,7 +1565,21 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
         "Identified parameters α̂1, α̂2, γ̂ per axis (projection box α1 ∈ [1.5, 2.02], α2 ∈ [−1.02, −0.5], γ ∈ [0.85, 1.15])".into(),
         fig,
     ));
-    // Mass cases.
+}
+
+/// (t s, full-geometry chaser–target distance m) of a run, one sample per 0.1 s step.
+fn distance_points(c: &CaseRun) -> impl Iterator<Item = (f64, f64)> + '_ {
+    c.distance_m
+        .iter()
+        .enumerate()
+        .map(|(k, d)| (k as f64 * 0.1, *d))
+}
+
+/// Mass cases: terminal error, the x thrust at 110 kg against the force needed, distances.
+fn mass_cases_figure(r: &AllRuns, figs: &mut Vec<(String, String, Figure)>) {
+    let a = &r.nominal[0];
+    let goal = a.goal_tof_m;
+    let err = move |s: &Xu2015Sample| (s.xi_tof_m - goal).norm();
     let cases: [(&str, &CaseRun); 6] = [
         ("ACCM 90 kg", &r.m90[0]),
         ("ACCM 100 kg", &r.nominal[0]),
@@ -1520,7 +1594,7 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
         .log_y();
     for (name, c) in cases {
         let st = if name.starts_with("PD") {
-            dashed()
+            LineStyle::dashed()
         } else {
             LineStyle::default()
         };
@@ -1536,7 +1610,7 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
                 .x_label("t [s]")
                 .y_label("force [N]")
                 .line("ACCM u_x", series(pm, 0.0, |s| s.thrust_tof_n.x))
-                .line_styled("m_c F_t,x / m_t (needed)", need, dashed())
+                .line_styled("m_c F_t,x / m_t (needed)", need, LineStyle::dashed())
                 .hline(5.0, "+5 N")
                 .hline(-5.0, "−5 N"),
         )
@@ -1544,29 +1618,15 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
             Plot::new("full-geometry chaser–target distance")
                 .x_label("t [s]")
                 .y_label("distance [m]")
-                .line(
-                    "100 kg ACCM",
-                    a.distance_m
-                        .iter()
-                        .enumerate()
-                        .map(|(k, d)| (k as f64 * 0.1, *d)),
-                )
+                .line("100 kg ACCM", distance_points(a))
                 .line(
                     "110 kg ACCM (real geometry)",
-                    r.m110_geometry[0]
-                        .distance_m
-                        .iter()
-                        .enumerate()
-                        .map(|(k, d)| (k as f64 * 0.1, *d)),
+                    distance_points(&r.m110_geometry[0]),
                 )
                 .line_styled(
                     "110 kg PD (real geometry)",
-                    r.m110_geometry[1]
-                        .distance_m
-                        .iter()
-                        .enumerate()
-                        .map(|(k, d)| (k as f64 * 0.1, *d)),
-                    dashed(),
+                    distance_points(&r.m110_geometry[1]),
+                    LineStyle::dashed(),
                 ),
         );
     figs.push((
@@ -1574,12 +1634,4 @@ pub fn write_figures(out: &Path, r: &AllRuns) -> Result<Vec<(String, String)>, S
         "Mass cases: terminal error, the x thrust at 110 kg against the force needed to follow the target's maneuver, and the monitor's full-geometry distance".into(),
         fig,
     ));
-    let mut list = Vec::new();
-    for (stem, caption, fig) in figs {
-        let file = format!("{stem}.png");
-        fig.write_png(&out.join(&file))
-            .map_err(|e| format!("cannot write {file}: {e}"))?;
-        list.push((file, caption));
-    }
-    Ok(list)
 }

@@ -22,7 +22,8 @@
 use crate::control::xu2019::Xu2019Instance;
 use crate::control::xu2019::{Xu2019Controller, Xu2019Params};
 use crate::geometry::superquadric::RadialForm;
-use crate::report::{Claim, Color, Dash, Figure, LineStyle, Plot, ReportBuilder};
+use crate::report::ClaimKind::{BeyondThePaper, Paper};
+use crate::report::{Claim, Color, Dash, Figure, LineStyle, Plot, ReportBuilder, held_word};
 use crate::scene::load_scene_str;
 use crate::sim::Simulation;
 use crate::sim::docking::{DockState, Docking};
@@ -266,41 +267,13 @@ pub fn run_loaded(
     let mut last_theta: Option<f64> = None;
     let mut open_acc = 0.0;
     let mut sample = |sim: &Simulation, run: &mut CaseRun, open_mean: f64| {
-        let c = sim.body("chaser").expect("chaser");
-        let p = c.pos_m.xy();
-        let th = c.yaw_rad();
-        let th = match last_theta {
-            None => th,
-            Some(prev) => {
-                prev + (th - prev + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
-                    - std::f64::consts::PI
-            }
-        };
-        last_theta = Some(th);
-        run.t_s.push(sim.t_s());
-        run.x_m.push(p.x);
-        run.y_m.push(p.y);
-        run.theta_deg.push(th.to_degrees());
-        run.vel.push([c.vel_m_s.x, c.vel_m_s.y, c.omega_rad_s.z]);
-        run.radial_obstacle_eq8_m.push(
-            law.params
-                .obstacle
-                .radial_distance_m(p, RadialForm::PaperEq8),
+        push_sample(
+            run,
+            sim,
+            (&law.params, obstacle),
+            &mut last_theta,
+            open_mean,
         );
-        run.radial_obstacle_exact_m
-            .push(law.params.obstacle.radial_distance_m(p, RadialForm::Exact));
-        run.radial_heart_m
-            .push(law.params.heart.radial_distance_m(p));
-        let mon = sim.monitor();
-        let d = mon
-            .pairs
-            .iter()
-            .find(|q| q.a == 0 && Some(q.b) == obstacle)
-            .map_or(f64::NAN, |q| q.distance_m);
-        run.geometry_obstacle_m.push(d);
-        run.open_nozzles.push(open_mean);
-        let ctl = sim.law::<Xu2019Instance>(0).expect("an Xu2019 controller");
-        run.gas_kg.push(ctl.gas_used_kg);
     };
     sample(&sim, &mut run, 0.0);
     for _ in 0..n_samples {
@@ -319,6 +292,66 @@ pub fn run_loaded(
         sample(&sim, &mut run, open_acc / per_sample as f64);
     }
     let _ = open_acc;
+    read_final_state(&mut run, &sim, &law, goal);
+    read_contacts(&mut run, &sim, obstacle);
+    run.steps = sim.steps();
+    run.wall_s = sim.wall_s;
+    if out.is_some() {
+        sim.finish()
+            .map_err(|e| format!("cannot finish the outputs of {name}: {e}"))?;
+    }
+    Ok(run)
+}
+
+/// One sample of the chaser's state, distances, valves and gas into `run`; θ is unwrapped
+/// against the previous sample's (`last_theta`).
+fn push_sample(
+    run: &mut CaseRun,
+    sim: &Simulation,
+    (params, obstacle): (&Xu2019Params, Option<usize>),
+    last_theta: &mut Option<f64>,
+    open_mean: f64,
+) {
+    let c = sim.body("chaser").expect("chaser");
+    let p = c.pos_m.xy();
+    let th = c.yaw_rad();
+    let th = match *last_theta {
+        None => th,
+        Some(prev) => {
+            prev + (th - prev + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
+                - std::f64::consts::PI
+        }
+    };
+    *last_theta = Some(th);
+    run.t_s.push(sim.t_s());
+    run.x_m.push(p.x);
+    run.y_m.push(p.y);
+    run.theta_deg.push(th.to_degrees());
+    run.vel.push([c.vel_m_s.x, c.vel_m_s.y, c.omega_rad_s.z]);
+    run.radial_obstacle_eq8_m
+        .push(params.obstacle.radial_distance_m(p, RadialForm::PaperEq8));
+    run.radial_obstacle_exact_m
+        .push(params.obstacle.radial_distance_m(p, RadialForm::Exact));
+    run.radial_heart_m.push(params.heart.radial_distance_m(p));
+    let mon = sim.monitor();
+    let d = mon
+        .pairs
+        .iter()
+        .find(|q| q.a == 0 && Some(q.b) == obstacle)
+        .map_or(f64::NAN, |q| q.distance_m);
+    run.geometry_obstacle_m.push(d);
+    run.open_nozzles.push(open_mean);
+    let ctl = sim.law::<Xu2019Instance>(0).expect("an Xu2019 controller");
+    run.gas_kg.push(ctl.gas_used_kg);
+}
+
+/// The actuator, docking and goal outcome at the end of the run.
+fn read_final_state(
+    run: &mut CaseRun,
+    sim: &Simulation,
+    law: &Xu2019Controller,
+    goal: Vector3<f64>,
+) {
     let act = &sim
         .controllers()
         .slot_of::<Xu2019Instance>(0)
@@ -343,6 +376,10 @@ pub fn run_loaded(
                 && (th.to_radians() - goal.z).abs().to_degrees() < GOAL_ANGLE_TOL_DEG
         })
         .map(|(t, _)| *t);
+}
+
+/// The closest approach to the obstacle, the collisions and the off-table events.
+fn read_contacts(run: &mut CaseRun, sim: &Simulation, obstacle: Option<usize>) {
     let mon = sim.monitor();
     run.min_geometry_obstacle = (f64::NAN, "no obstacle body".into(), f64::NAN);
     if let Some(b) = obstacle
@@ -385,13 +422,6 @@ pub fn run_loaded(
             )
         })
         .collect();
-    run.steps = sim.steps();
-    run.wall_s = sim.wall_s;
-    if out.is_some() {
-        sim.finish()
-            .map_err(|e| format!("cannot finish the outputs of {name}: {e}"))?;
-    }
-    Ok(run)
 }
 
 /// Runs both cases (their scenes' durations), recording under `out/<case>/` if given.
@@ -529,12 +559,25 @@ fn lag_s(a: &CaseRun, b: &CaseRun, j: usize) -> String {
     }
 }
 
-/// The claims of the issue, measured.
-pub fn claims(r: &Results) -> Vec<Claim> {
-    use crate::report::ClaimKind::{BeyondThePaper, Paper};
-    let tol_src = "ours: 1 cm and 2° — the paper shows x, y, θ converging (Fig. 13b–d) without \
+/// Threshold source of the goal claims.
+const TOL_SRC: &str = "ours: 1 cm and 2° — the paper shows x, y, θ converging (Fig. 13b–d) without \
                    a tolerance; 2° is a round value below the mechanism's 3° latch tolerance";
+
+/// The claims, measured on `r`: goal and latch per variant, radial distances, obstacle
+/// contacts, the ghost obstacle, the experiment's lag.
+pub fn claims(r: &Results) -> Vec<Claim> {
     let mut v = Vec::new();
+    goal_claims(r, &mut v);
+    radial_claims(r, &mut v);
+    obstacle_claims(r, &mut v);
+    ghost_claims(r, &mut v);
+    lag_claims(r, &mut v);
+    v
+}
+
+/// Every variant reaches the goal and latches.
+fn goal_claims(r: &Results, v: &mut Vec<Claim>) {
+    let tol_src = TOL_SRC;
     for (run, active, _) in r.variants() {
         let held = at_goal_and_latched(run, GOAL_ANGLE_TOL_DEG);
         v.push(
@@ -552,8 +595,8 @@ pub fn claims(r: &Results) -> Vec<Claim> {
             )
             .with_sensitivity(format!(
                 "with the latch's own {LATCH_ANGLE_TOL_DEG}° tolerance: {}; with the law kept active after the magnet (the paper does not say it stops): {} (|Δθ| {:.2}°)",
-                if at_goal_and_latched(run, LATCH_ANGLE_TOL_DEG) { "held" } else { "NOT held" },
-                if at_goal_and_latched(active, GOAL_ANGLE_TOL_DEG) { "held" } else { "NOT held" },
+                held_word(at_goal_and_latched(run, LATCH_ANGLE_TOL_DEG)),
+                held_word(at_goal_and_latched(active, GOAL_ANGLE_TOL_DEG)),
                 active.final_angle_err_deg
             )),
         );
@@ -572,11 +615,15 @@ pub fn claims(r: &Results) -> Vec<Claim> {
             )
             .with_sensitivity(format!(
                 "law switched off at the magnet (scenes' default): {} (|Δθ| {:.2}°)",
-                if held { "held" } else { "NOT held" },
+                held_word(held),
                 run.final_angle_err_deg
             )),
         );
     }
+}
+
+/// The radial distances to the obstacle and the heart stay positive.
+fn radial_claims(r: &Results, v: &mut Vec<Claim>) {
     for run in [&r.simulation, &r.experiment] {
         let n = run.approach_end() + 1;
         let m8 = CaseRun::min(&run.radial_obstacle_eq8_m[..n]);
@@ -600,6 +647,10 @@ pub fn claims(r: &Results) -> Vec<Claim> {
             m8 > 0.0 && me > 0.0 && mh > 0.0,
         ));
     }
+}
+
+/// No contact with the obstacle.
+fn obstacle_claims(r: &Results, v: &mut Vec<Claim>) {
     for run in [&r.simulation, &r.experiment] {
         let (d, parts, t) = &run.min_geometry_obstacle;
         let first = run.obstacle_collisions.first();
@@ -622,6 +673,11 @@ pub fn claims(r: &Results) -> Vec<Claim> {
             first.is_none() && *d > 0.0,
         ));
     }
+}
+
+/// With a ghost obstacle (no prism body) the goal is reached and latched.
+fn ghost_claims(r: &Results, v: &mut Vec<Claim>) {
+    let tol_src = TOL_SRC;
     for (run, _, ghost) in r.variants() {
         let t_hit = run
             .obstacle_collisions
@@ -645,6 +701,10 @@ pub fn claims(r: &Results) -> Vec<Claim> {
             at_goal_and_latched(ghost, GOAL_ANGLE_TOL_DEG),
         ));
     }
+}
+
+/// The experiment lags the simulation in x and y, and (the paper says) leads in θ.
+fn lag_claims(r: &Results, v: &mut Vec<Claim>) {
     let ss = settling(&r.simulation);
     let se = settling(&r.experiment);
     let si = settling(&r.experiment_tuned_iz);
@@ -678,7 +738,7 @@ pub fn claims(r: &Results) -> Vec<Claim> {
         )
         .with_sensitivity(format!(
             "at 90 % of the change: {}",
-            if held90 { "held" } else { "NOT held" }
+            held_word(held90)
         )),
     );
     v.push(
@@ -699,14 +759,9 @@ pub fn claims(r: &Results) -> Vec<Claim> {
         )
         .with_sensitivity(format!(
             "at 90 % of the change: {}",
-            if lag(2, 1).is_some_and(|l| l < 0.0) {
-                "held"
-            } else {
-                "NOT held"
-            }
+            held_word(lag(2, 1).is_some_and(|l| l < 0.0))
         )),
     );
-    v
 }
 
 fn pts(t: &[f64], v: &[f64]) -> Vec<(f64, f64)> {
@@ -762,13 +817,10 @@ pub fn run(out: &Path) -> Result<(), String> {
     Ok(())
 }
 
-fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String> {
+/// Fig. 13 (path): both cases, the ghost-obstacle run and the last restart in the table plane.
+fn path_plot(r: &Results, s: &CaseRun, e: &CaseRun) -> Plot {
     let p = Xu2019Params::paper();
-    let (s, e) = (&on_table(&r.simulation), &on_table(&r.experiment));
-    let dashed = LineStyle {
-        dash: Dash::Dashed,
-        ..Default::default()
-    };
+    let dashed = LineStyle::dashed();
     // Path in the plane.
     let obstacle: Vec<(f64, f64)> = p
         .obstacle
@@ -828,13 +880,16 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
         path = path.line_styled(
             format!("simulation restarted at {t0} s (diagnostic)"),
             pts(&rs.x_m, &rs.y_m),
-            LineStyle {
-                dash: Dash::Dotted,
-                ..Default::default()
-            },
+            LineStyle::dotted(),
         );
     }
-    let states = Figure::new(
+    path
+}
+
+/// x(t), y(t), θ(t) of both cases.
+fn states_figure(s: &CaseRun, e: &CaseRun) -> Figure {
+    let p = Xu2019Params::paper();
+    Figure::new(
         "Chaser state vs time (lab frame; axes clipped to the approach, the rebound leaves them)",
     )
     .cols(1)
@@ -864,8 +919,13 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
             .line("simulation", pts(&s.t_s, &s.theta_deg))
             .line("experiment", pts(&e.t_s, &e.theta_deg))
             .hline(90.0, "goal 90°"),
-    );
-    let dist = Figure::new("Distances of the chaser to the constraints")
+    )
+}
+
+/// Radial distances (both forms) and the full-geometry distance to the obstacle.
+fn distances_figure(s: &CaseRun, e: &CaseRun) -> Figure {
+    let dashed = LineStyle::dashed();
+    Figure::new("Distances of the chaser to the constraints")
         .cols(2)
         .plot(
             Plot::new("Radial distance to the obstacle (centre of mass)")
@@ -903,9 +963,13 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
                 .line("simulation", pts(&s.t_s, &s.geometry_obstacle_m))
                 .line("experiment", pts(&e.t_s, &e.geometry_obstacle_m))
                 .hline(0.0, "contact"),
-        );
+        )
+}
+
+/// Valve activity and gas used by the experiment.
+fn valves_figure(e: &CaseRun) -> Figure {
     let gas_g: Vec<f64> = e.gas_kg.iter().map(|g| g * 1e3).collect();
-    let valves = Figure::new("Experiment: cold-gas valves")
+    Figure::new("Experiment: cold-gas valves")
         .cols(2)
         .plot(
             Plot::new("Open nozzles (mean over each 0.1 s)")
@@ -918,8 +982,11 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
                 .x_label("t (s)")
                 .y_label("gas used (g)")
                 .line("experiment", pts(&e.t_s, &gas_g)),
-        );
+        )
+}
 
+fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String> {
+    let (s, e) = (&on_table(&r.simulation), &on_table(&r.experiment));
     let mut rep = ReportBuilder::new(
         "Xu, Wen, Wei (2019): air-bearing rendezvous and docking with a superquadric obstacle and a heart-shaped target",
     );
@@ -949,98 +1016,131 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
     rep.figure(
         "path",
         "Path in the plane with the obstacle, the heart keep-out and the target body",
-        Figure::new("Fig. 13 (path)").plot(path),
+        Figure::new("Fig. 13 (path)").plot(path_plot(r, s, e)),
     );
-    rep.figure("states", "x(t), y(t), θ(t) of both cases", states);
+    rep.figure(
+        "states",
+        "x(t), y(t), θ(t) of both cases",
+        states_figure(s, e),
+    );
     rep.figure(
         "distances",
         "Radial distances (both forms) and the full-geometry distance to the obstacle",
-        dist,
+        distances_figure(s, e),
     );
-    rep.figure("valves", "Valve activity and gas used (experiment)", valves);
+    rep.figure(
+        "valves",
+        "Valve activity and gas used (experiment)",
+        valves_figure(e),
+    );
+    numbers_section(&mut rep, s, e);
+    variants_section(&mut rep, r);
+    choices_section(&mut rep);
+    restarts_section(&mut rep, r);
+    rep.write(out)
+        .map_err(|e| format!("cannot write the report in {}: {e}", out.display()))?;
+    Ok(())
+}
+
+/// The numbers of both cases: settling, capture, distances, collisions, gas, steps.
+fn numbers_section(rep: &mut ReportBuilder, s: &CaseRun, e: &CaseRun) {
     rep.heading("Numbers");
+    let mut rows = settling_rows(s, e);
+    rows.extend(outcome_rows(s, e));
+    rep.table(&["quantity", "simulation", "experiment"], &rows);
+}
+
+/// Rows of the numbers table: settling times, magnet, docking.
+fn settling_rows(s: &CaseRun, e: &CaseRun) -> Vec<Vec<String>> {
     let ssim = settling(s);
     let sexp = settling(e);
     let f = |x: Option<f64>| x.map_or("n/a".into(), |x| format!("{x:.1}"));
-    rep.table(
-        &["quantity", "simulation", "experiment"],
-        &[
-            vec![
-                "x: 50 % / 90 % of the change (s)".into(),
-                format!("{} / {}", f(ssim[0][0]), f(ssim[0][1])),
-                format!("{} / {}", f(sexp[0][0]), f(sexp[0][1])),
-            ],
-            vec![
-                "y: 50 % / 90 % of the change (s)".into(),
-                format!("{} / {}", f(ssim[1][0]), f(ssim[1][1])),
-                format!("{} / {}", f(sexp[1][0]), f(sexp[1][1])),
-            ],
-            vec![
-                "θ: 50 % / 90 % of the change (s)".into(),
-                format!("{} / {}", f(ssim[2][0]), f(ssim[2][1])),
-                format!("{} / {}", f(sexp[2][0]), f(sexp[2][1])),
-            ],
-            vec![
-                "magnet on (law hands over) (s)".into(),
-                fmt_opt(s.magnet_on_s),
-                fmt_opt(e.magnet_on_s),
-            ],
-            vec![
-                "docking".into(),
-                format!("{}: {}", s.dock_state, s.dock_reason),
-                format!("{}: {}", e.dock_state, e.dock_reason),
-            ],
-            vec![
-                "min radial distance over the whole run, obstacle eq (8) / exact (m)".into(),
-                format!(
-                    "{:.4} / {:.4}",
-                    CaseRun::min(&s.radial_obstacle_eq8_m),
-                    CaseRun::min(&s.radial_obstacle_exact_m)
-                ),
-                format!(
-                    "{:.4} / {:.4}",
-                    CaseRun::min(&e.radial_obstacle_eq8_m),
-                    CaseRun::min(&e.radial_obstacle_exact_m)
-                ),
-            ],
-            vec![
-                "min full-geometry distance to the obstacle, whole run (m)".into(),
-                format!(
-                    "{:.4} ({}, {:.2} s)",
-                    s.min_geometry_obstacle.0, s.min_geometry_obstacle.1, s.min_geometry_obstacle.2
-                ),
-                format!(
-                    "{:.4} ({}, {:.2} s)",
-                    e.min_geometry_obstacle.0, e.min_geometry_obstacle.1, e.min_geometry_obstacle.2
-                ),
-            ],
-            vec![
-                "collisions (all pairs)".into(),
-                s.collisions.to_string(),
-                e.collisions.to_string(),
-            ],
-            vec![
-                "off the table".into(),
-                format!("{:?}", s.off_table),
-                format!("{:?}", e.off_table),
-            ],
-            vec![
-                "gas used (g)".into(),
-                "—".into(),
-                format!("{:.2}", e.gas_kg.last().copied().unwrap_or(0.0) * 1e3),
-            ],
-            vec![
-                "valve openings per nozzle (1-1 … 4-2)".into(),
-                "—".into(),
-                format!("{:?}", e.valve_openings),
-            ],
-            vec![
-                "steps / wall time".into(),
-                format!("{} / {:.1} s", s.steps, s.wall_s),
-                format!("{} / {:.1} s", e.steps, e.wall_s),
-            ],
+    vec![
+        vec![
+            "x: 50 % / 90 % of the change (s)".into(),
+            format!("{} / {}", f(ssim[0][0]), f(ssim[0][1])),
+            format!("{} / {}", f(sexp[0][0]), f(sexp[0][1])),
         ],
-    );
+        vec![
+            "y: 50 % / 90 % of the change (s)".into(),
+            format!("{} / {}", f(ssim[1][0]), f(ssim[1][1])),
+            format!("{} / {}", f(sexp[1][0]), f(sexp[1][1])),
+        ],
+        vec![
+            "θ: 50 % / 90 % of the change (s)".into(),
+            format!("{} / {}", f(ssim[2][0]), f(ssim[2][1])),
+            format!("{} / {}", f(sexp[2][0]), f(sexp[2][1])),
+        ],
+        vec![
+            "magnet on (law hands over) (s)".into(),
+            fmt_opt(s.magnet_on_s),
+            fmt_opt(e.magnet_on_s),
+        ],
+        vec![
+            "docking".into(),
+            format!("{}: {}", s.dock_state, s.dock_reason),
+            format!("{}: {}", e.dock_state, e.dock_reason),
+        ],
+    ]
+}
+
+/// Rows of the numbers table: distances, collisions, table, gas, valves, steps.
+fn outcome_rows(s: &CaseRun, e: &CaseRun) -> Vec<Vec<String>> {
+    vec![
+        vec![
+            "min radial distance over the whole run, obstacle eq (8) / exact (m)".into(),
+            format!(
+                "{:.4} / {:.4}",
+                CaseRun::min(&s.radial_obstacle_eq8_m),
+                CaseRun::min(&s.radial_obstacle_exact_m)
+            ),
+            format!(
+                "{:.4} / {:.4}",
+                CaseRun::min(&e.radial_obstacle_eq8_m),
+                CaseRun::min(&e.radial_obstacle_exact_m)
+            ),
+        ],
+        vec![
+            "min full-geometry distance to the obstacle, whole run (m)".into(),
+            format!(
+                "{:.4} ({}, {:.2} s)",
+                s.min_geometry_obstacle.0, s.min_geometry_obstacle.1, s.min_geometry_obstacle.2
+            ),
+            format!(
+                "{:.4} ({}, {:.2} s)",
+                e.min_geometry_obstacle.0, e.min_geometry_obstacle.1, e.min_geometry_obstacle.2
+            ),
+        ],
+        vec![
+            "collisions (all pairs)".into(),
+            s.collisions.to_string(),
+            e.collisions.to_string(),
+        ],
+        vec![
+            "off the table".into(),
+            format!("{:?}", s.off_table),
+            format!("{:?}", e.off_table),
+        ],
+        vec![
+            "gas used (g)".into(),
+            "—".into(),
+            format!("{:.2}", e.gas_kg.last().copied().unwrap_or(0.0) * 1e3),
+        ],
+        vec![
+            "valve openings per nozzle (1-1 … 4-2)".into(),
+            "—".into(),
+            format!("{:?}", e.valve_openings),
+        ],
+        vec![
+            "steps / wall time".into(),
+            format!("{} / {:.1} s", s.steps, s.wall_s),
+            format!("{} / {:.1} s", e.steps, e.wall_s),
+        ],
+    ]
+}
+
+/// The variants: law kept active, ghost obstacle, tuned inertia.
+fn variants_section(rep: &mut ReportBuilder, r: &Results) {
     rep.heading("Variants: law kept active, ghost obstacle, tuned inertia");
     let variant_row = |label: &str, run: &CaseRun| {
         vec![
@@ -1077,6 +1177,11 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
             ),
         ],
     );
+    variants_paragraph(rep, r);
+}
+
+/// What the variants show: the latch angle, the contacts' effect on the path, the inertia.
+fn variants_paragraph(rep: &mut ReportBuilder, r: &Results) {
     let dev = |a: &CaseRun, b: &CaseRun| {
         let t = a.obstacle_collisions.first().map_or(f64::INFINITY, |c| c.0);
         path_deviation_m(a, b, t)
@@ -1123,6 +1228,10 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
         lag_s(&r.experiment_tuned_iz, &r.simulation, 0),
         lag_s(&r.experiment_tuned_iz, &r.simulation, 1),
     ));
+}
+
+/// Choices where the paper is silent, and how to read the result.
+fn choices_section(rep: &mut ReportBuilder) {
     rep.heading("Choices where the paper is silent");
     rep.paragraph(
         "Geometry: both simulators are cylinders of radius 0.1 m (the nozzle lever arm 0.09 m \
@@ -1147,6 +1256,10 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
          row says what the mechanism did; where the capture fails, the events in \
          `<case>/events.jsonl` give the sequence (magnet on, contact, rebound or miss, and why).",
     );
+}
+
+/// Diagnostic (only when the simulation case was restarted): the restarts' outcomes.
+fn restarts_section(rep: &mut ReportBuilder, r: &Results) {
     if !r.restarts.is_empty() {
         rep.heading("Diagnostic: the capture is sensitive to the last millimetres");
         let rows: Vec<Vec<String>> = r
@@ -1176,7 +1289,4 @@ fn write_report(out: &Path, r: &Results, claims: &[Claim]) -> Result<(), String>
              forces, rebound or miss, and why).",
         );
     }
-    rep.write(out)
-        .map_err(|e| format!("cannot write the report in {}: {e}", out.display()))?;
-    Ok(())
 }

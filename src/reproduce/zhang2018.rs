@@ -12,12 +12,25 @@
 //! minimum separation is refined inside each step ([`refined_min_separation`]); the tests in
 //! `tests/val_zhang2018.rs` use the same functions.
 
-use crate::orbit::l2::{L2Centre, L2State};
+use crate::control::zhang2018::{
+    Drift, GameState, PlannedManeuver, PursuerRole, Zhang2018Params, bup_state, gamma_on_boundary,
+    los_angle_s5_rad, p_state, paper_initial_state_l2c, paper_initial_state_rot, rel_pos_m,
+    retrograde_path,
+};
+use crate::orbit::l2::{L2Centre, L2Params, L2State};
+use crate::report::ClaimKind::{BeyondThePaper, Paper};
+use crate::report::plot::PolygonStyle;
+use crate::report::{
+    Claim, Color, Dash, Figure, LineStyle, PALETTE, Plot, ReportBuilder, held_word,
+};
+use crate::reproduce::zhang2018_sim::{
+    boundary_value_history, collision_course_plan, simulate_reconfiguration,
+};
 use crate::scene::load_scene_file;
 use crate::sim::Simulation;
 use crate::sim::environment::L2Frame;
 use crate::sim::output::Diagnostics;
-use nalgebra::Vector3;
+use nalgebra::{Vector2, Vector3};
 use std::path::{Path, PathBuf};
 
 /// Every step of a run.
@@ -233,26 +246,38 @@ fn sign_changes(t: &[f64], v: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// Runs every case (a few seconds in release).
-pub fn compute() -> Result<Results, String> {
-    use crate::control::zhang2018::{
-        Drift, PlannedManeuver, PursuerRole, Zhang2018Params, bup_state, gamma_on_boundary,
-        los_angle_s5_rad, p_state, paper_initial_state_l2c, paper_initial_state_rot, rel_pos_m,
-        retrograde_path,
-    };
-    use crate::orbit::l2::L2Params;
-    use crate::reproduce::zhang2018_sim::{
-        boundary_value_history, collision_course_plan, simulate_reconfiguration,
-    };
-    use nalgebra::Vector2;
-    let l2 = L2Params::paper();
-    let p = Zhang2018Params::paper();
-    let x0 = paper_initial_state_rot(&l2);
+/// Zeros of `h` over the grid `t` of step `dt_s`, linearly interpolated between samples, s.
+fn interpolated_zeros(t: &[f64], h: &[f64], dt_s: f64) -> Vec<f64> {
+    (1..h.len())
+        .filter(|&k| h[k - 1] * h[k] <= 0.0)
+        .map(|k| t[k - 1] + dt_s * h[k - 1] / (h[k - 1] - h[k]))
+        .collect()
+}
 
-    // Fig. 2, Bevy-free (RK4 at 60 s over 20 days; the sign change is interpolated linearly
-    // between samples, the closest approach refined along the relative line).
-    let dt2 = 60.0;
-    let hist = boundary_value_history(&p, &x0, PursuerRole::PaperCooperative, dt2, 20 * 1440);
+/// Fig. 2 along the thrust-free scenario: H and separation, L2 model (RK4) and gravity-free.
+struct Fig2 {
+    /// (t s, H, separation m), L2 model.
+    fig2: Vec<(f64, f64, f64)>,
+    /// Sign changes and interpolated zeros of H, L2 model, s.
+    h_sign_changes_s: Vec<f64>,
+    h_zero_s: Vec<f64>,
+    /// Closest approach of the L2-model run (separation m, time s).
+    closest_approach: (f64, f64),
+    /// (t s, H, separation m), gravity-free; its zeros (s) and closest approach (m, s).
+    fig2_free: Vec<(f64, f64, f64)>,
+    h_zero_free_s: Vec<f64>,
+    closest_free: (f64, f64),
+}
+
+/// Time step of the Fig. 2 histories, s.
+const FIG2_DT_S: f64 = 60.0;
+
+/// Fig. 2, Bevy-free (RK4 at 60 s over 20 days; the sign change is interpolated linearly
+/// between samples, the closest approach refined along the relative line), and gravity-free.
+fn compute_fig2(p: &Zhang2018Params, x0: &GameState) -> Fig2 {
+    let x0 = *x0;
+    let dt2 = FIG2_DT_S;
+    let hist = boundary_value_history(p, &x0, PursuerRole::PaperCooperative, dt2, 20 * 1440);
     let mut x = x0;
     let mut fig2 = Vec::with_capacity(hist.len());
     let mut ca = (f64::INFINITY, 0.0);
@@ -275,12 +300,8 @@ pub fn compute() -> Result<Results, String> {
     let t2: Vec<f64> = fig2.iter().map(|r| r.0).collect();
     let h2: Vec<f64> = fig2.iter().map(|r| r.1).collect();
     let h_sign_changes_s = sign_changes(&t2, &h2);
-    let h_zero_s: Vec<f64> = (1..h2.len())
-        .filter(|&k| h2[k - 1] * h2[k] <= 0.0)
-        .map(|k| t2[k - 1] + dt2 * h2[k - 1] / (h2[k - 1] - h2[k]))
-        .collect();
-
-    // Fig. 2 gravity-free (the paper's stated setting): straight lines, μ terms of eq (12) zero.
+    let h_zero_s = interpolated_zeros(&t2, &h2, dt2);
+    // Gravity-free (the paper's stated setting): straight lines, μ terms of eq (12) zero.
     let mut pf = p.clone();
     pf.drift = Drift::ForceFree;
     let hist_free = boundary_value_history(&pf, &x0, PursuerRole::PaperCooperative, dt2, 20 * 1440);
@@ -292,15 +313,33 @@ pub fn compute() -> Result<Results, String> {
         })
         .collect();
     let hf: Vec<f64> = fig2_free.iter().map(|r| r.1).collect();
-    let h_zero_free_s: Vec<f64> = (1..hf.len())
-        .filter(|&k| hf[k - 1] * hf[k] <= 0.0)
-        .map(|k| t2[k - 1] + dt2 * hf[k - 1] / (hf[k - 1] - hf[k]))
-        .collect();
+    let h_zero_free_s = interpolated_zeros(&t2, &hf, dt2);
     let cf = crate::control::zhang2018::closest_approach(&x0);
     let closest_free = (cf.miss_m, cf.t_ca_s);
+    Fig2 {
+        fig2,
+        h_sign_changes_s,
+        h_zero_s,
+        closest_approach: ca,
+        fig2_free,
+        h_zero_free_s,
+        closest_free,
+    }
+}
 
-    // Fig. 2 in the ECS world, 10 days thrust-free at dt = 60 s, and its fidelity.
-    let pair = scene_path("zhang2018_pair.ron");
+/// Fig. 2 in the ECS world and its fidelity.
+struct Fig2Ecs {
+    /// (t s, H) every 6 h.
+    fig2_ecs: Vec<(f64, f64)>,
+    /// Sign changes of H, s.
+    h_sign_changes_ecs_s: Vec<f64>,
+    /// Largest separation difference from the rotating-frame RK4, m.
+    ecs_vs_rk4_m: f64,
+}
+
+/// Fig. 2 in the ECS world, 20 days thrust-free at dt = 60 s, against the rotating-frame RK4.
+fn compute_fig2_ecs(p: &Zhang2018Params, x0: &GameState, pair: &Path) -> Result<Fig2Ecs, String> {
+    let (x0, pair) = (*x0, pair.to_path_buf());
     let coast = run_scene(
         &pair,
         &[
@@ -335,11 +374,21 @@ pub fn compute() -> Result<Results, String> {
         }
     }
 
-    // Fig. 3: barrier path from the BUP at the paper's P state and line of sight.
+    Ok(Fig2Ecs {
+        fig2_ecs,
+        h_sign_changes_ecs_s,
+        ecs_vs_rk4_m,
+    })
+}
+
+/// Fig. 3: barrier path from the BUP at the paper's P state and line of sight: (τ s,
+/// F_p cos v* N, F_p sin v* N, v* unwrapped deg) and the sign changes of F_p cos v*.
+fn compute_fig3(p: &Zhang2018Params, x0: &GameState) -> (Vec<(f64, f64, f64, f64)>, usize) {
+    let x0 = *x0;
     let s5 = los_angle_s5_rad(&x0);
     let role = PursuerRole::Adversarial;
-    let xb = bup_state(&p, &p_state(&x0), s5, 0.0, role);
-    let path = retrograde_path(&p, &xb, &gamma_on_boundary(s5), role, 3600.0, 365 * 24);
+    let xb = bup_state(p, &p_state(&x0), s5, 0.0, role);
+    let path = retrograde_path(p, &xb, &gamma_on_boundary(s5), role, 3600.0, 365 * 24);
     let mut fig3 = Vec::with_capacity(path.len());
     let mut unwrapped = path[0].v_rad;
     for (k, smp) in path.iter().enumerate() {
@@ -356,10 +405,14 @@ pub fn compute() -> Result<Results, String> {
         ));
     }
     let fig3_sign_changes = fig3.windows(2).filter(|w| w[0].1 * w[1].1 < 0.0).count();
+    (fig3, fig3_sign_changes)
+}
 
-    // Eq (17): force-free barrier from the BUP with zero relative velocity stays on the circle.
-    // (Force-free, the absolute position is immaterial: the L2-centred numbers keep the
-    // round-off at ulp(9e7 m) = 1.5e-8 m.)
+/// Eq (17): force-free barrier from the BUP with zero relative velocity stays on the circle;
+/// the largest | |ρ| − l |, m. (Force-free, the absolute position is immaterial: the
+/// L2-centred numbers keep the round-off at ulp(9e7 m) = 1.5e-8 m.)
+fn eq17_circle_error_m(p: &Zhang2018Params) -> f64 {
+    let role = PursuerRole::Adversarial;
     let mut ff = p.clone();
     ff.drift = Drift::ForceFree;
     let base = p_state(&paper_initial_state_l2c());
@@ -373,6 +426,23 @@ pub fn compute() -> Result<Results, String> {
         }
     }
 
+    eq17_circle_err_m
+}
+
+/// Runs every case (a few seconds in release).
+pub fn compute() -> Result<Results, String> {
+    let l2 = L2Params::paper();
+    let p = Zhang2018Params::paper();
+    let x0 = paper_initial_state_rot(&l2);
+    let f2 = compute_fig2(&p, &x0);
+    let pair = scene_path("zhang2018_pair.ron");
+    let Fig2Ecs {
+        fig2_ecs,
+        h_sign_changes_ecs_s,
+        ecs_vs_rk4_m,
+    } = compute_fig2_ecs(&p, &x0, &pair)?;
+    let (fig3, fig3_sign_changes) = compute_fig3(&p, &x0);
+    let eq17_circle_err_m = eq17_circle_error_m(&p);
     // Closed loop in the ECS world.
     let on = run_scene(&pair, &[], None)?;
     let off = run_scene(&pair, &["controllers.1.0.avoid=false"], None)?;
@@ -388,15 +458,15 @@ pub fn compute() -> Result<Results, String> {
     let bf_off = simulate_reconfiguration(&p, &x0, &plan, &none, false, 10.0, t_end);
 
     Ok(Results {
-        fig2,
+        fig2: f2.fig2,
         fig2_ecs,
-        h_sign_changes_s,
-        h_zero_s,
-        fig2_free,
-        h_zero_free_s,
-        closest_free,
+        h_sign_changes_s: f2.h_sign_changes_s,
+        h_zero_s: f2.h_zero_s,
+        fig2_free: f2.fig2_free,
+        h_zero_free_s: f2.h_zero_free_s,
+        closest_free: f2.closest_free,
         h_sign_changes_ecs_s,
-        closest_approach: ca,
+        closest_approach: f2.closest_approach,
         ecs_vs_rk4_m,
         fig3,
         fig3_sign_changes,
@@ -433,33 +503,91 @@ fn status<'a>(tr: &'a Trace, name: &str) -> Option<&'a crate::guarantee::Guarant
     tr.guarantees.iter().find(|g| g.name == name)
 }
 
-/// Writes REPORT.md, the figures and claims.json.
-fn write_report(out: &Path, r: &Results) -> Result<(), String> {
-    use crate::report::plot::PolygonStyle;
-    use crate::report::{Claim, Color, Dash, Figure, LineStyle, PALETTE, Plot, ReportBuilder};
-    let l = 5000.0;
-    let day = 86_400.0;
-    let hour = 3600.0;
+/// Capture radius l of the paper, m (§3).
+const L_M: f64 = 5000.0;
+/// One day, s.
+const DAY_S: f64 = 86_400.0;
+/// One hour, s.
+const HOUR_S: f64 = 3600.0;
 
-    // ---------------------------------------------------------------- numbers
+/// The numbers of the pair scene (and of Fig. 2) that the claims and the report quote.
+struct PairNumbers<'a> {
+    /// Body indices of P and E.
+    ip: usize,
+    ie: usize,
+    /// Refined minimum separation (m) and its time (s), with and without avoidance.
+    min_on: f64,
+    t_on: f64,
+    min_off: f64,
+    t_off: f64,
+    /// The capture guarantee with and without avoidance.
+    g_on: &'a crate::guarantee::GuaranteeStatus,
+    g_off: &'a crate::guarantee::GuaranteeStatus,
+    /// First time E's avoidance engaged (s) and how long it was engaged in all (s).
+    first_engaged: Option<f64>,
+    engaged_s: f64,
+    /// H of eq (12) takes both signs: L2 model, gravity-free.
+    h_has_both: bool,
+    h_free_both: bool,
+    /// First zero of H (s): L2 model Bevy-free, ECS world, gravity-free.
+    t_sign: f64,
+    t_sign_ecs: f64,
+    t_sign_free: f64,
+}
+
+impl PairNumbers<'_> {
+    /// (minimum separation m, its time s) with avoidance, then without.
+    fn separations(&self) -> (f64, f64, f64, f64) {
+        (self.min_on, self.t_on, self.min_off, self.t_off)
+    }
+}
+
+/// The pair-scene numbers of [`PairNumbers`].
+fn pair_numbers(r: &Results) -> Result<PairNumbers<'_>, String> {
     let (ip, ie) = (
         r.pair.on.body("p").ok_or("p")?,
         r.pair.on.body("e").ok_or("e")?,
     );
     let (min_on, t_on) = refined_min_separation(&r.pair.on, ip, ie);
     let (min_off, t_off) = refined_min_separation(&r.pair.off, ip, ie);
-    let g_on = status(&r.pair.on, "capture.p.e").ok_or("guarantee")?;
-    let g_off = status(&r.pair.off, "capture.p.e").ok_or("guarantee")?;
     let engaged = r.pair.on.column("zhang2018.e.engaged").ok_or("column")?;
-    let first_engaged = engaged
-        .iter()
-        .position(|&v| v > 0.5)
-        .map(|k| r.pair.on.t_s[k]);
-    let engaged_s = engaged.iter().filter(|&&v| v > 0.5).count() as f64 * r.pair.on.dt_s;
-    let h_has_both = r.fig2.iter().any(|x| x.1 > 0.0) && r.fig2.iter().any(|x| x.1 < 0.0);
-    let t_sign = r.h_zero_s.first().copied().unwrap_or(f64::NAN);
-    let t_sign_ecs = r.h_sign_changes_ecs_s.first().copied().unwrap_or(f64::NAN);
+    Ok(PairNumbers {
+        ip,
+        ie,
+        min_on,
+        t_on,
+        min_off,
+        t_off,
+        g_on: status(&r.pair.on, "capture.p.e").ok_or("guarantee")?,
+        g_off: status(&r.pair.off, "capture.p.e").ok_or("guarantee")?,
+        first_engaged: engaged
+            .iter()
+            .position(|&v| v > 0.5)
+            .map(|k| r.pair.on.t_s[k]),
+        engaged_s: engaged.iter().filter(|&&v| v > 0.5).count() as f64 * r.pair.on.dt_s,
+        h_has_both: r.fig2.iter().any(|x| x.1 > 0.0) && r.fig2.iter().any(|x| x.1 < 0.0),
+        h_free_both: r.fig2_free.iter().any(|x| x.1 > 0.0) && r.fig2_free.iter().any(|x| x.1 < 0.0),
+        t_sign: r.h_zero_s.first().copied().unwrap_or(f64::NAN),
+        t_sign_ecs: r.h_sign_changes_ecs_s.first().copied().unwrap_or(f64::NAN),
+        t_sign_free: r.h_zero_free_s.first().copied().unwrap_or(f64::NAN),
+    })
+}
 
+/// Per pair of the three-spacecraft scene, with and without avoidance.
+struct ReconfNumbers {
+    /// Report table rows: pair, separation and guarantee with, then without, avoidance.
+    rows: Vec<Vec<String>>,
+    /// Smallest pair separation with avoidance, m.
+    min_on: f64,
+    /// Every pair's guarantee held and stayed above l with avoidance.
+    all_held: bool,
+    /// The pairs that came within l without avoidance ("a–b N m").
+    off_entered: Vec<String>,
+}
+
+/// The three-spacecraft numbers of [`ReconfNumbers`].
+fn reconf_numbers(r: &Results) -> ReconfNumbers {
+    let (l, hour) = (L_M, HOUR_S);
     let names = &r.reconf.on.names;
     let mut reconf_rows = Vec::new();
     let mut reconf_min_on = f64::INFINITY;
@@ -486,20 +614,38 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             ]);
         }
     }
+    ReconfNumbers {
+        rows: reconf_rows,
+        min_on: reconf_min_on,
+        all_held: reconf_all_held,
+        off_entered: reconf_off_entered,
+    }
+}
 
-    // ---------------------------------------------------------------- claims
-    use crate::report::ClaimKind::{BeyondThePaper, Paper};
-    let h_free_both =
-        r.fig2_free.iter().any(|x| x.1 > 0.0) && r.fig2_free.iter().any(|x| x.1 < 0.0);
-    let t_sign_free = r.h_zero_free_s.first().copied().unwrap_or(f64::NAN);
-    let h_sign_text = |zeros: &[f64]| {
-        zeros
-            .iter()
-            .map(|t| format!("{:.3} d", t / day))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let claims = vec![
+/// Times of the zeros of H in days, "a d, b d".
+fn h_sign_text(zeros: &[f64]) -> String {
+    zeros
+        .iter()
+        .map(|t| format!("{:.3} d", t / DAY_S))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The claims of the report, in its order.
+fn claims(r: &Results, n: &PairNumbers, rc: &ReconfNumbers) -> Vec<Claim> {
+    let mut claims = claims_hamiltonian(r, n);
+    claims.extend(claim_h_sign_marks_collision(r, n));
+    claims.extend(claims_barrier(r));
+    claims.extend(claims_closed_loop(r, n, rc));
+    claims
+}
+
+/// Fig. 2: H takes both signs (gravity-free and L2 model).
+fn claims_hamiltonian(r: &Results, n: &PairNumbers) -> Vec<Claim> {
+    let (h_has_both, h_free_both) = (n.h_has_both, n.h_free_both);
+    let (t_sign, t_sign_ecs) = (n.t_sign, n.t_sign_ecs);
+    let day = DAY_S;
+    vec![
         Claim::new(
             "zhang2018-fig2-gravity-free-h-both-signs",
             Paper,
@@ -522,7 +668,7 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
         )
         .with_sensitivity(format!(
             "with the Sun–EMB gravity of eq (1) (L2 model): {} (sign change at {})",
-            if h_has_both { "held" } else { "NOT held" },
+            held_word(h_has_both),
             h_sign_text(&r.h_zero_s)
         )),
         Claim::new(
@@ -543,6 +689,14 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             ),
             h_has_both && r.h_sign_changes_s.len() == 1,
         ),
+    ]
+}
+
+/// Fig. 2: the paper reads the sign of H as the collision region.
+fn claim_h_sign_marks_collision(r: &Results, n: &PairNumbers) -> Vec<Claim> {
+    let (t_sign, t_sign_free) = (n.t_sign, n.t_sign_free);
+    let (l, day) = (L_M, DAY_S);
+    vec![
         Claim::new(
             "zhang2018-h-sign-marks-collision",
             Paper,
@@ -577,6 +731,12 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
                 .fold(f64::INFINITY, f64::min)
                 / 1e3
         )),
+    ]
+}
+
+/// Fig. 3 reversals and the eq (17) circle.
+fn claims_barrier(r: &Results) -> Vec<Claim> {
+    vec![
         Claim::new(
             "zhang2018-fig3-reversals",
             Paper,
@@ -608,6 +768,17 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             ),
             r.eq17_circle_err_m < 1e-6,
         ),
+    ]
+}
+
+/// The avoidance law in the ECS world: the pair with and without it, the reconfiguration.
+fn claims_closed_loop(r: &Results, n: &PairNumbers, rc: &ReconfNumbers) -> Vec<Claim> {
+    let (min_on, t_on, min_off, t_off) = n.separations();
+    let (g_on, g_off, first_engaged, engaged_s) = (n.g_on, n.g_off, n.first_engaged, n.engaged_s);
+    let (reconf_min_on, reconf_all_held, reconf_off_entered) =
+        (rc.min_on, rc.all_held, &rc.off_entered);
+    let (l, hour) = (L_M, HOUR_S);
+    vec![
         Claim::new(
             "zhang2018-avoidance-keeps-l",
             Paper,
@@ -661,9 +832,12 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             ),
             reconf_all_held && !reconf_off_entered.is_empty(),
         ),
-    ];
+    ]
+}
 
-    // ---------------------------------------------------------------- figures
+/// Fig. 2: H over time with its sign regions, and the separation of the thrust-free pair.
+fn fig2(r: &Results, t_sign: f64) -> Figure {
+    let (l, day) = (L_M, DAY_S);
     let region = |color: Color| PolygonStyle {
         fill: Some((color, 0.18)),
         stroke: None,
@@ -679,7 +853,7 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
         });
     let t_end2 = r.fig2.last().map_or(0.0, |x| x.0) / day;
     let ts = t_sign / day;
-    let fig2 = Figure::new(
+    Figure::new(
         "Fig. 2 — eq (12) along the paper's scenario (thrust-free; L2 model and gravity-free)",
     )
     .plot(
@@ -707,10 +881,7 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             .line_styled(
                 "gravity-free (the paper's §3 setting)",
                 r.fig2_free.iter().map(|x| (x.0 / day, x.1)),
-                LineStyle {
-                    dash: Dash::Dashed,
-                    ..LineStyle::default()
-                },
+                LineStyle::dashed(),
             )
             .hline_styled(
                 0.0,
@@ -734,15 +905,17 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             .line_styled(
                 "separation, gravity-free",
                 r.fig2_free.iter().map(|x| (x.0 / day, x.2 / 1e3)),
-                LineStyle {
-                    dash: Dash::Dashed,
-                    ..LineStyle::default()
-                },
+                LineStyle::dashed(),
             )
             .hline(l / 1e3, "l = 5 km")
             .vline(r.closest_approach.1 / day, "closest approach"),
-    );
-    let fig3 = Figure::new(
+    )
+}
+
+/// Fig. 3: P's optimal thrust over backward time.
+fn fig3(r: &Results) -> Figure {
+    let day = DAY_S;
+    Figure::new(
         "Fig. 3 — P's optimal thrust over backward time on the barrier path (adversarial, L2)",
     )
     .plot(
@@ -766,7 +939,13 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             .x_label("backward time τ [d]")
             .y_label("v* (from +X of rot, unwrapped) [deg]")
             .line("v*", r.fig3.iter().map(|x| (x.0 / day, x.3))),
-    );
+    )
+}
+
+/// The pair's separation with and without avoidance: whole maneuver and ±3 h zoom.
+fn fig_pair(r: &Results, n: &PairNumbers) -> Figure {
+    let (l, hour) = (L_M, HOUR_S);
+    let (ip, ie, t_off) = (n.ip, n.ie, n.t_off);
     let sep_on = km(&r.pair.on.separation_m(ip, ie));
     let sep_off = km(&r.pair.off.separation_m(ip, ie));
     let tc = t_off;
@@ -778,7 +957,7 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             .map(|(t, s)| (t / hour, *s))
             .collect()
     };
-    let fig_pair = Figure::new(
+    Figure::new(
         "Pair (paper's initial states): separation with and without avoidance (ECS world, dt 10 s)",
     )
     .plot(
@@ -800,7 +979,12 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             .line("with avoidance", zoom(&r.pair.on, &sep_on))
             .line("without avoidance", zoom(&r.pair.off, &sep_off))
             .hline(l / 1e3, "l = 5 km"),
-    );
+    )
+}
+
+/// P relative to E in the rotating frame near the encounter, with the capture circle.
+fn fig_rel(r: &Results, n: &PairNumbers) -> Figure {
+    let (ip, ie) = (n.ip, n.ie);
     let circle: Vec<(f64, f64)> = (0..=72)
         .map(|k| {
             let a = k as f64 * std::f64::consts::TAU / 72.0;
@@ -817,14 +1001,20 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             .filter(|(x, y)| x.abs() < 15.0 && y.abs() < 15.0)
             .collect()
     };
-    let fig_rel = Plot::new("P relative to E in the rotating frame near the encounter")
+    Plot::new("P relative to E in the rotating frame near the encounter")
         .x_label("X_p − X_e [km]")
         .y_label("Y_p − Y_e [km]")
         .equal_aspect()
         .outline("capture circle l = 5 km", circle)
         .line("with avoidance", rel(&r.pair.on))
         .line("without avoidance", rel(&r.pair.off))
-        .into_figure();
+        .into_figure()
+}
+
+/// The three-spacecraft reconfiguration: every pair's separation.
+fn fig_reconf(r: &Results) -> Figure {
+    let (l, hour) = (L_M, HOUR_S);
+    let names = &r.reconf.on.names;
     let mut fig_reconf =
         Plot::new("Three-spacecraft reconfiguration: pair separations (ECS world, dt 10 s)")
             .x_label("t [h]")
@@ -841,17 +1031,19 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
                 fig_reconf = fig_reconf.line_styled(
                     format!("{}–{} without avoidance", names[a], names[b]),
                     series(&r.reconf.off.t_s, &off, 5, hour),
-                    LineStyle {
-                        dash: Dash::Dashed,
-                        ..LineStyle::default()
-                    },
+                    LineStyle::dashed(),
                 );
             }
         }
     }
-    let fig_reconf = fig_reconf.hline(l / 1e3, "l = 5 km").into_figure();
+    fig_reconf.hline(l / 1e3, "l = 5 km").into_figure()
+}
 
-    // ---------------------------------------------------------------- report
+/// Writes REPORT.md, the figures and claims.json.
+fn write_report(out: &Path, r: &Results) -> Result<(), String> {
+    let n = pair_numbers(r)?;
+    let rc = reconf_numbers(r);
+    let claims = claims(r, &n, &rc);
     let mut rep = ReportBuilder::new(
         "Zhang, He, Lü, Wang (2018): differential-game barrier for formation collision avoidance near Sun–Earth L2",
     );
@@ -866,6 +1058,19 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
          non-rotating with the `rot` axes at t = 0 and its origin on the formation centre.",
     );
     rep.claims(&claims);
+    corrections_section(&mut rep);
+    fig2_section(&mut rep, r, &n);
+    fig3_section(&mut rep, r);
+    pair_section(&mut rep, r, &n);
+    reconf_section(&mut rep, r, &rc);
+    notes_section(&mut rep, r);
+    rep.write(out)
+        .map_err(|e| format!("cannot write the report: {e}"))?;
+    Ok(())
+}
+
+/// The corrections of the printed paper, one table row each.
+fn corrections_section(rep: &mut ReportBuilder) {
     rep.heading("Corrections of the printed paper (each one documented)");
     rep.table(
         &["where", "printed", "used here", "why"],
@@ -886,6 +1091,12 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             vec!["thrust F, maneuver".into(), "not given".into(), "F = 1 N each (2000 kg); P's collision-course reconfiguration built by `collision_course_plan`".into(), "the premise of the avoidance test".into()],
         ],
     );
+}
+
+/// Fig. 2: what H does along the scenario, gravity-free and in the L2 model.
+fn fig2_section(rep: &mut ReportBuilder, r: &Results, n: &PairNumbers) {
+    let (t_sign, t_sign_ecs, t_sign_free) = (n.t_sign, n.t_sign_ecs, n.t_sign_free);
+    let day = DAY_S;
     rep.heading("Fig. 2 — the Hamiltonian along the paper's scenario");
     rep.paragraph(format!(
         "Eq (12) as printed (both players minimising, ½ normalisation) along the thrust-free \
@@ -934,8 +1145,12 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
     rep.figure(
         "fig2_hamiltonian",
         "Fig. 2: H over time with its sign regions",
-        fig2,
+        fig2(r, t_sign),
     );
+}
+
+/// Fig. 3 and the eq (17) circle.
+fn fig3_section(rep: &mut ReportBuilder, r: &Results) {
     rep.heading("Fig. 3 — P's optimal control over backward time");
     rep.paragraph(format!(
         "Barrier path from the BUP at the paper's P state and line of sight (relative velocity \
@@ -950,8 +1165,15 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
     rep.figure(
         "fig3_optimal_control",
         "Fig. 3: P's optimal thrust over backward time",
-        fig3,
+        fig3(r),
     );
+}
+
+/// The avoidance law on the paper's initial states.
+fn pair_section(rep: &mut ReportBuilder, r: &Results, n: &PairNumbers) {
+    let (min_on, t_on, min_off, t_off) = n.separations();
+    let (g_on, g_off, first_engaged, engaged_s) = (n.g_on, n.g_off, n.first_engaged, n.engaged_s);
+    let hour = HOUR_S;
     rep.heading("Avoidance on the paper's initial states (ECS world)");
     rep.paragraph(
         "`scenes/papers/zhang2018/zhang2018_pair.ron`: P flies a bang-bang reconfiguration aimed at E (92.76° \
@@ -1006,13 +1228,17 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
     rep.figure(
         "separation_pair",
         "Separation with and without avoidance",
-        fig_pair,
+        fig_pair(r, n),
     );
     rep.figure(
         "relative_pair",
         "Relative motion near the encounter",
-        fig_rel,
+        fig_rel(r, n),
     );
+}
+
+/// The three-spacecraft reconfiguration.
+fn reconf_section(rep: &mut ReportBuilder, r: &Results, rc: &ReconfNumbers) {
     rep.heading("Three-spacecraft reconfiguration (ECS world)");
     rep.paragraph(
         "`scenes/papers/zhang2018/zhang2018_reconfiguration.ron`: chief at the formation centre, deputy1 20 km \
@@ -1043,13 +1269,17 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
             "without (chief unprotected)",
             "guarantee",
         ],
-        &reconf_rows,
+        &rc.rows,
     );
     rep.figure(
         "separation_reconfiguration",
         "Three-spacecraft separations",
-        fig_reconf,
+        fig_reconf(r),
     );
+}
+
+/// Testbed notes: floating origin, f32 resolution, step.
+fn notes_section(rep: &mut ReportBuilder, r: &Results) {
     rep.heading("Testbed notes");
     rep.paragraph(format!(
         "Floating origin: the ECS world rides on the formation centre (f64, RK4 in `rot`), and \
@@ -1066,7 +1296,4 @@ fn write_report(out: &Path, r: &Results) -> Result<(), String> {
         r.pair.on.t_s.len() - 1,
         r.ecs_vs_rk4_m * 1e3
     ));
-    rep.write(out)
-        .map_err(|e| format!("cannot write the report: {e}"))?;
-    Ok(())
 }
