@@ -138,10 +138,6 @@ pub struct ControllerHost {
     planar: bool,
     /// Some law reads the gravity at the bodies.
     gravity: bool,
-    /// The host's systems are in the schedule (added with the first controller or disturbance).
-    systems_added: bool,
-    /// The post-step diagnostics system is in the schedule.
-    post_added: bool,
     /// `jet_pulse` events raised so far in the run, all jets together.
     jet_pulse_events: u64,
 }
@@ -904,13 +900,6 @@ pub fn host_post_step(
     mut host: ResMut<ControllerHost>,
     mut diag: ResMut<Diagnostics>,
 ) {
-    if !host
-        .slots
-        .iter()
-        .any(|s| s.n_cols > 0 && s.at.contains(&DiagnosticsAt::PostStep))
-    {
-        return;
-    }
     let host = &mut *host;
     let gravity = refs.gravity.as_deref().filter(|_| host.gravity);
     refresh_truth(&mut host.truth, &roster, &states, gravity);
@@ -1081,17 +1070,85 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
     Ok(host.slots.len() - 1)
 }
 
-/// Builds and hosts the scene's `controllers`, in scene order. Called after the pipeline,
-/// the docking mechanism and the environment exist, before t = 0 is monitored.
+/// The controller host: owns the [`ControllerHost`] resource and four systems, each running
+/// only while there is something to host (a scene without controllers or disturbances runs
+/// none of them): `host_sense` in [`super::Stage::Sense`] (after
+/// [`super::environment::sync_l2_frame`]), `host_control` in [`super::Stage::Control`],
+/// `host_actuate` in [`super::Order::ControllerForces`] (a controller's force is added after the
+/// docking mechanism's: the order of floating-point sums is part of a run's bit-exact result),
+/// and, once a law asks for post-step diagnostics, `host_post_step` in
+/// [`super::Order::PostStepDiagnostics`]. Add it after the pipeline, the environment, the
+/// docking mechanism and the table; the scene's controllers are then hosted by [`install`],
+/// and more by `Simulation::add_controller` / `add_disturbance`.
+#[derive(Debug, Clone)]
+pub struct ControllersPlugin {
+    /// Bodies' constants, scene order.
+    info: Vec<BodyInfo>,
+    /// Air-bearing scene: forces act in the table's plane.
+    planar: bool,
+}
+
+impl ControllersPlugin {
+    /// The host of a scene's bodies.
+    pub fn new(scene: &crate::scene::Scene) -> Self {
+        Self {
+            info: body_info(scene),
+            planar: matches!(scene.environment, crate::scene::Environment::AirBearing(_)),
+        }
+    }
+}
+
+impl Plugin for ControllersPlugin {
+    fn build(&self, app: &mut App) {
+        use super::{SimStep, Stage};
+        app.insert_resource(ControllerHost {
+            info: self.info.clone(),
+            planar: self.planar,
+            ..Default::default()
+        });
+        app.add_systems(
+            SimStep,
+            (
+                // After the L2 frame is brought to this step (an empty set outside L2 scenes).
+                host_sense
+                    .in_set(Stage::Sense)
+                    .after(super::environment::sync_l2_frame)
+                    .run_if(hosting),
+                host_control.in_set(Stage::Control).run_if(hosting),
+                host_actuate
+                    .in_set(super::Order::ControllerForces)
+                    .run_if(hosting),
+            ),
+        );
+        app.add_systems(
+            SimStep,
+            host_post_step
+                .in_set(super::Order::PostStepDiagnostics)
+                .run_if(post_step_wanted),
+        );
+    }
+}
+
+/// Run condition: the host has a controller or a disturbance.
+fn hosting(host: Res<ControllerHost>) -> bool {
+    !(host.slots.is_empty() && host.disturbances.is_empty())
+}
+
+/// Run condition: some controller writes diagnostics after the step.
+fn post_step_wanted(host: Res<ControllerHost>) -> bool {
+    host.slots
+        .iter()
+        .any(|s| s.n_cols > 0 && s.at.contains(&DiagnosticsAt::PostStep))
+}
+
+/// Adds the [`ControllersPlugin`] and hosts the scene's `controllers`, in scene order. Called
+/// after the pipeline, the docking mechanism and the environment exist, before t = 0 is
+/// monitored.
 pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
     let scene = &loaded.scene;
-    let info = body_info(scene);
-    let planar = matches!(scene.environment, crate::scene::Environment::AirBearing(_));
-    app.insert_resource(ControllerHost {
-        info: info.clone(),
-        planar,
-        ..Default::default()
-    });
+    let plugin = ControllersPlugin::new(scene);
+    let info = plugin.info.clone();
+    app.add_plugins(plugin);
     let world = app.world_mut();
     let initial: Vec<BodyObs> = {
         let roster = world.resource::<Roster>().clone();
@@ -1132,54 +1189,5 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
             .disturbances
             .extend(built.disturbances);
     }
-    ensure_systems(app);
     Ok(())
-}
-
-/// Adds the host's systems once there is something to host (a scene without controllers pays
-/// nothing per step), and the post-step diagnostics system once a law asks for them. Called
-/// at install and by `Simulation::add_controller`.
-pub fn ensure_systems(app: &mut App) {
-    use super::SimStep;
-    let host = app.world().resource::<ControllerHost>();
-    let want_main = !(host.slots.is_empty() && host.disturbances.is_empty());
-    let want_post = host
-        .slots
-        .iter()
-        .any(|s| s.n_cols > 0 && s.at.contains(&DiagnosticsAt::PostStep));
-    let (add_main, add_post) = (
-        want_main && !host.systems_added,
-        want_post && !host.post_added,
-    );
-    if add_main {
-        app.world_mut()
-            .resource_mut::<ControllerHost>()
-            .systems_added = true;
-        add_systems(app);
-    }
-    if add_post {
-        app.world_mut().resource_mut::<ControllerHost>().post_added = true;
-        app.add_systems(
-            SimStep,
-            host_post_step.in_set(super::Order::PostStepDiagnostics),
-        );
-    }
-}
-
-/// The host's systems, in their stages; within Actuate a controller's force is added after the
-/// docking mechanism's ([`super::Order`]: the order of floating-point sums is part of a run's
-/// bit-exact result).
-fn add_systems(app: &mut App) {
-    use super::{SimStep, Stage};
-    app.add_systems(
-        SimStep,
-        (
-            // After the L2 frame is brought to this step (an empty set outside L2 scenes).
-            host_sense
-                .in_set(Stage::Sense)
-                .after(super::environment::sync_l2_frame),
-            host_control.in_set(Stage::Control),
-            host_actuate.in_set(super::Order::ControllerForces),
-        ),
-    );
 }

@@ -52,42 +52,67 @@ pub fn reference_state(reference: &OrbitSpec) -> (Vector3<f64>, Vector3<f64>) {
     }
 }
 
-/// Inserts the scene environment's gravity field and resources. Returns the reference orbit's
-/// ECI state at t = 0 (orbit scenes: Hill-frame initial states are written relative to it).
-pub fn install(
-    app: &mut App,
-    environment: &Environment,
-    dt_s: f64,
-) -> Option<(Vector3<f64>, Vector3<f64>)> {
-    match environment {
-        Environment::Orbit {
-            reference,
-            j2,
-            gravity_gradient,
-        } => {
-            let (r, v) = reference_state(reference);
-            let env = OrbitEnv {
-                reference: crate::orbit::integrate::ReferenceOrbit::from_state(r, v, *j2),
-                j2: *j2,
-                gravity_gradient: *gravity_gradient,
-            };
-            app.insert_resource(Gravity(Box::new(env.clone())));
-            app.insert_resource(env);
-            Some((r, v))
+/// The scene's environment: owns its gravity field ([`Gravity`]) and the resources the
+/// Environment stage and the controllers read — `Orbit`: [`OrbitEnv`]; `SunEarthL2`:
+/// [`L2Frame`] and the system `sync_l2_frame` in [`Stage::Sense`] (the controllers' `host_sense`
+/// runs after it); `FreeSpace` and `AirBearing`: nothing (the table is
+/// [`super::airbearing::AirBearingPlugin`]). The gravity itself is applied by the pipeline's
+/// `environment_gravity` in [`super::Order::Gravity`] and the reference orbit advanced in
+/// [`Stage::Physics`]. Add it after [`super::PipelinePlugin`].
+pub struct EnvironmentPlugin {
+    /// Orbit scenes: the reference orbit and its gravity.
+    orbit: Option<OrbitEnv>,
+    /// `SunEarthL2` scenes: the formation centre at t = 0.
+    l2: Option<L2Centre>,
+    /// The reference orbit's ECI state at t = 0 (orbit scenes).
+    reference: Option<(Vector3<f64>, Vector3<f64>)>,
+}
+
+impl EnvironmentPlugin {
+    /// The plugin of a scene's `environment`, stepped at `dt_s`.
+    pub fn new(environment: &Environment, dt_s: f64) -> Self {
+        let mut plugin = Self {
+            orbit: None,
+            l2: None,
+            reference: None,
+        };
+        match environment {
+            Environment::Orbit {
+                reference,
+                j2,
+                gravity_gradient,
+            } => {
+                let (r, v) = reference_state(reference);
+                plugin.orbit = Some(OrbitEnv {
+                    reference: crate::orbit::integrate::ReferenceOrbit::from_state(r, v, *j2),
+                    j2: *j2,
+                    gravity_gradient: *gravity_gradient,
+                });
+                plugin.reference = Some((r, v));
+            }
+            Environment::FreeSpace | Environment::AirBearing(_) => {}
+            Environment::SunEarthL2(spec) => plugin.l2 = Some(L2Centre::new(spec, dt_s)),
         }
-        Environment::FreeSpace | Environment::AirBearing(_) => None,
-        Environment::SunEarthL2(spec) => {
-            let centre = L2Centre::new(spec, dt_s);
-            app.insert_resource(Gravity(Box::new(L2Gravity(centre.clone()))));
-            app.insert_resource(L2Frame(centre));
-            None
-        }
+        plugin
+    }
+
+    /// The reference orbit's ECI state (position m, velocity m/s) at t = 0, in orbit scenes
+    /// (Hill-frame initial states are written relative to it).
+    pub fn reference(&self) -> Option<(Vector3<f64>, Vector3<f64>)> {
+        self.reference
     }
 }
 
-/// The environment's systems (added after the pipeline's schedule exists).
-pub fn add_systems(app: &mut App, environment: &Environment) {
-    if let Environment::SunEarthL2(_) = environment {
-        app.add_systems(SimStep, sync_l2_frame.in_set(Stage::Sense));
+impl Plugin for EnvironmentPlugin {
+    fn build(&self, app: &mut App) {
+        if let Some(env) = &self.orbit {
+            app.insert_resource(Gravity(Box::new(env.clone())));
+            app.insert_resource(env.clone());
+        }
+        if let Some(centre) = &self.l2 {
+            app.insert_resource(Gravity(Box::new(L2Gravity(centre.clone()))));
+            app.insert_resource(L2Frame(centre.clone()));
+            app.add_systems(SimStep, sync_l2_frame.in_set(Stage::Sense));
+        }
     }
 }
