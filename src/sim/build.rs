@@ -578,6 +578,15 @@ impl Simulation {
             .map(|e| e.reference.state())
     }
 
+    /// A copy of the reference orbit (orbit scenes): its current state and its gravity model,
+    /// to propagate it further outside the app (the viewer's track of the reference).
+    pub fn reference_orbit(&self) -> Option<crate::orbit::integrate::ReferenceOrbit> {
+        self.app
+            .world()
+            .get_resource::<OrbitEnv>()
+            .map(|e| e.reference.clone())
+    }
+
     /// Loads, validates and builds a scene file (`overrides`: `--set`-style `path=value`).
     pub fn from_file(path: impl AsRef<Path>, overrides: &[String]) -> Result<Self, SceneError> {
         let loaded = crate::scene::load_scene_file(path.as_ref(), overrides)?;

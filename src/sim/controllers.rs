@@ -132,7 +132,10 @@ pub struct ControllerHost {
     /// Bodies' truth at the start of the current step (refreshed in Sense).
     pub truth: Vec<BodyObs>,
     guarantees: Vec<GuaranteeObs>,
-    env_now: EnvSnapshot,
+    /// The environment at the start of the current step (refreshed in Sense).
+    env_now: EnvObs,
+    /// The environment after the physics (refreshed by the post-step diagnostics).
+    env_post: EnvObs,
     docking_now: Option<DockingObs>,
     wrench_buf: Vec<crate::control::registry::BodyWrench>,
     planar: bool,
@@ -199,98 +202,37 @@ impl ControllerHost {
     }
 }
 
-/// An owned copy of the environment as the controllers see it (taken at the start of each
-/// step, so that the Control and Actuate systems need not look the resources up again).
-#[derive(Debug, Clone, Default)]
-pub enum EnvSnapshot {
-    /// Force-free space.
-    #[default]
-    FreeSpace,
-    /// Orbit: the reference state and the J2 flag.
-    Orbit {
-        /// Reference position, ECI, m.
-        r: Vector3<f64>,
-        /// Reference velocity, ECI, m/s.
-        v: Vector3<f64>,
-        /// J2 on.
-        j2: bool,
-    },
-    /// Sun–Earth L2: the formation centre.
-    SunEarthL2(crate::orbit::l2::L2Centre, Vec<crate::orbit::l2::L2State>),
-    /// Air-bearing table: lab gravity.
-    AirBearing(Vector3<f64>),
-}
-
-impl EnvSnapshot {
-    /// The view a controller gets.
-    pub fn obs(&self) -> EnvObs<'_> {
-        match self {
-            EnvSnapshot::FreeSpace => EnvObs::FreeSpace,
-            EnvSnapshot::Orbit { r, v, j2 } => EnvObs::Orbit {
-                r_ref_eci_m: *r,
-                v_ref_eci_m_s: *v,
-                j2: *j2,
-            },
-            EnvSnapshot::SunEarthL2(c, s) => EnvObs::SunEarthL2 {
-                centre: c,
-                states_rot: s,
-            },
-            EnvSnapshot::AirBearing(g) => EnvObs::AirBearing {
-                gravity_lab_m_s2: *g,
-            },
-        }
-    }
-    fn of(e: &EnvObs) -> Self {
-        match e {
-            EnvObs::FreeSpace => EnvSnapshot::FreeSpace,
-            EnvObs::Orbit {
-                r_ref_eci_m,
-                v_ref_eci_m_s,
-                j2,
-            } => EnvSnapshot::Orbit {
-                r: *r_ref_eci_m,
-                v: *v_ref_eci_m_s,
-                j2: *j2,
-            },
-            EnvObs::SunEarthL2 { centre, .. } => {
-                EnvSnapshot::SunEarthL2((*centre).clone(), Vec::new())
-            }
-            EnvObs::AirBearing { gravity_lab_m_s2 } => EnvSnapshot::AirBearing(*gravity_lab_m_s2),
-        }
-    }
-}
-
-/// The environment as controllers see it, from the app's resources.
-pub fn env_of_world(world: &World) -> EnvObs<'_> {
-    if let Some(f) = world.get_resource::<super::environment::L2Frame>() {
-        return EnvObs::SunEarthL2 {
-            centre: &f.0,
-            states_rot: &[],
-        };
-    }
-    env_from(
+/// The environment as controllers see it, from the app's resources (a copy).
+pub fn env_of_world(world: &World) -> EnvObs {
+    let mut env = EnvObs::default();
+    refresh_env(
+        &mut env,
+        world.get_resource::<super::environment::L2Frame>(),
         world.get_resource::<OrbitEnv>(),
         world.get_resource::<super::airbearing::AirBearing>(),
-    )
+    );
+    env
 }
 
-fn env_from(
+/// Brings `env` to the environment the resources hold now, in place.
+fn refresh_env(
+    env: &mut EnvObs,
+    l2: Option<&super::environment::L2Frame>,
     orbit: Option<&OrbitEnv>,
     airbearing: Option<&super::airbearing::AirBearing>,
-) -> EnvObs<'static> {
-    match (orbit, airbearing) {
-        (Some(o), _) => {
+) {
+    match (l2, orbit, airbearing) {
+        (Some(f), _, _) => env.set_l2(&f.0),
+        (None, Some(o), _) => {
             let (r, v) = o.reference.state();
-            EnvObs::Orbit {
-                r_ref_eci_m: r,
-                v_ref_eci_m_s: v,
-                j2: o.j2,
+            env.set_orbit(r, v, o.reference.gravity());
+        }
+        (None, None, Some(a)) => {
+            *env = EnvObs::AirBearing {
+                gravity_lab_m_s2: a.gravity_lab_m_s2,
             }
         }
-        (None, Some(a)) => EnvObs::AirBearing {
-            gravity_lab_m_s2: a.gravity_lab_m_s2,
-        },
-        _ => EnvObs::FreeSpace,
+        (None, None, None) => *env = EnvObs::FreeSpace,
     }
 }
 
@@ -305,14 +247,14 @@ pub struct EnvRefs<'w> {
 }
 
 impl EnvRefs<'_> {
-    fn env(&self) -> EnvObs<'_> {
-        if let Some(f) = &self.l2 {
-            return EnvObs::SunEarthL2 {
-                centre: &f.0,
-                states_rot: &[],
-            };
-        }
-        env_from(self.orbit.as_deref(), self.airbearing.as_deref())
+    /// Brings `env` to the environment now, in place.
+    fn refresh(&self, env: &mut EnvObs) {
+        refresh_env(
+            env,
+            self.l2.as_deref(),
+            self.orbit.as_deref(),
+            self.airbearing.as_deref(),
+        );
     }
     fn docking(&self) -> Option<DockingObs> {
         self.docking.as_ref().map(|d| DockingObs {
@@ -415,7 +357,7 @@ fn observation<'a>(
     clock: &Clock,
     info: &'a [BodyInfo],
     truth: &'a [BodyObs],
-    env: EnvObs<'a>,
+    env: &'a EnvObs,
     docking: Option<DockingObs>,
     guarantees: &'a [GuaranteeObs],
 ) -> Observation<'a> {
@@ -533,13 +475,14 @@ pub fn host_sense(
     let host = &mut *host;
     let gravity = refs.gravity.as_deref().filter(|_| host.gravity);
     refresh_truth(&mut host.truth, &roster, &states, gravity);
-    let env = refs.env();
-    host.env_now = EnvSnapshot::of(&env);
-    if let EnvSnapshot::SunEarthL2(c, rot) = &mut host.env_now {
-        rot.extend(
+    // Taken out of the host while the slots are borrowed, put back below.
+    let mut env = std::mem::take(&mut host.env_now);
+    refs.refresh(&mut env);
+    if let EnvObs::SunEarthL2 { centre, states_rot } = &mut env {
+        states_rot.extend(
             host.truth
                 .iter()
-                .map(|b| c.world_to_rot(&b.pos_m, &b.vel_m_s)),
+                .map(|b| centre.world_to_rot(&b.pos_m, &b.vel_m_s)),
         );
     }
     host.docking_now = refs.docking();
@@ -564,6 +507,7 @@ pub fn host_sense(
             }
         }
     }
+    host.env_now = env;
 }
 
 /// One step of a slot's navigation filter: the prediction over the previous step with the
@@ -654,7 +598,7 @@ pub fn host_control(
     for (g, s) in host.guarantees.iter_mut().zip(&guarantees.status) {
         g.margin = s.last_margin;
     }
-    let env = host.env_now.obs();
+    let env = &host.env_now;
     let docking = host.docking_now;
     let t = clock.t_s();
     for slot in host.slots.iter_mut() {
@@ -708,7 +652,7 @@ pub fn host_actuate(
         jet_pulse_events,
         ..
     } = &mut *host;
-    let env = env_now.obs();
+    let env = &*env_now;
     let dt = clock.h_s();
     for (index, slot) in slots.iter_mut().enumerate() {
         let own = &truth[slot.body];
@@ -877,7 +821,7 @@ fn write_diagnostics(
     guarantees: &[GuaranteeObs],
     at: DiagnosticsAt,
     clock: &Clock,
-    env: EnvObs,
+    env: &EnvObs,
     docking: Option<DockingObs>,
     diag: &mut Diagnostics,
 ) {
@@ -903,7 +847,9 @@ pub fn host_post_step(
     let host = &mut *host;
     let gravity = refs.gravity.as_deref().filter(|_| host.gravity);
     refresh_truth(&mut host.truth, &roster, &states, gravity);
-    let env = refs.env();
+    // The environment after the physics (an L2 snapshot's `states_rot` stays empty here).
+    let mut env = std::mem::take(&mut host.env_post);
+    refs.refresh(&mut env);
     refresh_derived(host, &env);
     write_diagnostics(
         &mut host.slots,
@@ -912,10 +858,11 @@ pub fn host_post_step(
         &host.guarantees,
         DiagnosticsAt::PostStep,
         &clock,
-        env,
+        &env,
         refs.docking(),
         &mut diag,
     );
+    host.env_post = env;
 }
 
 /// Hosts one slot: columns, guarantees, the t = 0 diagnostics. Errors are messages (duplicate
@@ -1052,7 +999,7 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
                 &clock,
                 &host.info,
                 &truth,
-                env,
+                &env,
                 None,
                 &guarantees,
             );
@@ -1178,7 +1125,7 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         };
         let built = {
             let env = env_of_world(world);
-            let mut ctx = BuildContext::new(scene, i, &info, &initial, env, &mut shared);
+            let mut ctx = BuildContext::new(scene, i, &info, &initial, &env, &mut shared);
             spec.build(&mut ctx).map_err(locate)?
         };
         for slot in built.slots {

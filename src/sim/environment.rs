@@ -1,7 +1,8 @@
 //! The environment layer of the Bevy app: a scene's `environment` becomes its gravity field
 //! ([`super::Gravity`]) and the resources the Environment stage and the controllers read.
 //!
-//! - `Orbit`: [`OrbitEnv`] (the f64 reference orbit, two-body + J2) and its differential gravity.
+//! - `Orbit`: [`OrbitEnv`] (the f64 reference orbit and its gravity model, a list of terms:
+//!   two-body, plus J2 if the scene's `j2` is set) and its differential gravity.
 //! - `SunEarthL2`: [`crate::environment::L2Gravity`] about the formation centre, and
 //!   [`L2Frame`], a copy of the centre advanced on the same steps (bit-identical) for frame
 //!   conversions (controllers, reports), brought to the current step in the Sense stage.
@@ -83,9 +84,13 @@ impl EnvironmentPlugin {
                 gravity_gradient,
             } => {
                 let (r, v) = reference_state(reference);
+                // The scene's `j2` flag becomes the gravity model's list of terms here, once.
                 plugin.orbit = Some(OrbitEnv {
-                    reference: crate::orbit::integrate::ReferenceOrbit::from_state(r, v, *j2),
-                    j2: *j2,
+                    reference: crate::orbit::integrate::ReferenceOrbit::from_state(
+                        r,
+                        v,
+                        crate::orbit::gravity::earth_gravity(*j2),
+                    ),
                     gravity_gradient: *gravity_gradient,
                 });
                 plugin.reference = Some((r, v));

@@ -178,13 +178,13 @@ pub struct Physics {
     pub substeps: u32,
 }
 
-/// The orbital environment: the reference orbit (f64) and the force model toggles.
+/// The orbital environment: the reference orbit (f64, with its gravity model: the list of
+/// terms every body's differential gravity also sums) and the torque toggle.
 #[derive(Resource, Debug, Clone)]
 pub struct OrbitEnv {
-    /// Reference orbit (the world frame's origin), ECI.
+    /// Reference orbit (the world frame's origin), ECI, and the gravity model's terms
+    /// ([`crate::orbit::integrate::ReferenceOrbit::gravity`]).
     pub reference: crate::orbit::integrate::ReferenceOrbit,
-    /// Include J2.
-    pub j2: bool,
     /// Apply gravity-gradient torques.
     pub gravity_gradient: bool,
 }
@@ -197,7 +197,11 @@ pub struct Gravity(pub Box<dyn GravityField>);
 
 impl GravityField for OrbitEnv {
     fn accel_m_s2(&self, pos_world_m: &Vector3<f64>) -> Vector3<f64> {
-        crate::orbit::gravity::differential_accel(&self.reference.state().0, pos_world_m, self.j2)
+        crate::orbit::gravity::differential_accel(
+            &self.reference.state().0,
+            pos_world_m,
+            self.reference.gravity(),
+        )
     }
     fn advance(&mut self, dt_s: f64) {
         self.reference.step(dt_s);
@@ -1175,7 +1179,7 @@ fn check_guarantees(
         motion: &motion,
         hill_rate_rad_s: orbit.and_then(|o| {
             let (r, v) = o.reference.state();
-            crate::orbit::lvlh::hill_rate_bound_rad_s(&r, &v, motion.dt_s, o.j2)
+            crate::orbit::lvlh::hill_rate_bound_rad_s(&r, &v, motion.dt_s, o.reference.gravity())
         }),
         rotation_read: std::cell::Cell::new(false),
     };
