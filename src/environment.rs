@@ -37,6 +37,51 @@ impl GravityField for L2Gravity {
     }
 }
 
+/// An environment model: the gravity field it applies to every body and what a controller
+/// knows of it. A new kind of environment implements this (and adds its [`EnvObs`] variant); the
+/// pipeline asks it for its field once and for its [`EnvObs`] after each of its own updates, so
+/// neither the physics nor the controller host match on the kinds.
+pub trait EnvironmentModel: Send + Sync {
+    /// A copy of the gravity field this environment applies to every body's centre of mass (the
+    /// pipeline advances it), or `None` (force-free space; a table whose forces are its own
+    /// systems').
+    fn gravity_field(&self) -> Option<Box<dyn GravityField>>;
+    /// Writes what a controller knows of the environment now into `env`, in place.
+    fn observe(&self, env: &mut EnvObs);
+}
+
+/// Force-free space: no field, an inertial world frame.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FreeSpace;
+
+impl EnvironmentModel for FreeSpace {
+    fn gravity_field(&self) -> Option<Box<dyn GravityField>> {
+        None
+    }
+    fn observe(&self, env: &mut EnvObs) {
+        *env = EnvObs::FreeSpace;
+    }
+}
+
+/// An air-bearing table as the controllers see it (its forces — film, friction, tilt — are the
+/// table's own systems, `sim::airbearing`).
+#[derive(Debug, Clone, Copy)]
+pub struct Table {
+    /// Gravity in the lab frame, m/s².
+    pub gravity_lab_m_s2: Vector3<f64>,
+}
+
+impl EnvironmentModel for Table {
+    fn gravity_field(&self) -> Option<Box<dyn GravityField>> {
+        None
+    }
+    fn observe(&self, env: &mut EnvObs) {
+        *env = EnvObs::AirBearing {
+            gravity_lab_m_s2: self.gravity_lab_m_s2,
+        };
+    }
+}
+
 /// What a controller knows of the environment at one instant (f64): the one snapshot type. The
 /// controller host keeps one, refreshed in place at the start of every step (and one after the
 /// physics for post-step diagnostics); laws see it by reference (`Observation::env`,
@@ -112,6 +157,24 @@ impl EnvObs {
                 v_ref_eci_m_s,
                 gravity: gravity_terms.to_vec(),
             };
+        }
+    }
+
+    /// Makes this snapshot a copy of `src`, reusing its allocations where the kinds match.
+    pub fn assign(&mut self, src: &EnvObs) {
+        match src {
+            EnvObs::Orbit {
+                r_ref_eci_m,
+                v_ref_eci_m_s,
+                gravity,
+            } => self.set_orbit(*r_ref_eci_m, *v_ref_eci_m_s, gravity),
+            EnvObs::SunEarthL2 { centre, states_rot } => {
+                self.set_l2(centre);
+                if let EnvObs::SunEarthL2 { states_rot: s, .. } = self {
+                    s.extend_from_slice(states_rot);
+                }
+            }
+            EnvObs::FreeSpace | EnvObs::AirBearing { .. } => *self = src.clone(),
         }
     }
 

@@ -134,8 +134,6 @@ pub struct ControllerHost {
     guarantees: Vec<GuaranteeObs>,
     /// The environment at the start of the current step (refreshed in Sense).
     env_now: EnvObs,
-    /// The environment after the physics (refreshed by the post-step diagnostics).
-    env_post: EnvObs,
     docking_now: Option<DockingObs>,
     wrench_buf: Vec<crate::control::registry::BodyWrench>,
     planar: bool,
@@ -202,59 +200,30 @@ impl ControllerHost {
     }
 }
 
-/// The environment as controllers see it, from the app's resources (a copy).
+/// The environment as controllers see it, from the app's resources (a copy of
+/// [`super::environment::EnvNow`]; force-free space without one).
 pub fn env_of_world(world: &World) -> EnvObs {
-    let mut env = EnvObs::default();
-    refresh_env(
-        &mut env,
-        world.get_resource::<super::environment::L2Frame>(),
-        world.get_resource::<OrbitEnv>(),
-        world.get_resource::<super::airbearing::AirBearing>(),
-    );
-    env
+    world
+        .get_resource::<super::environment::EnvNow>()
+        .map(|e| e.0.clone())
+        .unwrap_or_default()
 }
 
-/// Brings `env` to the environment the resources hold now, in place.
-fn refresh_env(
-    env: &mut EnvObs,
-    l2: Option<&super::environment::L2Frame>,
-    orbit: Option<&OrbitEnv>,
-    airbearing: Option<&super::airbearing::AirBearing>,
-) {
-    match (l2, orbit, airbearing) {
-        (Some(f), _, _) => env.set_l2(&f.0),
-        (None, Some(o), _) => {
-            let (r, v) = o.reference.state();
-            env.set_orbit(r, v, o.reference.gravity());
-        }
-        (None, None, Some(a)) => {
-            *env = EnvObs::AirBearing {
-                gravity_lab_m_s2: a.gravity_lab_m_s2,
-            }
-        }
-        (None, None, None) => *env = EnvObs::FreeSpace,
-    }
-}
+/// What [`EnvRefs::now`] gives in an app without an environment.
+static FREE_SPACE: EnvObs = EnvObs::FreeSpace;
 
 /// The environment resources a host system reads.
 #[derive(bevy::ecs::system::SystemParam)]
 pub struct EnvRefs<'w> {
-    orbit: Option<Res<'w, OrbitEnv>>,
-    l2: Option<Res<'w, super::environment::L2Frame>>,
-    airbearing: Option<Res<'w, super::airbearing::AirBearing>>,
+    env: Option<Res<'w, super::environment::EnvNow>>,
     gravity: Option<Res<'w, super::Gravity>>,
     docking: Option<Res<'w, super::docking::Docking>>,
 }
 
 impl EnvRefs<'_> {
-    /// Brings `env` to the environment now, in place.
-    fn refresh(&self, env: &mut EnvObs) {
-        refresh_env(
-            env,
-            self.l2.as_deref(),
-            self.orbit.as_deref(),
-            self.airbearing.as_deref(),
-        );
+    /// The environment now.
+    fn now(&self) -> &EnvObs {
+        self.env.as_deref().map_or(&FREE_SPACE, |e| &e.0)
     }
     fn docking(&self) -> Option<DockingObs> {
         self.docking.as_ref().map(|d| DockingObs {
@@ -477,7 +446,7 @@ pub fn host_sense(
     refresh_truth(&mut host.truth, &roster, &states, gravity);
     // Taken out of the host while the slots are borrowed, put back below.
     let mut env = std::mem::take(&mut host.env_now);
-    refs.refresh(&mut env);
+    env.assign(refs.now());
     if let EnvObs::SunEarthL2 { centre, states_rot } = &mut env {
         states_rot.extend(
             host.truth
@@ -847,10 +816,9 @@ pub fn host_post_step(
     let host = &mut *host;
     let gravity = refs.gravity.as_deref().filter(|_| host.gravity);
     refresh_truth(&mut host.truth, &roster, &states, gravity);
-    // The environment after the physics (an L2 snapshot's `states_rot` stays empty here).
-    let mut env = std::mem::take(&mut host.env_post);
-    refs.refresh(&mut env);
-    refresh_derived(host, &env);
+    // The environment after the physics (an L2 snapshot's `states_rot` is empty here).
+    let env = refs.now();
+    refresh_derived(host, env);
     write_diagnostics(
         &mut host.slots,
         &host.info,
@@ -858,11 +826,10 @@ pub fn host_post_step(
         &host.guarantees,
         DiagnosticsAt::PostStep,
         &clock,
-        &env,
+        env,
         refs.docking(),
         &mut diag,
     );
-    host.env_post = env;
 }
 
 /// Hosts one slot: columns, guarantees, the t = 0 diagnostics. Errors are messages (duplicate
@@ -1020,7 +987,7 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
 /// The controller host: owns the [`ControllerHost`] resource and four systems, each running
 /// only while there is something to host (a scene without controllers or disturbances runs
 /// none of them): `host_sense` in [`super::Stage::Sense`] (after
-/// [`super::environment::sync_l2_frame`]), `host_control` in [`super::Stage::Control`],
+/// [`super::environment::EnvironmentSense`]), `host_control` in [`super::Stage::Control`],
 /// `host_actuate` in [`super::Order::ControllerForces`] (a controller's force is added after the
 /// docking mechanism's: the order of floating-point sums is part of a run's bit-exact result),
 /// and, once a law asks for post-step diagnostics, `host_post_step` in
@@ -1059,7 +1026,7 @@ impl Plugin for ControllersPlugin {
                 // After the L2 frame is brought to this step (an empty set outside L2 scenes).
                 host_sense
                     .in_set(Stage::Sense)
-                    .after(super::environment::sync_l2_frame)
+                    .after(super::environment::EnvironmentSense)
                     .run_if(hosting),
                 host_control.in_set(Stage::Control).run_if(hosting),
                 host_actuate
