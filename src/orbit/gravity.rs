@@ -253,8 +253,9 @@ pub fn gravity_gradient_torque_body(
 mod tests {
     //! References: a double-double (≈32-digit) evaluation of the naive difference
     //! a(r+ρ) − a(r) (error-free transformations two_sum / two_prod with FMA, Dekker 1971);
-    //! the closed-form gravity-gradient torque of a body at 45° in a principal plane; and the
-    //! torque summed over the point masses of a rigid body.
+    //! the closed-form gravity-gradient torque of a body at 45° in a principal plane; the
+    //! torque summed over the point masses of a rigid body; and, for a model as a list of
+    //! terms, the closed forms [`accel_two_body`] + [`accel_j2`] and −μ/r + the J2 potential.
     use super::*;
     use nalgebra::{Rotation3, Unit};
 
@@ -526,5 +527,50 @@ mod tests {
         let want = c * want_world;
         let rel = (got - want).norm() / want.norm();
         assert!(rel < 10.0 * 2.0 / r.norm(), "rel {rel:e}");
+    }
+
+    /// A model is the sum of its terms in list order: [`TWO_BODY_J2`] is the two-body closed
+    /// form plus the J2 closed form, bit for bit (the same operations as before the list); a
+    /// one-term list is that term exactly; the empty list is no gravity; a list's differential
+    /// gravity is the sum of its terms' (J2 alone against the two lists' difference, to the
+    /// rounding of the two-body part: 4 ulps of |a_2body(ρ)|, the size of the summands).
+    #[test]
+    fn invariant_gravity_terms_sum_in_list_order() {
+        let points = [
+            Vector3::new(6.778e6, 0.0, 0.0),
+            Vector3::new(4.1e6, -3.3e6, 4.2e6),
+            Vector3::new(-2.0e6, 6.0e6, -3.1e6),
+        ];
+        let rho = Vector3::new(12.5, -40.0, 7.25);
+        for r in points {
+            let tb = accel_two_body(&r);
+            let j2 = accel_j2(&r);
+            assert_eq!(accel_earth(&r, TWO_BODY_J2), tb + j2);
+            assert_eq!(accel_earth(&r, TWO_BODY), tb);
+            assert_eq!(accel_earth(&r, &[GravityTerm::J2]), j2);
+            assert_eq!(accel_earth(&r, &[]), Vector3::zeros());
+            assert_eq!(earth_gravity(true), TWO_BODY_J2);
+            assert_eq!(earth_gravity(false), TWO_BODY);
+
+            let rn = r.norm();
+            let z2_r2 = r.z * r.z / r.norm_squared();
+            let v_tb = -MU_EARTH_M3_S2 / rn;
+            let v_j2 = MU_EARTH_M3_S2 * J2_EARTH * R_EARTH_M * R_EARTH_M
+                / (2.0 * r.norm_squared() * rn)
+                * (3.0 * z2_r2 - 1.0);
+            assert_eq!(potential_energy_per_mass(&r, TWO_BODY), v_tb);
+            assert_eq!(potential_energy_per_mass(&r, TWO_BODY_J2), v_tb + v_j2);
+
+            let both = differential_accel(&r, &rho, TWO_BODY_J2);
+            let two_body = differential_accel(&r, &rho, TWO_BODY);
+            let j2_only = differential_accel(&r, &rho, &[GravityTerm::J2]);
+            let tol = 4.0 * f64::EPSILON * two_body.norm();
+            assert!(
+                ((both - two_body) - j2_only).norm() <= tol,
+                "r {r:?}: {:e} > {tol:e}",
+                ((both - two_body) - j2_only).norm()
+            );
+            assert_eq!(differential_accel(&r, &rho, &[]), Vector3::zeros());
+        }
     }
 }
