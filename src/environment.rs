@@ -2,8 +2,11 @@
 //! what a controller may know about the environment it flies in.
 //!
 //! The Bevy layer (`sim::environment`) turns a scene's `environment` into one of these fields
-//! and steps it; the controller host hands every law an [`EnvObs`] with the same numbers.
+//! and steps it; the controller host hands every law an [`EnvObs`] (the one snapshot type of
+//! the environment) with the same numbers. An orbit's gravity is a list of
+//! [`crate::orbit::gravity::GravityTerm`]s.
 
+use crate::orbit::gravity::GravityTerm;
 use crate::orbit::l2::L2Centre;
 use nalgebra::Vector3;
 
@@ -34,10 +37,59 @@ impl GravityField for L2Gravity {
     }
 }
 
-/// What a controller knows of the environment at one instant (f64).
+/// An environment model: the gravity field it applies to every body and what a controller
+/// knows of it. A new kind of environment implements this (and adds its [`EnvObs`] variant); the
+/// pipeline asks it for its field once and for its [`EnvObs`] after each of its own updates, so
+/// neither the physics nor the controller host match on the kinds.
+pub trait EnvironmentModel: Send + Sync {
+    /// A copy of the gravity field this environment applies to every body's centre of mass (the
+    /// pipeline advances it), or `None` (force-free space; a table whose forces are its own
+    /// systems').
+    fn gravity_field(&self) -> Option<Box<dyn GravityField>>;
+    /// Writes what a controller knows of the environment now into `env`, in place.
+    fn observe(&self, env: &mut EnvObs);
+}
+
+/// Force-free space: no field, an inertial world frame.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FreeSpace;
+
+impl EnvironmentModel for FreeSpace {
+    fn gravity_field(&self) -> Option<Box<dyn GravityField>> {
+        None
+    }
+    fn observe(&self, env: &mut EnvObs) {
+        *env = EnvObs::FreeSpace;
+    }
+}
+
+/// An air-bearing table as the controllers see it (its forces — film, friction, tilt — are the
+/// table's own systems, `sim::airbearing`).
 #[derive(Debug, Clone, Copy)]
-pub enum EnvObs<'a> {
+pub struct Table {
+    /// Gravity in the lab frame, m/s².
+    pub gravity_lab_m_s2: Vector3<f64>,
+}
+
+impl EnvironmentModel for Table {
+    fn gravity_field(&self) -> Option<Box<dyn GravityField>> {
+        None
+    }
+    fn observe(&self, env: &mut EnvObs) {
+        *env = EnvObs::AirBearing {
+            gravity_lab_m_s2: self.gravity_lab_m_s2,
+        };
+    }
+}
+
+/// What a controller knows of the environment at one instant (f64): the one snapshot type. The
+/// controller host keeps one, refreshed in place at the start of every step (and one after the
+/// physics for post-step diagnostics); laws see it by reference (`Observation::env`,
+/// `BuildContext::env`).
+#[derive(Debug, Clone, Default)]
+pub enum EnvObs {
     /// Force-free space, inertial world frame.
+    #[default]
     FreeSpace,
     /// Earth orbit: the world frame's origin rides on the reference orbit (the target's
     /// unforced orbit), its axes parallel to the Earth-centred inertial frame.
@@ -46,17 +98,18 @@ pub enum EnvObs<'a> {
         r_ref_eci_m: Vector3<f64>,
         /// Reference orbit velocity, ECI, m/s.
         v_ref_eci_m_s: Vector3<f64>,
-        /// Whether the scene's gravity includes J2.
-        j2: bool,
+        /// The scene's gravity model: its terms, summed in this order (two-body, plus J2 if the
+        /// scene's `j2` is set).
+        gravity: Vec<GravityTerm>,
     },
     /// Near the Sun–Earth L2 point: the world origin is the formation centre.
     SunEarthL2 {
         /// The formation centre at the current step (frame conversions to the rotating frame).
-        centre: &'a L2Centre,
+        centre: L2Centre,
         /// Every body's planar state in the rotating frame, `centre.world_to_rot` of its world
         /// state, scene order (computed once per step by the controller host; empty where it
         /// is not).
-        states_rot: &'a [crate::orbit::l2::L2State],
+        states_rot: Vec<crate::orbit::l2::L2State>,
     },
     /// An air-bearing table: the lab frame (x, y in the table top, z up).
     AirBearing {
@@ -65,7 +118,7 @@ pub enum EnvObs<'a> {
     },
 }
 
-impl EnvObs<'_> {
+impl EnvObs {
     /// The reference orbit's ECI state (r, v), in orbit scenes.
     pub fn reference(&self) -> Option<(Vector3<f64>, Vector3<f64>)> {
         match self {
@@ -75,6 +128,67 @@ impl EnvObs<'_> {
                 ..
             } => Some((*r_ref_eci_m, *v_ref_eci_m_s)),
             _ => None,
+        }
+    }
+
+    /// Sets this snapshot to an orbit scene's reference state and gravity model, in place (no
+    /// allocation once it holds an orbit).
+    pub fn set_orbit(
+        &mut self,
+        r_ref_eci_m: Vector3<f64>,
+        v_ref_eci_m_s: Vector3<f64>,
+        gravity_terms: &[GravityTerm],
+    ) {
+        if let EnvObs::Orbit {
+            r_ref_eci_m: r,
+            v_ref_eci_m_s: v,
+            gravity,
+        } = self
+        {
+            *r = r_ref_eci_m;
+            *v = v_ref_eci_m_s;
+            if gravity.as_slice() != gravity_terms {
+                gravity.clear();
+                gravity.extend_from_slice(gravity_terms);
+            }
+        } else {
+            *self = EnvObs::Orbit {
+                r_ref_eci_m,
+                v_ref_eci_m_s,
+                gravity: gravity_terms.to_vec(),
+            };
+        }
+    }
+
+    /// Makes this snapshot a copy of `src`, reusing its allocations where the kinds match.
+    pub fn assign(&mut self, src: &EnvObs) {
+        match src {
+            EnvObs::Orbit {
+                r_ref_eci_m,
+                v_ref_eci_m_s,
+                gravity,
+            } => self.set_orbit(*r_ref_eci_m, *v_ref_eci_m_s, gravity),
+            EnvObs::SunEarthL2 { centre, states_rot } => {
+                self.set_l2(centre);
+                if let EnvObs::SunEarthL2 { states_rot: s, .. } = self {
+                    s.extend_from_slice(states_rot);
+                }
+            }
+            EnvObs::FreeSpace | EnvObs::AirBearing { .. } => *self = src.clone(),
+        }
+    }
+
+    /// Sets this snapshot to a `SunEarthL2` scene's formation centre, in place; its
+    /// `states_rot` is emptied (the host fills it).
+    pub fn set_l2(&mut self, centre_now: &L2Centre) {
+        if let EnvObs::SunEarthL2 { centre, states_rot } = self {
+            centre.clone_from(centre_now);
+            states_rot.clear();
+        } else {
+            *self = EnvObs::SunEarthL2 {
+                centre: centre_now.clone(),
+                states_rot: Vec::new(),
+            };
         }
     }
 }

@@ -879,9 +879,10 @@ fn hill_rate_bound_holds_along_a_j2_orbit() {
         true_anomaly_rad: 1.0,
     };
     for dt in [0.01, 1.0, 10.0, 100.0] {
-        let orbit = ReferenceOrbit::from_elements(&el, true);
+        let orbit = ReferenceOrbit::from_elements(&el, rpod::orbit::gravity::TWO_BODY_J2);
         let (r, v) = orbit.state();
-        let Some(bound) = hill_rate_bound_rad_s(&r, &v, dt, true) else {
+        let Some(bound) = hill_rate_bound_rad_s(&r, &v, dt, rpod::orbit::gravity::TWO_BODY_J2)
+        else {
             // |v|·dt + g·dt² ≈ 860 km at 100 s: the bound cannot keep |r| above the Earth's
             // radius, so it gives none (the guarantee is then judged at samples only).
             assert_eq!(dt, 100.0);

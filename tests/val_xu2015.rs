@@ -166,8 +166,16 @@ fn val_xu2015_thrust_never_above_limit() {
             sim.step(1);
             let s1 = sim.body("chaser").unwrap();
             let (r1, _) = sim.reference_state().unwrap();
-            let ag0 = rpod::orbit::gravity::differential_accel(&r0, &s0.pos_m, false);
-            let ag1 = rpod::orbit::gravity::differential_accel(&r1, &s1.pos_m, false);
+            let ag0 = rpod::orbit::gravity::differential_accel(
+                &r0,
+                &s0.pos_m,
+                rpod::orbit::gravity::TWO_BODY,
+            );
+            let ag1 = rpod::orbit::gravity::differential_accel(
+                &r1,
+                &s1.pos_m,
+                rpod::orbit::gravity::TWO_BODY,
+            );
             let a_c = (s1.vel_m_s - s0.vel_m_s) / dt - (ag0 + ag1) * 0.5;
             let f_tof = dcm_eci_from_tof_state(&r0, &v0).transpose() * a_c * m_c;
             let cmd = sim

@@ -255,7 +255,7 @@ pub struct Observation<'a> {
     /// Every body's truth, scene order.
     pub bodies: &'a [BodyObs],
     /// The environment.
-    pub env: EnvObs<'a>,
+    pub env: &'a EnvObs,
     /// The controlled body relative to the target (when the slot names one).
     pub relative: Option<&'a RelativeObs>,
     /// Both docking ports (when the slot names them, or the scene's docking mechanism joins the

@@ -89,7 +89,7 @@ pub struct DisturbanceContext<'a> {
     /// Bodies' truth at the start of the step.
     pub bodies: &'a [BodyObs],
     /// The environment.
-    pub env: EnvObs<'a>,
+    pub env: &'a EnvObs,
 }
 
 /// A force through a body's centre of mass and/or a torque, world frame. A part that is `None`
@@ -161,7 +161,7 @@ pub struct BuildContext<'a> {
     /// Bodies' initial truth.
     pub initial: &'a [BodyObs],
     /// The environment at t = 0.
-    pub env: EnvObs<'a>,
+    pub env: &'a EnvObs,
     shared: &'a mut BTreeMap<String, Box<dyn Any + Send + Sync>>,
 }
 
@@ -173,7 +173,7 @@ impl<'a> BuildContext<'a> {
         index: usize,
         info: &'a [BodyInfo],
         initial: &'a [BodyObs],
-        env: EnvObs<'a>,
+        env: &'a EnvObs,
         shared: &'a mut BTreeMap<String, Box<dyn Any + Send + Sync>>,
     ) -> Self {
         Self {

@@ -922,15 +922,16 @@ const BAD_FINDING: DriftFinding = DriftFinding {
 /// Time derivative of a drift state [R_a, V_a, p, v] (ECI axes: `around`'s absolute state,
 /// `body`'s relative one) under the scene's gravity.
 fn drift_rhs(y: &SVector<f64, 12>, j2: bool) -> SVector<f64, 12> {
-    use crate::orbit::gravity::{accel_earth, differential_accel};
+    use crate::orbit::gravity::{accel_earth, differential_accel, earth_gravity};
     let r = Vector3::new(y[0], y[1], y[2]);
     let p = Vector3::new(y[6], y[7], y[8]);
     let mut d = SVector::<f64, 12>::zeros();
     d.fixed_rows_mut::<3>(0).copy_from(&y.fixed_rows::<3>(3));
-    d.fixed_rows_mut::<3>(3).copy_from(&accel_earth(&r, j2));
+    d.fixed_rows_mut::<3>(3)
+        .copy_from(&accel_earth(&r, earth_gravity(j2)));
     d.fixed_rows_mut::<3>(6).copy_from(&y.fixed_rows::<3>(9));
     d.fixed_rows_mut::<3>(9)
-        .copy_from(&differential_accel(&r, &p, j2));
+        .copy_from(&differential_accel(&r, &p, earth_gravity(j2)));
     d
 }
 
@@ -1108,8 +1109,12 @@ pub fn propagate_drift_track(
     let k0 = setup.intervals.max(1);
     let dtau = setup.horizon_s / k0 as f64;
     let k = k0 + extra;
-    let h_max =
-        ReferenceOrbit::from_state(reference.pos_eci_m, reference.vel_eci_m_s, j2).max_substep_s();
+    let h_max = ReferenceOrbit::from_state(
+        reference.pos_eci_m,
+        reference.vel_eci_m_s,
+        crate::orbit::gravity::earth_gravity(j2),
+    )
+    .max_substep_s();
     let mut track = DriftTrack {
         dtau_s: dtau,
         sub_fine: 2,

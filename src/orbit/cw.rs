@@ -223,7 +223,7 @@ mod tests {
     //! for the CW error bound.
     use super::*;
     use crate::orbit::constants::MU_EARTH_M3_S2 as MU;
-    use crate::orbit::gravity::{accel_two_body, differential_accel};
+    use crate::orbit::gravity::{TWO_BODY, accel_two_body, differential_accel};
     use crate::orbit::integrate::{RkMethod, propagate_fixed, rk8_step};
     use crate::orbit::lvlh::{LocalFrame, LocalFrameKind};
     use nalgebra::{Matrix3, Vector6};
@@ -318,7 +318,7 @@ mod tests {
                     )
                 };
                 let rho = mag * d;
-                let a2 = differential_accel(&r, &rho, false) - g * rho;
+                let a2 = differential_accel(&r, &rho, TWO_BODY) - g * rho;
                 let bound = 3.0 * MU * mag * mag / (R0 - mag).powi(4);
                 let ratio = a2.norm() / bound;
                 assert!(ratio <= 1.0, "mag {mag} k {k}: ratio {ratio}");
@@ -383,7 +383,7 @@ mod tests {
                 d.fixed_rows_mut::<3>(3).copy_from(&accel_two_body(&r));
                 d.fixed_rows_mut::<3>(6).copy_from(&y.fixed_rows::<3>(9));
                 d.fixed_rows_mut::<3>(9)
-                    .copy_from(&differential_accel(&r, &rho, false));
+                    .copy_from(&differential_accel(&r, &rho, TWO_BODY));
                 d
             };
             let steps = t_end as usize;

@@ -5,6 +5,13 @@
 //! Frames: every vector is expressed in the Earth-centred inertial frame (ECI, z = Earth's
 //! rotation axis) unless its name says `body`. Units: SI (m, s, kg, N·m).
 //!
+//! ## The model is a list of terms
+//! A gravity model is a list of [`GravityTerm`]s, summed in list order ([`accel_earth`],
+//! [`potential_energy_per_mass`], [`differential_accel`]); a scene's `j2` flag selects
+//! [`TWO_BODY`] or [`TWO_BODY_J2`] ([`earth_gravity`]). Adding a term is one variant and its
+//! formulas in the three `match`es here (and its bound in
+//! [`crate::orbit::lvlh::hill_rate_bound_rad_s`]); no signature changes.
+//!
 //! ## Why the differential gravity needs care (cancellation)
 //! At a LEO radius |a| ≈ 8 m/s², while the differential gravity at ρ = 1 mm is about
 //! n²·ρ ≈ 1e-9 m/s². Evaluating a(r_ref + ρ) − a(r_ref) directly loses ~9 of the 16 digits:
@@ -53,28 +60,81 @@ pub fn accel_j2(r_eci_m: &Vector3<f64>) -> Vector3<f64> {
     )
 }
 
-/// Earth gravity at `r_eci_m`, m/s², ECI: two-body plus, if `with_j2`, the J2 term.
-pub fn accel_earth(r_eci_m: &Vector3<f64>, with_j2: bool) -> Vector3<f64> {
-    if with_j2 {
-        accel_two_body(r_eci_m) + accel_j2(r_eci_m)
-    } else {
-        accel_two_body(r_eci_m)
+/// One term of the Earth's gravity field (about the Earth's centre, ECI).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum GravityTerm {
+    /// The point mass: a = −μ r / |r|³ ([`accel_two_body`]).
+    TwoBody,
+    /// The J2 zonal harmonic, the oblateness ([`accel_j2`]).
+    J2,
+}
+
+/// The point-mass model.
+pub const TWO_BODY: &[GravityTerm] = &[GravityTerm::TwoBody];
+
+/// The point mass plus J2.
+pub const TWO_BODY_J2: &[GravityTerm] = &[GravityTerm::TwoBody, GravityTerm::J2];
+
+/// The model a `j2` flag selects (a scene's `environment.Orbit.j2`): [`TWO_BODY_J2`] if set,
+/// else [`TWO_BODY`].
+pub fn earth_gravity(j2: bool) -> &'static [GravityTerm] {
+    if j2 { TWO_BODY_J2 } else { TWO_BODY }
+}
+
+/// The sum of `parts` in order (the first term is the start value, so a one-term model is that
+/// term exactly); zero for an empty model.
+fn sum_in_order(parts: impl Iterator<Item = Vector3<f64>>) -> Vector3<f64> {
+    let mut acc: Option<Vector3<f64>> = None;
+    for a in parts {
+        acc = Some(match acc {
+            None => a,
+            Some(sum) => sum + a,
+        });
+    }
+    acc.unwrap_or_else(Vector3::zeros)
+}
+
+impl GravityTerm {
+    /// This term's acceleration at `r_eci_m`, m/s², ECI.
+    pub fn accel(self, r_eci_m: &Vector3<f64>) -> Vector3<f64> {
+        match self {
+            GravityTerm::TwoBody => accel_two_body(r_eci_m),
+            GravityTerm::J2 => accel_j2(r_eci_m),
+        }
+    }
+
+    /// This term's potential energy per unit mass at `r_eci_m`, J/kg (its acceleration is −∇
+    /// of it): −μ/r (two-body); (μ J2 R_E² / (2 r³))·(3 z²/r² − 1) (J2).
+    pub fn potential_energy_per_mass(self, r_eci_m: &Vector3<f64>) -> f64 {
+        let r2 = r_eci_m.norm_squared();
+        let r = r2.sqrt();
+        match self {
+            GravityTerm::TwoBody => -MU_EARTH_M3_S2 / r,
+            GravityTerm::J2 => {
+                let z2_r2 = r_eci_m.z * r_eci_m.z / r2;
+                MU_EARTH_M3_S2 * J2_EARTH * R_EARTH_M * R_EARTH_M / (2.0 * r2 * r)
+                    * (3.0 * z2_r2 - 1.0)
+            }
+        }
     }
 }
 
+/// Earth gravity at `r_eci_m`, m/s², ECI: the sum of the model's terms, in list order.
+pub fn accel_earth(r_eci_m: &Vector3<f64>, gravity: &[GravityTerm]) -> Vector3<f64> {
+    sum_in_order(gravity.iter().map(|t| t.accel(r_eci_m)))
+}
+
 /// Gravitational potential energy per unit mass at `r_eci_m`, J/kg (m²/s²), such that
-/// [`accel_earth`] = −∇V: V = −μ/r + (μ J2 R_E² / (2 r³))·(3 z²/r² − 1) (J2 part if `with_j2`).
-/// Used to check energy conservation (specific energy = |v|²/2 + V).
-pub fn potential_energy_per_mass(r_eci_m: &Vector3<f64>, with_j2: bool) -> f64 {
-    let r2 = r_eci_m.norm_squared();
-    let r = r2.sqrt();
-    let v = -MU_EARTH_M3_S2 / r;
-    if with_j2 {
-        let z2_r2 = r_eci_m.z * r_eci_m.z / r2;
-        v + MU_EARTH_M3_S2 * J2_EARTH * R_EARTH_M * R_EARTH_M / (2.0 * r2 * r) * (3.0 * z2_r2 - 1.0)
-    } else {
-        v
+/// [`accel_earth`] = −∇V: the sum of the terms' [`GravityTerm::potential_energy_per_mass`]
+/// (V = −μ/r + (μ J2 R_E² / (2 r³))·(3 z²/r² − 1) for [`TWO_BODY_J2`]). Used to check energy
+/// conservation (specific energy = |v|²/2 + V).
+pub fn potential_energy_per_mass(r_eci_m: &Vector3<f64>, gravity: &[GravityTerm]) -> f64 {
+    let mut v: Option<f64> = None;
+    for t in gravity {
+        let e = t.potential_energy_per_mass(r_eci_m);
+        v = Some(v.map_or(e, |sum| sum + e));
     }
+    v.unwrap_or(0.0)
 }
 
 /// (1+q)^k − 1 for integer k ≥ 1, evaluated as q·Σ_{j=1..k} C(k,j) q^(j−1) (Horner), which has
@@ -113,15 +173,15 @@ fn pow_neg_half_minus_one(q: f64, m: u32) -> f64 {
 }
 
 /// Differential Earth gravity a(r_ref + r_rel) − a(r_ref), m/s², ECI axes, for a body at
-/// `r_rel_m` (ECI axes, metres) from the reference point `r_ref_eci_m`. Two-body plus, if
-/// `with_j2`, the J2 term. Accurate to ~1e-14 relative for |r_rel| from 1 mm to well beyond
+/// `r_rel_m` (ECI axes, metres) from the reference point `r_ref_eci_m`: the sum of the model's
+/// terms, in list order. Accurate to ~1e-14 relative for |r_rel| from 1 mm to well beyond
 /// 10 km: see the module doc for the cancellation-free formulation (Battin's f(q) for the
 /// point mass; a product-rule difference for J2). Exact (not linearised): valid at any
 /// separation with |r_ref + r_rel| > 0.
 pub fn differential_accel(
     r_ref_eci_m: &Vector3<f64>,
     r_rel_m: &Vector3<f64>,
-    with_j2: bool,
+    gravity: &[GravityTerm],
 ) -> Vector3<f64> {
     let r = r_ref_eci_m;
     let rho = r_rel_m;
@@ -130,45 +190,46 @@ pub fn differential_accel(
     // q = (|r+ρ|² − |r|²)/|r|², computed without forming |r+ρ|².
     let q = rho.dot(&(2.0 * r + rho)) / r2;
     let r_true = r + rho;
-
-    // Two-body, Battin f(q): 1 − (1+q)^(−3/2) = −[(1+q)^(−3/2) − 1].
-    let f = -pow_neg_half_minus_one(q, 3);
-    let mut da = MU_EARTH_M3_S2 / (r2 * rn) * (f * r_true - rho);
-
-    if with_j2 {
-        // a_J2 = C·[x(s⁵ − h), y(s⁵ − h), z(3 s⁵ − h)], h = 5 z² s⁷, s = 1/|r|,
-        // C = −(3/2) J2 μ R_E².
-        let c = -1.5 * J2_EARTH * MU_EARTH_M3_S2 * R_EARTH_M * R_EARTH_M;
-        let s = 1.0 / rn;
-        let s5 = s.powi(5);
-        let s7 = s5 * s * s;
-        // Values at r + ρ via the accurate ratios (1+q)^(−k/2).
-        let d5 = pow_neg_half_minus_one(q, 5); // (s'⁵ − s⁵)/s⁵
-        let d7 = pow_neg_half_minus_one(q, 7);
-        let ds5 = s5 * d5;
-        let ds7 = s7 * d7;
-        let s5p = s5 + ds5;
-        let s7p = s7 + ds7;
-        let z = r.z;
-        let zp = r_true.z;
-        let z2 = z * z;
-        let dz2 = rho.z * (2.0 * z + rho.z);
-        let hp = 5.0 * zp * zp * s7p;
-        // Δh = 5·[Δ(z²)·s'⁷ + z²·Δs⁷]
-        let dh = 5.0 * (dz2 * s7p + z2 * ds7);
-        // P_xy = s⁵ − h, P_z = 3 s⁵ − h: values at r + ρ and differences.
-        let pp_xy = s5p - hp;
-        let pp_z = 3.0 * s5p - hp;
-        let dp_xy = ds5 - dh;
-        let dp_z = 3.0 * ds5 - dh;
-        // Δ(x·P) = Δx·P' + x·ΔP with Δx = ρ_x exactly.
-        da += c * Vector3::new(
-            rho.x * pp_xy + r.x * dp_xy,
-            rho.y * pp_xy + r.y * dp_xy,
-            rho.z * pp_z + r.z * dp_z,
-        );
-    }
-    da
+    sum_in_order(gravity.iter().map(|t| match t {
+        GravityTerm::TwoBody => {
+            // Battin f(q): 1 − (1+q)^(−3/2) = −[(1+q)^(−3/2) − 1].
+            let f = -pow_neg_half_minus_one(q, 3);
+            MU_EARTH_M3_S2 / (r2 * rn) * (f * r_true - rho)
+        }
+        GravityTerm::J2 => {
+            // a_J2 = C·[x(s⁵ − h), y(s⁵ − h), z(3 s⁵ − h)], h = 5 z² s⁷, s = 1/|r|,
+            // C = −(3/2) J2 μ R_E².
+            let c = -1.5 * J2_EARTH * MU_EARTH_M3_S2 * R_EARTH_M * R_EARTH_M;
+            let s = 1.0 / rn;
+            let s5 = s.powi(5);
+            let s7 = s5 * s * s;
+            // Values at r + ρ via the accurate ratios (1+q)^(−k/2).
+            let d5 = pow_neg_half_minus_one(q, 5); // (s'⁵ − s⁵)/s⁵
+            let d7 = pow_neg_half_minus_one(q, 7);
+            let ds5 = s5 * d5;
+            let ds7 = s7 * d7;
+            let s5p = s5 + ds5;
+            let s7p = s7 + ds7;
+            let z = r.z;
+            let zp = r_true.z;
+            let z2 = z * z;
+            let dz2 = rho.z * (2.0 * z + rho.z);
+            let hp = 5.0 * zp * zp * s7p;
+            // Δh = 5·[Δ(z²)·s'⁷ + z²·Δs⁷]
+            let dh = 5.0 * (dz2 * s7p + z2 * ds7);
+            // P_xy = s⁵ − h, P_z = 3 s⁵ − h: values at r + ρ and differences.
+            let pp_xy = s5p - hp;
+            let pp_z = 3.0 * s5p - hp;
+            let dp_xy = ds5 - dh;
+            let dp_z = 3.0 * ds5 - dh;
+            // Δ(x·P) = Δx·P' + x·ΔP with Δx = ρ_x exactly.
+            c * Vector3::new(
+                rho.x * pp_xy + r.x * dp_xy,
+                rho.y * pp_xy + r.y * dp_xy,
+                rho.z * pp_z + r.z * dp_z,
+            )
+        }
+    }))
 }
 
 /// Gravity-gradient torque on a rigid body, N·m, body frame (point-mass Earth):
@@ -192,8 +253,9 @@ pub fn gravity_gradient_torque_body(
 mod tests {
     //! References: a double-double (≈32-digit) evaluation of the naive difference
     //! a(r+ρ) − a(r) (error-free transformations two_sum / two_prod with FMA, Dekker 1971);
-    //! the closed-form gravity-gradient torque of a body at 45° in a principal plane; and the
-    //! torque summed over the point masses of a rigid body.
+    //! the closed-form gravity-gradient torque of a body at 45° in a principal plane; the
+    //! torque summed over the point masses of a rigid body; and, for a model as a list of
+    //! terms, the closed forms [`accel_two_body`] + [`accel_j2`] and −μ/r + the J2 potential.
     use super::*;
     use nalgebra::{Rotation3, Unit};
 
@@ -331,18 +393,19 @@ mod tests {
             for d in &dirs {
                 let rho = mag * d;
                 for with_j2 in [false, true] {
-                    let got = differential_accel(&r, &rho, with_j2);
+                    let got = differential_accel(&r, &rho, earth_gravity(with_j2));
                     let want = diff_dd(&r, &rho, with_j2);
                     let rel = (got - want).norm() / want.norm();
                     worst[k] = worst[k].max(rel);
                     assert!(rel < 1e-13, "mag {mag} j2 {with_j2}: rel err {rel:e}");
                     if k == 0 {
-                        let naive = accel_earth(&(r + rho), with_j2) - accel_earth(&r, with_j2);
+                        let naive = accel_earth(&(r + rho), earth_gravity(with_j2))
+                            - accel_earth(&r, earth_gravity(with_j2));
                         worst_naive_1mm = worst_naive_1mm.max((naive - want).norm() / want.norm());
                     }
                 }
-                let j2_got =
-                    differential_accel(&r, &rho, true) - differential_accel(&r, &rho, false);
+                let j2_got = differential_accel(&r, &rho, TWO_BODY_J2)
+                    - differential_accel(&r, &rho, TWO_BODY);
                 let j2_want = diff_dd(&r, &rho, true) - diff_dd(&r, &rho, false);
                 let rel = (j2_got - j2_want).norm() / j2_want.norm();
                 worst_j2 = worst_j2.max(rel);
@@ -377,7 +440,7 @@ mod tests {
         let g = MU_EARTH_M3_S2 / rn.powi(3) * (3.0 * rh * rh.transpose() - Matrix3::identity());
         for d in &dirs {
             let rho = 1e-3 * d;
-            let got = differential_accel(&r, &rho, false);
+            let got = differential_accel(&r, &rho, TWO_BODY);
             let lin = g * rho;
             assert!((got - lin).norm() / lin.norm() < 1e-8);
         }
@@ -389,14 +452,14 @@ mod tests {
     fn invariant_accel_is_minus_grad_potential() {
         let r = Vector3::new(4.1e6, -3.3e6, 4.4e6);
         for with_j2 in [false, true] {
-            let a = accel_earth(&r, with_j2);
+            let a = accel_earth(&r, earth_gravity(with_j2));
             let h = 1.0;
             let mut g = Vector3::zeros();
             for i in 0..3 {
                 let mut e = Vector3::zeros();
                 e[i] = h;
-                g[i] = -(potential_energy_per_mass(&(r + e), with_j2)
-                    - potential_energy_per_mass(&(r - e), with_j2))
+                g[i] = -(potential_energy_per_mass(&(r + e), earth_gravity(with_j2))
+                    - potential_energy_per_mass(&(r - e), earth_gravity(with_j2)))
                     / (2.0 * h);
             }
             // Rounding of V (≈6e7 J/kg, ulp ≈ 7e-9) over 2h = 2 m: ~1e-8 m/s² absolute.
@@ -459,10 +522,55 @@ mod tests {
         let mut want_world = Vector3::zeros();
         for (mi, p_b) in &pts {
             let p_w = c.transpose() * p_b;
-            want_world += *mi * p_w.cross(&differential_accel(&r, &p_w, false));
+            want_world += *mi * p_w.cross(&differential_accel(&r, &p_w, TWO_BODY));
         }
         let want = c * want_world;
         let rel = (got - want).norm() / want.norm();
         assert!(rel < 10.0 * 2.0 / r.norm(), "rel {rel:e}");
+    }
+
+    /// A model is the sum of its terms in list order: [`TWO_BODY_J2`] is the two-body closed
+    /// form plus the J2 closed form, bit for bit (the same operations as before the list); a
+    /// one-term list is that term exactly; the empty list is no gravity; a list's differential
+    /// gravity is the sum of its terms' (J2 alone against the two lists' difference, to the
+    /// rounding of the two-body part: 4 ulps of |a_2body(ρ)|, the size of the summands).
+    #[test]
+    fn invariant_gravity_terms_sum_in_list_order() {
+        let points = [
+            Vector3::new(6.778e6, 0.0, 0.0),
+            Vector3::new(4.1e6, -3.3e6, 4.2e6),
+            Vector3::new(-2.0e6, 6.0e6, -3.1e6),
+        ];
+        let rho = Vector3::new(12.5, -40.0, 7.25);
+        for r in points {
+            let tb = accel_two_body(&r);
+            let j2 = accel_j2(&r);
+            assert_eq!(accel_earth(&r, TWO_BODY_J2), tb + j2);
+            assert_eq!(accel_earth(&r, TWO_BODY), tb);
+            assert_eq!(accel_earth(&r, &[GravityTerm::J2]), j2);
+            assert_eq!(accel_earth(&r, &[]), Vector3::zeros());
+            assert_eq!(earth_gravity(true), TWO_BODY_J2);
+            assert_eq!(earth_gravity(false), TWO_BODY);
+
+            let rn = r.norm();
+            let z2_r2 = r.z * r.z / r.norm_squared();
+            let v_tb = -MU_EARTH_M3_S2 / rn;
+            let v_j2 = MU_EARTH_M3_S2 * J2_EARTH * R_EARTH_M * R_EARTH_M
+                / (2.0 * r.norm_squared() * rn)
+                * (3.0 * z2_r2 - 1.0);
+            assert_eq!(potential_energy_per_mass(&r, TWO_BODY), v_tb);
+            assert_eq!(potential_energy_per_mass(&r, TWO_BODY_J2), v_tb + v_j2);
+
+            let both = differential_accel(&r, &rho, TWO_BODY_J2);
+            let two_body = differential_accel(&r, &rho, TWO_BODY);
+            let j2_only = differential_accel(&r, &rho, &[GravityTerm::J2]);
+            let tol = 4.0 * f64::EPSILON * two_body.norm();
+            assert!(
+                ((both - two_body) - j2_only).norm() <= tol,
+                "r {r:?}: {:e} > {tol:e}",
+                ((both - two_body) - j2_only).norm()
+            );
+            assert_eq!(differential_accel(&r, &rho, &[]), Vector3::zeros());
+        }
     }
 }

@@ -14,7 +14,7 @@ use nalgebra::{SVector, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
 use crate::orbit::constants::MU_EARTH_M3_S2;
-use crate::orbit::gravity::{accel_earth, differential_accel};
+use crate::orbit::gravity::{GravityTerm, accel_earth, differential_accel, earth_gravity};
 use crate::orbit::kepler::ClassicalElements;
 
 /// One classic 4th-order Runge–Kutta step of x' = f(t, x) from (`t_s`, `x`) over `h_s`.
@@ -195,10 +195,10 @@ pub fn propagate_fixed<const N: usize>(
 }
 
 /// Time derivative of the inertial state [r; v] (ECI, m and m/s) under Earth gravity
-/// (two-body, plus J2 if `with_j2`): [v; a(r)].
-pub fn orbit_rhs(x: &Vector6<f64>, with_j2: bool) -> Vector6<f64> {
+/// (the terms of `gravity`, in order): [v; a(r)].
+pub fn orbit_rhs(x: &Vector6<f64>, gravity: &[GravityTerm]) -> Vector6<f64> {
     let r = Vector3::new(x[0], x[1], x[2]);
-    let a = accel_earth(&r, with_j2);
+    let a = accel_earth(&r, gravity);
     Vector6::new(x[3], x[4], x[5], a.x, a.y, a.z)
 }
 
@@ -209,8 +209,8 @@ pub fn orbit_rhs(x: &Vector6<f64>, with_j2: bool) -> Vector6<f64> {
 pub const MAX_SUBSTEP_ANOMALY_RAD: f64 = std::f64::consts::PI / 180.0;
 
 /// The reference orbit of an orbit scene: time and f64 inertial state (ECI position and
-/// velocity of the origin of the world frame), propagated under two-body + optional J2
-/// gravity with the 8th-order method. The world frame is non-rotating with ECI axes, its
+/// velocity of the origin of the world frame), propagated under a gravity model (a list of
+/// [`GravityTerm`]s: two-body, optionally J2) with the 8th-order method. The world frame is non-rotating with ECI axes, its
 /// origin at [`ReferenceOrbit::pos_eci_m`]; a body at world position ρ feels
 /// [`ReferenceOrbit::differential_accel`]`(ρ)` (the world frame's own acceleration removed).
 #[derive(Debug, Clone, PartialEq)]
@@ -218,7 +218,7 @@ pub struct ReferenceOrbit {
     t_s: f64,
     pos_eci_m: Vector3<f64>,
     vel_eci_m_s: Vector3<f64>,
-    with_j2: bool,
+    gravity: Vec<GravityTerm>,
     max_substep_s: f64,
 }
 
@@ -227,7 +227,11 @@ impl ReferenceOrbit {
     /// The maximum sub-step is fixed here from the initial osculating orbit:
     /// h_max = [`MAX_SUBSTEP_ANOMALY_RAD`] / ḟ_peri, with ḟ_peri = √(μ(1+e)/r_p³) the true-anomaly
     /// rate at perigee (r_p = a(1 − e)). Panics (debug) if the orbit is not elliptic.
-    pub fn from_state(pos_eci_m: Vector3<f64>, vel_eci_m_s: Vector3<f64>, with_j2: bool) -> Self {
+    pub fn from_state(
+        pos_eci_m: Vector3<f64>,
+        vel_eci_m_s: Vector3<f64>,
+        gravity: &[GravityTerm],
+    ) -> Self {
         let el = ClassicalElements::from_state(&pos_eci_m, &vel_eci_m_s, MU_EARTH_M3_S2);
         let rp = el.a_m * (1.0 - el.e);
         let fdot_peri = (MU_EARTH_M3_S2 * (1.0 + el.e) / (rp * rp * rp)).sqrt();
@@ -235,15 +239,15 @@ impl ReferenceOrbit {
             t_s: 0.0,
             pos_eci_m,
             vel_eci_m_s,
-            with_j2,
+            gravity: gravity.to_vec(),
             max_substep_s: MAX_SUBSTEP_ANOMALY_RAD / fdot_peri,
         }
     }
 
     /// Reference orbit starting at t = 0 from classical elements (μ = Earth's).
-    pub fn from_elements(elements: &ClassicalElements, with_j2: bool) -> Self {
+    pub fn from_elements(elements: &ClassicalElements, gravity: &[GravityTerm]) -> Self {
         let (r, v) = elements.to_state(MU_EARTH_M3_S2);
-        Self::from_state(r, v, with_j2)
+        Self::from_state(r, v, gravity)
     }
 
     /// Advance by `dt_s` (> 0 or < 0) with the 8th-order method, in n = ⌈|dt|/h_max⌉ equal
@@ -254,8 +258,8 @@ impl ReferenceOrbit {
         }
         let n = (dt_s.abs() / self.max_substep_s).ceil().max(1.0) as usize;
         let h = dt_s / n as f64;
-        let with_j2 = self.with_j2;
-        let mut f = |_t: f64, x: &Vector6<f64>| orbit_rhs(x, with_j2);
+        let gravity = &self.gravity;
+        let mut f = |_t: f64, x: &Vector6<f64>| orbit_rhs(x, gravity);
         let mut x = self.state_vector();
         for k in 0..n {
             x = rk8_step(&mut f, self.t_s + k as f64 * h, &x, h);
@@ -291,9 +295,9 @@ impl ReferenceOrbit {
         self.vel_eci_m_s
     }
 
-    /// Whether J2 is included (in the orbit and in [`ReferenceOrbit::differential_accel`]).
-    pub fn with_j2(&self) -> bool {
-        self.with_j2
+    /// The gravity model's terms (of the orbit and of [`ReferenceOrbit::differential_accel`]).
+    pub fn gravity(&self) -> &[GravityTerm] {
+        &self.gravity
     }
 
     /// Largest sub-step used by [`ReferenceOrbit::step`], s.
@@ -303,14 +307,14 @@ impl ReferenceOrbit {
 
     /// Gravitational acceleration of the reference itself, ECI, m/s².
     pub fn accel_eci_m_s2(&self) -> Vector3<f64> {
-        accel_earth(&self.pos_eci_m, self.with_j2)
+        accel_earth(&self.pos_eci_m, &self.gravity)
     }
 
     /// Differential gravity on a body at `pos_world_m` (world = ECI axes, origin at the
     /// reference), m/s²: a(r_ref + ρ) − a(r_ref), same force model as the reference orbit.
     /// Multiply by the body's mass for the external force, N.
     pub fn differential_accel(&self, pos_world_m: &Vector3<f64>) -> Vector3<f64> {
-        differential_accel(&self.pos_eci_m, pos_world_m, self.with_j2)
+        differential_accel(&self.pos_eci_m, pos_world_m, &self.gravity)
     }
 
     /// Osculating classical elements of the current state (μ = Earth's).
@@ -340,7 +344,7 @@ pub enum OrbitInit {
 pub struct ReferenceOrbitParams {
     /// Initial condition at t = 0.
     pub init: OrbitInit,
-    /// Include Earth's J2 (orbit and differential gravity).
+    /// Include Earth's J2 (orbit and differential gravity): the model [`earth_gravity`] selects.
     pub with_j2: bool,
 }
 
@@ -348,14 +352,16 @@ impl ReferenceOrbitParams {
     /// Build the reference orbit at t = 0.
     pub fn build(&self) -> ReferenceOrbit {
         match &self.init {
-            OrbitInit::Elements(el) => ReferenceOrbit::from_elements(el, self.with_j2),
+            OrbitInit::Elements(el) => {
+                ReferenceOrbit::from_elements(el, earth_gravity(self.with_j2))
+            }
             OrbitInit::State {
                 pos_eci_m,
                 vel_eci_m_s,
             } => ReferenceOrbit::from_state(
                 Vector3::from(*pos_eci_m),
                 Vector3::from(*vel_eci_m_s),
-                self.with_j2,
+                earth_gravity(self.with_j2),
             ),
         }
     }
@@ -370,7 +376,7 @@ mod tests {
     //! nodal regression rate dΩ/dt = −(3/2) n J2 (R_E/p)² cos i (Vallado eq. 9-41).
     use super::*;
     use crate::orbit::constants::{J2_EARTH, R_EARTH_M};
-    use crate::orbit::gravity::potential_energy_per_mass;
+    use crate::orbit::gravity::{TWO_BODY, TWO_BODY_J2, potential_energy_per_mass};
     use crate::orbit::kepler::{kepler_propagate, mean_motion, wrap_pi};
     use std::f64::consts::{PI, TAU};
 
@@ -409,10 +415,10 @@ mod tests {
         }
     }
 
-    fn energy(x: &Vector6<f64>, with_j2: bool) -> f64 {
+    fn energy(x: &Vector6<f64>, gravity: &[GravityTerm]) -> f64 {
         let r = Vector3::new(x[0], x[1], x[2]);
         let v = Vector3::new(x[3], x[4], x[5]);
-        0.5 * v.norm_squared() + potential_energy_per_mass(&r, with_j2)
+        0.5 * v.norm_squared() + potential_energy_per_mass(&r, gravity)
     }
     fn ang_mom(x: &Vector6<f64>) -> Vector3<f64> {
         Vector3::new(x[0], x[1], x[2]).cross(&Vector3::new(x[3], x[4], x[5]))
@@ -491,7 +497,7 @@ mod tests {
     #[test]
     fn val_rk8_vs_kepler_one_orbit() {
         for el in [leo_circular(), p0_orbit(), p1_orbit()] {
-            let mut orbit = ReferenceOrbit::from_elements(&el, false);
+            let mut orbit = ReferenceOrbit::from_elements(&el, TWO_BODY);
             let (r0, v0) = orbit.state();
             let t = el.period_s(MU_EARTH_M3_S2);
             orbit.step(t);
@@ -517,11 +523,12 @@ mod tests {
     #[test]
     fn invariant_two_body_energy_momentum() {
         for el in [leo_circular(), p0_orbit(), p1_orbit()] {
-            let mut orbit = ReferenceOrbit::from_elements(&el, false);
+            let mut orbit = ReferenceOrbit::from_elements(&el, TWO_BODY);
             let x0 = orbit.state_vector();
             orbit.step(el.period_s(MU_EARTH_M3_S2));
             let x1 = orbit.state_vector();
-            let de = ((energy(&x1, false) - energy(&x0, false)) / energy(&x0, false)).abs();
+            let de =
+                ((energy(&x1, TWO_BODY) - energy(&x0, TWO_BODY)) / energy(&x0, TWO_BODY)).abs();
             let dh = (ang_mom(&x1) - ang_mom(&x0)).norm() / ang_mom(&x0).norm();
             eprintln!("two-body e {}: rel energy {de:e}, rel |Δh| {dh:e}", el.e);
             assert!(de < 1e-10 && dh < 1e-10);
@@ -534,11 +541,13 @@ mod tests {
     #[test]
     fn invariant_j2_energy_and_polar_momentum() {
         for el in [leo_circular(), p1_orbit()] {
-            let mut orbit = ReferenceOrbit::from_elements(&el, true);
+            let mut orbit = ReferenceOrbit::from_elements(&el, TWO_BODY_J2);
             let x0 = orbit.state_vector();
             orbit.step(3.0 * el.period_s(MU_EARTH_M3_S2));
             let x1 = orbit.state_vector();
-            let de = ((energy(&x1, true) - energy(&x0, true)) / energy(&x0, true)).abs();
+            let de = ((energy(&x1, TWO_BODY_J2) - energy(&x0, TWO_BODY_J2))
+                / energy(&x0, TWO_BODY_J2))
+            .abs();
             let h0 = ang_mom(&x0);
             let h1 = ang_mom(&x1);
             let dhz = (h1.z - h0.z).abs() / h0.norm();
@@ -558,7 +567,7 @@ mod tests {
     #[test]
     fn val_j2_nodal_regression() {
         let el = leo_circular();
-        let mut orbit = ReferenceOrbit::from_elements(&el, true);
+        let mut orbit = ReferenceOrbit::from_elements(&el, TWO_BODY_J2);
         let om0 = orbit.elements().raan_rad;
         let t = 10.0 * el.period_s(MU_EARTH_M3_S2);
         orbit.step(t);
@@ -574,7 +583,7 @@ mod tests {
     /// 36,000 × 9.3e-10 ≈ 3.4e-5 m.
     #[test]
     fn invariant_reference_orbit_step_size_independent() {
-        let mut a = ReferenceOrbit::from_elements(&p0_orbit(), true);
+        let mut a = ReferenceOrbit::from_elements(&p0_orbit(), TWO_BODY_J2);
         let mut b = a.clone();
         a.step(600.0);
         for _ in 0..36_000 {
@@ -602,7 +611,7 @@ mod tests {
         assert_eq!(p, q);
         assert_eq!(
             q.build().state(),
-            ReferenceOrbit::from_elements(&p1_orbit(), true).state()
+            ReferenceOrbit::from_elements(&p1_orbit(), TWO_BODY_J2).state()
         );
         let bad = s.replace("\"with_j2\"", "\"with_j3\":1,\"with_j2\"");
         assert!(serde_json::from_str::<ReferenceOrbitParams>(&bad).is_err());

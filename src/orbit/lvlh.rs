@@ -20,6 +20,7 @@
 //! ρ_L = C ρ, ρ̇_L = C (ρ̇ − ω × ρ) (the derivative seen in the rotating frame); back:
 //! ρ = Cᵀ ρ_L, ρ̇ = Cᵀ ρ̇_L + ω × ρ.
 
+use crate::orbit::gravity::GravityTerm;
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -86,8 +87,8 @@ pub fn frame_rate_eci_exact_rad_s(
 }
 
 /// A bound on the Hill frame's angular speed over the interval [t − dt, t + dt] of a reference
-/// whose ECI state at t is (`r_eci_m`, `v_eci_m_s`), under two-body gravity plus J2 (`j2`), rad/s;
-/// `None` if the interval is too long for the bound (|r| could reach the Earth's radius).
+/// whose ECI state at t is (`r_eci_m`, `v_eci_m_s`), under the gravity model `gravity`
+/// (two-body, optionally J2), rad/s; `None` if the interval is too long for the bound (|r| could reach the Earth's radius).
 ///
 /// Derivation. The Hill frame (x̂ = r̂, ẑ = ĥ) turns at ω = (|h|/r²) ẑ + (r a_h/|h|) x̂, with a_h
 /// the acceleration along ĥ (only J2 has one). Over |τ| ≤ dt: the acceleration is at most
@@ -100,11 +101,18 @@ pub fn hill_rate_bound_rad_s(
     r_eci_m: &Vector3<f64>,
     v_eci_m_s: &Vector3<f64>,
     dt_s: f64,
-    j2: bool,
+    gravity: &[GravityTerm],
 ) -> Option<f64> {
     use crate::orbit::constants::{J2_EARTH, MU_EARTH_M3_S2 as MU, R_EARTH_M};
     let (r, v) = (r_eci_m.norm(), v_eci_m_s.norm());
-    let j2_fac = if j2 { 3.0 * J2_EARTH } else { 0.0 };
+    // Each term's share of the bounds below: the point mass is the 1 in (1 + j2_fac); J2 adds
+    // j2_fac to |a| and is the only term with an out-of-plane part (a_J2 below). A new term
+    // adds its own bound here.
+    let j2_fac = if gravity.contains(&GravityTerm::J2) {
+        3.0 * J2_EARTH
+    } else {
+        0.0
+    };
     let mut r_lo = r;
     for _ in 0..4 {
         if r_lo <= R_EARTH_M {
@@ -222,6 +230,7 @@ mod tests {
     //! inertial motion is exact (closed-form Kepler) or RK8-integrated (with J2).
     use super::*;
     use crate::orbit::constants::MU_EARTH_M3_S2 as MU;
+    use crate::orbit::gravity::TWO_BODY_J2;
     use crate::orbit::integrate::ReferenceOrbit;
     use crate::orbit::kepler::{ClassicalElements, kepler_propagate};
     use std::f64::consts::PI;
@@ -343,8 +352,8 @@ mod tests {
         let (r0, v0) = refs()[0];
         let rho = Vector3::new(300.0, -600.0, 700.0);
         let rhod = Vector3::new(0.3, 0.1, -0.4);
-        let mut reference = ReferenceOrbit::from_state(r0, v0, true);
-        let mut deputy = ReferenceOrbit::from_state(r0 + rho, v0 + rhod, true);
+        let mut reference = ReferenceOrbit::from_state(r0, v0, TWO_BODY_J2);
+        let mut deputy = ReferenceOrbit::from_state(r0 + rho, v0 + rhod, TWO_BODY_J2);
         // Go to the node region where the normal J2 acceleration is large: t = 1500 s.
         reference.step(1500.0);
         deputy.step(1500.0);

@@ -24,7 +24,7 @@
 use crate::control::guo2016::{Guo2016, Guo2016Command, Guo2016Observation, Guo2016Params};
 use crate::math::ode::{OdeEnd, OdeOptions, OdeStats, OdeSystem, integrate_rosenbrock23};
 use crate::orbit::constants::MU_EARTH_M3_S2;
-use crate::orbit::gravity::accel_earth;
+use crate::orbit::gravity::{accel_earth, earth_gravity};
 use crate::scene::LoadedScene;
 use crate::sim::Simulation;
 use nalgebra::{Quaternion, SVector, UnitQuaternion, Vector3};
@@ -118,7 +118,8 @@ pub fn observation(y: &PlantState, t_s: f64, j2: bool) -> Guo2016Observation {
         rate_target_body_rad_s: Vector3::zeros(),
         pos_rel_world_m: r,
         vel_rel_world_m_s: v3(y, 9),
-        grav_diff_world_m_s2: accel_earth(&(r_t + r), j2) - accel_earth(&r_t, j2),
+        grav_diff_world_m_s2: accel_earth(&(r_t + r), earth_gravity(j2))
+            - accel_earth(&r_t, earth_gravity(j2)),
     }
 }
 
@@ -186,8 +187,9 @@ impl OdeSystem<19> for Loop<'_> {
         let q = quat(y);
         let w = v3(y, 16);
         let p = &s.params;
-        let a_t = accel_earth(&r_t, s.j2);
-        let a_c = accel_earth(&(r_t + r), s.j2) + q * u.force_body_n / p.chaser_mass_kg;
+        let a_t = accel_earth(&r_t, earth_gravity(s.j2));
+        let a_c =
+            accel_earth(&(r_t + r), earth_gravity(s.j2)) + q * u.force_body_n / p.chaser_mass_kg;
         let j = p.chaser_inertia_body_kg_m2;
         let dtau = s.dtau_amplitude_nm * (s.dtau_rate_rad_s * t).cos();
         let wdot = j.try_inverse().unwrap_or_else(nalgebra::Matrix3::zeros)

@@ -80,109 +80,140 @@ fn planar_locks() -> rp::LockedAxes {
         | rp::LockedAxes::ROTATION_LOCKED_Y
 }
 
-/// Installs the table if the scene's environment is [`Environment::AirBearing`]: the table
-/// collider, rapier locks and fixed anchored bodies, and the systems. Called once the bodies
-/// exist.
-pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
-    let Environment::AirBearing(spec) = &loaded.scene.environment else {
-        return Ok(());
-    };
-    let spec = spec.clone();
-    let roster = app.world().resource::<Roster>().clone();
-    let n = roster.bodies.len();
-    let mut anchored = vec![false; n];
-    for (i, name) in spec.anchored.iter().enumerate() {
-        let k = roster.names.iter().position(|b| b == name).ok_or_else(|| {
-            loaded.error_at(
-                &format!("environment.0.anchored.{i}"),
-                format!("no body named `{name}`"),
-            )
-        })?;
-        anchored[k] = true;
-    }
-    let mut height_m = Vec::with_capacity(n);
-    let mut tilt_att = Vec::with_capacity(n);
-    let mut initial = Vec::with_capacity(n);
-    let mut handles = Vec::with_capacity(n);
-    for (k, e) in roster.bodies.iter().enumerate() {
-        let w = app.world();
-        let b = w.get::<SimBody>(*e).expect("body");
-        let s = w.get::<BodyState>(*e).expect("state").clone();
-        let q = s.att;
-        // Split q = R_z(ψ) · tilt with tilt free of yaw about the lab z axis.
-        let psi = {
-            let x = q * Vector3::x();
-            if x.x.abs() + x.y.abs() > 1e-9 {
-                x.y.atan2(x.x)
-            } else {
-                0.0
-            }
+/// The air-bearing table of a scene whose environment is [`Environment::AirBearing`]: owns the
+/// [`AirBearing`] resource, the table collider and the rapier locks (planar simulators, fixed
+/// anchored bodies), set when it is added, and two systems: `airbearing_forces` in
+/// [`super::Order::TableForces`] (Environment: film, friction, tilt) and
+/// `airbearing_constrain` in [`Stage::Monitor`] before [`super::Order::PostStepDiagnostics`]
+/// (so before the distances: everything the Monitor stage reads sees the constrained state). Add it once the bodies exist, after
+/// [`super::PipelinePlugin`].
+#[derive(Debug, Clone)]
+pub struct AirBearingPlugin {
+    /// The table at t = 0 (its collider handle set when the plugin is added).
+    table: AirBearing,
+}
+
+impl AirBearingPlugin {
+    /// The table of the scene's environment (`None` in other environments), checked against
+    /// the built bodies (`world` holds the [`Roster`] and the bodies' states at t = 0): located
+    /// errors for an unknown anchored body or a simulator that starts off the table.
+    pub fn new(world: &World, loaded: &LoadedScene) -> Result<Option<Self>, SceneError> {
+        let Environment::AirBearing(spec) = &loaded.scene.environment else {
+            return Ok(None);
         };
-        let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), psi);
-        tilt_att.push(rz.inverse() * q);
-        height_m.push(s.pos_m.z);
-        if !anchored[k] && !spec.on_table(s.pos_m.x, s.pos_m.y) {
-            return Err(loaded.error_at(
-                &format!("bodies.{}.initial.pos_m", b.name),
-                format!(
-                    "the simulator starts off the table: ({:.3}, {:.3}) m is outside x ∈ [{}, {}] m, y ∈ [{}, {}] m",
-                    s.pos_m.x,
-                    s.pos_m.y,
-                    spec.table_corner_m[0],
-                    spec.table_corner_m[0] + spec.table_size_m[0],
-                    spec.table_corner_m[1],
-                    spec.table_corner_m[1] + spec.table_size_m[1]
-                ),
-            ));
+        let spec = spec.clone();
+        let roster = world.resource::<Roster>().clone();
+        let n = roster.bodies.len();
+        let mut anchored = vec![false; n];
+        for (i, name) in spec.anchored.iter().enumerate() {
+            let k = roster.names.iter().position(|b| b == name).ok_or_else(|| {
+                loaded.error_at(
+                    &format!("environment.0.anchored.{i}"),
+                    format!("no body named `{name}`"),
+                )
+            })?;
+            anchored[k] = true;
         }
-        initial.push(s);
-        handles.push(b.handle);
-    }
-    let table_collider = {
-        let mut phys = app.world_mut().resource_mut::<Physics>();
-        let pw = &mut phys.world;
-        for (k, h) in handles.iter().enumerate() {
-            if let Some(rb) = pw.bodies.get_mut(*h) {
-                if anchored[k] {
-                    rb.set_body_type(rp::RigidBodyType::Fixed, true);
+        let mut height_m = Vec::with_capacity(n);
+        let mut tilt_att = Vec::with_capacity(n);
+        let mut initial = Vec::with_capacity(n);
+        for (k, e) in roster.bodies.iter().enumerate() {
+            let b = world.get::<SimBody>(*e).expect("body");
+            let s = world.get::<BodyState>(*e).expect("state").clone();
+            let q = s.att;
+            // Split q = R_z(ψ) · tilt with tilt free of yaw about the lab z axis.
+            let psi = {
+                let x = q * Vector3::x();
+                if x.x.abs() + x.y.abs() > 1e-9 {
+                    x.y.atan2(x.x)
                 } else {
-                    rb.set_locked_axes(planar_locks(), true);
+                    0.0
+                }
+            };
+            let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), psi);
+            tilt_att.push(rz.inverse() * q);
+            height_m.push(s.pos_m.z);
+            if !anchored[k] && !spec.on_table(s.pos_m.x, s.pos_m.y) {
+                return Err(loaded.error_at(
+                    &format!("bodies.{}.initial.pos_m", b.name),
+                    format!(
+                        "the simulator starts off the table: ({:.3}, {:.3}) m is outside x ∈ [{}, {}] m, y ∈ [{}, {}] m",
+                        s.pos_m.x,
+                        s.pos_m.y,
+                        spec.table_corner_m[0],
+                        spec.table_corner_m[0] + spec.table_size_m[0],
+                        spec.table_corner_m[1],
+                        spec.table_corner_m[1] + spec.table_size_m[1]
+                    ),
+                ));
+            }
+            initial.push(s);
+        }
+        let gravity_lab_m_s2 = spec.gravity_lab_m_s2();
+        Ok(Some(Self {
+            table: AirBearing {
+                spec,
+                gravity_lab_m_s2,
+                supported: anchored.iter().map(|a| !a).collect(),
+                anchored,
+                height_m,
+                tilt_att,
+                initial,
+                off_table_s: vec![None; n],
+                table_collider: rp::ColliderHandle::invalid(),
+            },
+        }))
+    }
+}
+
+impl Plugin for AirBearingPlugin {
+    fn build(&self, app: &mut App) {
+        let mut table = self.table.clone();
+        let handles: Vec<rp::RigidBodyHandle> = {
+            let w = app.world();
+            let roster = w.resource::<Roster>();
+            roster
+                .bodies
+                .iter()
+                .map(|e| w.get::<SimBody>(*e).expect("body").handle)
+                .collect()
+        };
+        let spec = &table.spec;
+        table.table_collider = {
+            let mut phys = app.world_mut().resource_mut::<Physics>();
+            let pw = &mut phys.world;
+            for (k, h) in handles.iter().enumerate() {
+                if let Some(rb) = pw.bodies.get_mut(*h) {
+                    if table.anchored[k] {
+                        rb.set_body_type(rp::RigidBodyType::Fixed, true);
+                    } else {
+                        rb.set_locked_axes(planar_locks(), true);
+                    }
                 }
             }
-        }
-        let [w, h] = spec.table_size_m;
-        let t = spec.table_thickness_m;
-        let centre = Vector3::new(
-            spec.table_corner_m[0] + w / 2.0,
-            spec.table_corner_m[1] + h / 2.0,
-            -t / 2.0,
+            let [w, h] = spec.table_size_m;
+            let t = spec.table_thickness_m;
+            let centre = Vector3::new(
+                spec.table_corner_m[0] + w / 2.0,
+                spec.table_corner_m[1] + h / 2.0,
+                -t / 2.0,
+            );
+            let col =
+                rp::ColliderBuilder::cuboid((w / 2.0) as f32, (h / 2.0) as f32, (t / 2.0) as f32)
+                    .translation(conv::v(&centre))
+                    .collision_groups(rp::InteractionGroups::none())
+                    .build();
+            pw.insert_collider(col, None)
+        };
+        app.insert_resource(table);
+        app.add_systems(SimStep, airbearing_forces.in_set(super::Order::TableForces));
+        app.add_systems(
+            SimStep,
+            airbearing_constrain
+                .in_set(Stage::Monitor)
+                .before(super::Order::PostStepDiagnostics),
         );
-        let col = rp::ColliderBuilder::cuboid((w / 2.0) as f32, (h / 2.0) as f32, (t / 2.0) as f32)
-            .translation(conv::v(&centre))
-            .collision_groups(rp::InteractionGroups::none())
-            .build();
-        pw.insert_collider(col, None)
-    };
-    let gravity_lab_m_s2 = spec.gravity_lab_m_s2();
-    app.insert_resource(AirBearing {
-        spec,
-        gravity_lab_m_s2,
-        supported: anchored.iter().map(|a| !a).collect(),
-        anchored,
-        height_m,
-        tilt_att,
-        initial,
-        off_table_s: vec![None; n],
-        table_collider,
-    });
-    app.add_systems(SimStep, airbearing_forces.in_set(super::Order::TableForces));
-    app.add_systems(
-        SimStep,
-        airbearing_constrain
-            .in_set(Stage::Monitor)
-            .before(super::monitor::distances),
-    );
-    Ok(())
+    }
 }
 
 /// Adds to a planar simulator's wrench the part of (`force_n`, `torque_nm`) (world = lab

@@ -151,7 +151,8 @@ impl Simulation {
         // recomputed every step instead: `tests/val_contact_normals.rs`.
         pw.integration_parameters.contact_recycling = false;
 
-        let reference = super::environment::install(&mut app, &scene.environment, dt);
+        let environment = super::environment::EnvironmentPlugin::new(&scene.environment, dt);
+        let reference = environment.reference();
 
         let mut roster = Roster::default();
         let mut contacts = ContactState::default();
@@ -376,12 +377,22 @@ impl Simulation {
         if let Some(m) = super::multirate::MultiRate::from_scene(&scene.stepping, dt) {
             app.insert_resource(m);
         }
-        super::add_pipeline(&mut app);
-        super::environment::add_systems(&mut app, &scene.environment);
-        super::overlap::install(&mut app, loaded, suppressed)?;
-        super::docking::install(&mut app, loaded)?;
+        // One plugin per feature, in this order (each doc comment names the sets it runs in).
+        app.add_plugins((
+            super::PipelinePlugin,
+            super::guard::GuardPlugin,
+            environment,
+        ));
+        if let Some(p) = super::overlap::OverlapPlugin::new(loaded, suppressed)? {
+            app.add_plugins(p);
+        }
+        if let Some(p) = super::docking::DockingPlugin::new(app.world(), loaded)? {
+            app.add_plugins(p);
+        }
         super::contact_model::install(&mut app, loaded)?;
-        super::airbearing::install(&mut app, loaded)?;
+        if let Some(p) = super::airbearing::AirBearingPlugin::new(app.world(), loaded)? {
+            app.add_plugins(p);
+        }
         // rapier's continuous pass (CCD) sweeps every fast dynamic body (the `ccd_enabled`
         // flag only widens what it sweeps against); in a scene with a mesh body where no sweep
         // can have a target ([`ccd_has_targets`]) it is pure cost — the convex pieces' mass
@@ -567,6 +578,15 @@ impl Simulation {
             .map(|e| e.reference.state())
     }
 
+    /// A copy of the reference orbit (orbit scenes): its current state and its gravity model,
+    /// to propagate it further outside the app (the viewer's track of the reference).
+    pub fn reference_orbit(&self) -> Option<crate::orbit::integrate::ReferenceOrbit> {
+        self.app
+            .world()
+            .get_resource::<OrbitEnv>()
+            .map(|e| e.reference.clone())
+    }
+
     /// Loads, validates and builds a scene file (`overrides`: `--set`-style `path=value`).
     pub fn from_file(path: impl AsRef<Path>, overrides: &[String]) -> Result<Self, SceneError> {
         let loaded = crate::scene::load_scene_file(path.as_ref(), overrides)?;
@@ -651,9 +671,7 @@ impl Simulation {
         if self.app.world().resource::<Recorder>().files.is_some() {
             return Err("controllers must be added before recording starts".into());
         }
-        let k = super::controllers::host_slot(self.app.world_mut(), slot)?;
-        super::controllers::ensure_systems(&mut self.app);
-        Ok(k)
+        super::controllers::host_slot(self.app.world_mut(), slot)
     }
 
     /// Adds a guarantee (a user's Rust guarantee, a Python callable) to the built simulation,
@@ -732,7 +750,6 @@ impl Simulation {
             .resource_mut::<super::controllers::ControllerHost>()
             .disturbances
             .push(d);
-        super::controllers::ensure_systems(&mut self.app);
     }
 
     /// The monitor's results.

@@ -132,16 +132,13 @@ pub struct ControllerHost {
     /// Bodies' truth at the start of the current step (refreshed in Sense).
     pub truth: Vec<BodyObs>,
     guarantees: Vec<GuaranteeObs>,
-    env_now: EnvSnapshot,
+    /// The environment at the start of the current step (refreshed in Sense).
+    env_now: EnvObs,
     docking_now: Option<DockingObs>,
     wrench_buf: Vec<crate::control::registry::BodyWrench>,
     planar: bool,
     /// Some law reads the gravity at the bodies.
     gravity: bool,
-    /// The host's systems are in the schedule (added with the first controller or disturbance).
-    systems_added: bool,
-    /// The post-step diagnostics system is in the schedule.
-    post_added: bool,
     /// `jet_pulse` events raised so far in the run, all jets together.
     jet_pulse_events: u64,
 }
@@ -203,120 +200,30 @@ impl ControllerHost {
     }
 }
 
-/// An owned copy of the environment as the controllers see it (taken at the start of each
-/// step, so that the Control and Actuate systems need not look the resources up again).
-#[derive(Debug, Clone, Default)]
-pub enum EnvSnapshot {
-    /// Force-free space.
-    #[default]
-    FreeSpace,
-    /// Orbit: the reference state and the J2 flag.
-    Orbit {
-        /// Reference position, ECI, m.
-        r: Vector3<f64>,
-        /// Reference velocity, ECI, m/s.
-        v: Vector3<f64>,
-        /// J2 on.
-        j2: bool,
-    },
-    /// Sun–Earth L2: the formation centre.
-    SunEarthL2(crate::orbit::l2::L2Centre, Vec<crate::orbit::l2::L2State>),
-    /// Air-bearing table: lab gravity.
-    AirBearing(Vector3<f64>),
+/// The environment as controllers see it, from the app's resources (a copy of
+/// [`super::environment::EnvNow`]; force-free space without one).
+pub fn env_of_world(world: &World) -> EnvObs {
+    world
+        .get_resource::<super::environment::EnvNow>()
+        .map(|e| e.0.clone())
+        .unwrap_or_default()
 }
 
-impl EnvSnapshot {
-    /// The view a controller gets.
-    pub fn obs(&self) -> EnvObs<'_> {
-        match self {
-            EnvSnapshot::FreeSpace => EnvObs::FreeSpace,
-            EnvSnapshot::Orbit { r, v, j2 } => EnvObs::Orbit {
-                r_ref_eci_m: *r,
-                v_ref_eci_m_s: *v,
-                j2: *j2,
-            },
-            EnvSnapshot::SunEarthL2(c, s) => EnvObs::SunEarthL2 {
-                centre: c,
-                states_rot: s,
-            },
-            EnvSnapshot::AirBearing(g) => EnvObs::AirBearing {
-                gravity_lab_m_s2: *g,
-            },
-        }
-    }
-    fn of(e: &EnvObs) -> Self {
-        match e {
-            EnvObs::FreeSpace => EnvSnapshot::FreeSpace,
-            EnvObs::Orbit {
-                r_ref_eci_m,
-                v_ref_eci_m_s,
-                j2,
-            } => EnvSnapshot::Orbit {
-                r: *r_ref_eci_m,
-                v: *v_ref_eci_m_s,
-                j2: *j2,
-            },
-            EnvObs::SunEarthL2 { centre, .. } => {
-                EnvSnapshot::SunEarthL2((*centre).clone(), Vec::new())
-            }
-            EnvObs::AirBearing { gravity_lab_m_s2 } => EnvSnapshot::AirBearing(*gravity_lab_m_s2),
-        }
-    }
-}
-
-/// The environment as controllers see it, from the app's resources.
-pub fn env_of_world(world: &World) -> EnvObs<'_> {
-    if let Some(f) = world.get_resource::<super::environment::L2Frame>() {
-        return EnvObs::SunEarthL2 {
-            centre: &f.0,
-            states_rot: &[],
-        };
-    }
-    env_from(
-        world.get_resource::<OrbitEnv>(),
-        world.get_resource::<super::airbearing::AirBearing>(),
-    )
-}
-
-fn env_from(
-    orbit: Option<&OrbitEnv>,
-    airbearing: Option<&super::airbearing::AirBearing>,
-) -> EnvObs<'static> {
-    match (orbit, airbearing) {
-        (Some(o), _) => {
-            let (r, v) = o.reference.state();
-            EnvObs::Orbit {
-                r_ref_eci_m: r,
-                v_ref_eci_m_s: v,
-                j2: o.j2,
-            }
-        }
-        (None, Some(a)) => EnvObs::AirBearing {
-            gravity_lab_m_s2: a.gravity_lab_m_s2,
-        },
-        _ => EnvObs::FreeSpace,
-    }
-}
+/// What [`EnvRefs::now`] gives in an app without an environment.
+static FREE_SPACE: EnvObs = EnvObs::FreeSpace;
 
 /// The environment resources a host system reads.
 #[derive(bevy::ecs::system::SystemParam)]
 pub struct EnvRefs<'w> {
-    orbit: Option<Res<'w, OrbitEnv>>,
-    l2: Option<Res<'w, super::environment::L2Frame>>,
-    airbearing: Option<Res<'w, super::airbearing::AirBearing>>,
+    env: Option<Res<'w, super::environment::EnvNow>>,
     gravity: Option<Res<'w, super::Gravity>>,
     docking: Option<Res<'w, super::docking::Docking>>,
 }
 
 impl EnvRefs<'_> {
-    fn env(&self) -> EnvObs<'_> {
-        if let Some(f) = &self.l2 {
-            return EnvObs::SunEarthL2 {
-                centre: &f.0,
-                states_rot: &[],
-            };
-        }
-        env_from(self.orbit.as_deref(), self.airbearing.as_deref())
+    /// The environment now.
+    fn now(&self) -> &EnvObs {
+        self.env.as_deref().map_or(&FREE_SPACE, |e| &e.0)
     }
     fn docking(&self) -> Option<DockingObs> {
         self.docking.as_ref().map(|d| DockingObs {
@@ -419,7 +326,7 @@ fn observation<'a>(
     clock: &Clock,
     info: &'a [BodyInfo],
     truth: &'a [BodyObs],
-    env: EnvObs<'a>,
+    env: &'a EnvObs,
     docking: Option<DockingObs>,
     guarantees: &'a [GuaranteeObs],
 ) -> Observation<'a> {
@@ -537,13 +444,14 @@ pub fn host_sense(
     let host = &mut *host;
     let gravity = refs.gravity.as_deref().filter(|_| host.gravity);
     refresh_truth(&mut host.truth, &roster, &states, gravity);
-    let env = refs.env();
-    host.env_now = EnvSnapshot::of(&env);
-    if let EnvSnapshot::SunEarthL2(c, rot) = &mut host.env_now {
-        rot.extend(
+    // Taken out of the host while the slots are borrowed, put back below.
+    let mut env = std::mem::take(&mut host.env_now);
+    env.assign(refs.now());
+    if let EnvObs::SunEarthL2 { centre, states_rot } = &mut env {
+        states_rot.extend(
             host.truth
                 .iter()
-                .map(|b| c.world_to_rot(&b.pos_m, &b.vel_m_s)),
+                .map(|b| centre.world_to_rot(&b.pos_m, &b.vel_m_s)),
         );
     }
     host.docking_now = refs.docking();
@@ -568,6 +476,7 @@ pub fn host_sense(
             }
         }
     }
+    host.env_now = env;
 }
 
 /// One step of a slot's navigation filter: the prediction over the previous step with the
@@ -658,7 +567,7 @@ pub fn host_control(
     for (g, s) in host.guarantees.iter_mut().zip(&guarantees.status) {
         g.margin = s.last_margin;
     }
-    let env = host.env_now.obs();
+    let env = &host.env_now;
     let docking = host.docking_now;
     let t = clock.t_s();
     for slot in host.slots.iter_mut() {
@@ -712,7 +621,7 @@ pub fn host_actuate(
         jet_pulse_events,
         ..
     } = &mut *host;
-    let env = env_now.obs();
+    let env = &*env_now;
     let dt = clock.h_s();
     for (index, slot) in slots.iter_mut().enumerate() {
         let own = &truth[slot.body];
@@ -881,7 +790,7 @@ fn write_diagnostics(
     guarantees: &[GuaranteeObs],
     at: DiagnosticsAt,
     clock: &Clock,
-    env: EnvObs,
+    env: &EnvObs,
     docking: Option<DockingObs>,
     diag: &mut Diagnostics,
 ) {
@@ -904,18 +813,12 @@ pub fn host_post_step(
     mut host: ResMut<ControllerHost>,
     mut diag: ResMut<Diagnostics>,
 ) {
-    if !host
-        .slots
-        .iter()
-        .any(|s| s.n_cols > 0 && s.at.contains(&DiagnosticsAt::PostStep))
-    {
-        return;
-    }
     let host = &mut *host;
     let gravity = refs.gravity.as_deref().filter(|_| host.gravity);
     refresh_truth(&mut host.truth, &roster, &states, gravity);
-    let env = refs.env();
-    refresh_derived(host, &env);
+    // The environment after the physics (an L2 snapshot's `states_rot` is empty here).
+    let env = refs.now();
+    refresh_derived(host, env);
     write_diagnostics(
         &mut host.slots,
         &host.info,
@@ -1063,7 +966,7 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
                 &clock,
                 &host.info,
                 &truth,
-                env,
+                &env,
                 None,
                 &guarantees,
             );
@@ -1081,17 +984,85 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
     Ok(host.slots.len() - 1)
 }
 
-/// Builds and hosts the scene's `controllers`, in scene order. Called after the pipeline,
-/// the docking mechanism and the environment exist, before t = 0 is monitored.
+/// The controller host: owns the [`ControllerHost`] resource and four systems, each running
+/// only while there is something to host (a scene without controllers or disturbances runs
+/// none of them): `host_sense` in [`super::Stage::Sense`] (after
+/// [`super::environment::EnvironmentSense`]), `host_control` in [`super::Stage::Control`],
+/// `host_actuate` in [`super::Order::ControllerForces`] (a controller's force is added after the
+/// docking mechanism's: the order of floating-point sums is part of a run's bit-exact result),
+/// and, once a law asks for post-step diagnostics, `host_post_step` in
+/// [`super::Order::PostStepDiagnostics`]. Add it after the pipeline, the environment, the
+/// docking mechanism and the table; the scene's controllers are then hosted by [`install`],
+/// and more by `Simulation::add_controller` / `add_disturbance`.
+#[derive(Debug, Clone)]
+pub struct ControllersPlugin {
+    /// Bodies' constants, scene order.
+    info: Vec<BodyInfo>,
+    /// Air-bearing scene: forces act in the table's plane.
+    planar: bool,
+}
+
+impl ControllersPlugin {
+    /// The host of a scene's bodies.
+    pub fn new(scene: &crate::scene::Scene) -> Self {
+        Self {
+            info: body_info(scene),
+            planar: matches!(scene.environment, crate::scene::Environment::AirBearing(_)),
+        }
+    }
+}
+
+impl Plugin for ControllersPlugin {
+    fn build(&self, app: &mut App) {
+        use super::{SimStep, Stage};
+        app.insert_resource(ControllerHost {
+            info: self.info.clone(),
+            planar: self.planar,
+            ..Default::default()
+        });
+        app.add_systems(
+            SimStep,
+            (
+                // After the L2 frame is brought to this step (an empty set outside L2 scenes).
+                host_sense
+                    .in_set(Stage::Sense)
+                    .after(super::environment::EnvironmentSense)
+                    .run_if(hosting),
+                host_control.in_set(Stage::Control).run_if(hosting),
+                host_actuate
+                    .in_set(super::Order::ControllerForces)
+                    .run_if(hosting),
+            ),
+        );
+        app.add_systems(
+            SimStep,
+            host_post_step
+                .in_set(super::Order::PostStepDiagnostics)
+                .run_if(post_step_wanted),
+        );
+    }
+}
+
+/// Run condition: the host has a controller or a disturbance.
+fn hosting(host: Res<ControllerHost>) -> bool {
+    !(host.slots.is_empty() && host.disturbances.is_empty())
+}
+
+/// Run condition: some controller writes diagnostics after the step.
+fn post_step_wanted(host: Res<ControllerHost>) -> bool {
+    host.slots
+        .iter()
+        .any(|s| s.n_cols > 0 && s.at.contains(&DiagnosticsAt::PostStep))
+}
+
+/// Adds the [`ControllersPlugin`] and hosts the scene's `controllers`, in scene order. Called
+/// after the pipeline, the docking mechanism and the environment exist, before t = 0 is
+/// monitored.
 pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
     let scene = &loaded.scene;
-    let info = body_info(scene);
-    let planar = matches!(scene.environment, crate::scene::Environment::AirBearing(_));
-    app.insert_resource(ControllerHost {
-        info: info.clone(),
-        planar,
-        ..Default::default()
-    });
+    let plugin = ControllersPlugin::new(scene);
+    let info = plugin.info.clone();
+    app.add_plugins(plugin);
     let world = app.world_mut();
     let initial: Vec<BodyObs> = {
         let roster = world.resource::<Roster>().clone();
@@ -1121,7 +1092,7 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         };
         let built = {
             let env = env_of_world(world);
-            let mut ctx = BuildContext::new(scene, i, &info, &initial, env, &mut shared);
+            let mut ctx = BuildContext::new(scene, i, &info, &initial, &env, &mut shared);
             spec.build(&mut ctx).map_err(locate)?
         };
         for slot in built.slots {
@@ -1132,54 +1103,5 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
             .disturbances
             .extend(built.disturbances);
     }
-    ensure_systems(app);
     Ok(())
-}
-
-/// Adds the host's systems once there is something to host (a scene without controllers pays
-/// nothing per step), and the post-step diagnostics system once a law asks for them. Called
-/// at install and by `Simulation::add_controller`.
-pub fn ensure_systems(app: &mut App) {
-    use super::SimStep;
-    let host = app.world().resource::<ControllerHost>();
-    let want_main = !(host.slots.is_empty() && host.disturbances.is_empty());
-    let want_post = host
-        .slots
-        .iter()
-        .any(|s| s.n_cols > 0 && s.at.contains(&DiagnosticsAt::PostStep));
-    let (add_main, add_post) = (
-        want_main && !host.systems_added,
-        want_post && !host.post_added,
-    );
-    if add_main {
-        app.world_mut()
-            .resource_mut::<ControllerHost>()
-            .systems_added = true;
-        add_systems(app);
-    }
-    if add_post {
-        app.world_mut().resource_mut::<ControllerHost>().post_added = true;
-        app.add_systems(
-            SimStep,
-            host_post_step.in_set(super::Order::PostStepDiagnostics),
-        );
-    }
-}
-
-/// The host's systems, in their stages; within Actuate a controller's force is added after the
-/// docking mechanism's ([`super::Order`]: the order of floating-point sums is part of a run's
-/// bit-exact result).
-fn add_systems(app: &mut App) {
-    use super::{SimStep, Stage};
-    app.add_systems(
-        SimStep,
-        (
-            // After the L2 frame is brought to this step (an empty set outside L2 scenes).
-            host_sense
-                .in_set(Stage::Sense)
-                .after(super::environment::sync_l2_frame),
-            host_control.in_set(Stage::Control),
-            host_actuate.in_set(super::Order::ControllerForces),
-        ),
-    );
 }

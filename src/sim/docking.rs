@@ -348,12 +348,94 @@ pub fn geometry(
     (g, pc, at)
 }
 
-/// Installs the mechanism for a scene with `docking: Some(..)`.
-pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
+/// The docking mechanism of a scene with `docking: Some(..)`: owns the [`Docking`] and
+/// [`DockingCommands`] resources, the `dock.*` output columns (registered when it is added, in
+/// the order the trajectory shows them) and two systems: `docking_actuate` in
+/// [`super::Order::MechanismForces`] (Actuate: a latch that starts closed, release commands,
+/// the magnet) and `docking_monitor` in [`super::Order::Mechanism`] (Monitor: capture, latch,
+/// loads and state changes from the step's contacts). Add it after [`super::PipelinePlugin`]
+/// and before the controllers (their observations read the docking state).
+#[derive(Debug, Clone)]
+pub struct DockingPlugin {
+    /// The mechanism at t = 0, its column indices still unset.
+    docking: Docking,
+    /// Legs of a soft-capture platform (their columns), `None` for a cone-and-slot mechanism.
+    soft_legs: Option<usize>,
+}
+
+impl DockingPlugin {
+    /// The mechanism of the scene's `docking` (`None` without one), checked against the built
+    /// bodies (`world` holds the [`super::Roster`] and the bodies' states at t = 0): located
+    /// errors for an unknown body or platform, or a chaser that `start_latched` but is not
+    /// seated.
+    pub fn new(world: &World, loaded: &LoadedScene) -> Result<Option<Self>, SceneError> {
+        let Some(docking) = new_docking(world, loaded)? else {
+            return Ok(None);
+        };
+        let soft_legs = docking.soft.as_ref().map(|s| s.cols.len());
+        Ok(Some(Self { docking, soft_legs }))
+    }
+}
+
+impl Plugin for DockingPlugin {
+    fn build(&self, app: &mut App) {
+        let mut docking = self.docking.clone();
+        let mut diag = app.world_mut().resource_mut::<Diagnostics>();
+        docking.cols = [
+            diag.column("dock.gap_m"),
+            diag.column("dock.axial_error_m"),
+            diag.column("dock.lateral_m"),
+            diag.column("dock.misalignment_deg"),
+            diag.column("dock.magnet_n"),
+            diag.column("dock.state"),
+            diag.column("dock.joint_force_n"),
+            diag.column("dock.joint_torque_nm"),
+        ];
+        if let (Some(n), Some(soft)) = (self.soft_legs, docking.soft.as_mut()) {
+            let mut c = Vec::with_capacity(2 * n + 13);
+            for i in 0..n {
+                c.push(diag.column(&format!("dock.leg{i}_stroke_m")));
+                c.push(diag.column(&format!("dock.leg{i}_force_n")));
+            }
+            for name in SOFT_CAPTURE_COLUMNS {
+                c.push(diag.column(name));
+            }
+            soft.cols = c;
+        }
+        app.init_resource::<DockingCommands>();
+        app.insert_resource(docking);
+        app.add_systems(
+            SimStep,
+            docking_actuate.in_set(super::Order::MechanismForces),
+        );
+        app.add_systems(SimStep, docking_monitor.in_set(super::Order::Mechanism));
+    }
+}
+
+/// A soft-capture platform's columns after its legs' (ring pose, interface loads, retraction).
+const SOFT_CAPTURE_COLUMNS: [&str; 13] = [
+    "dock.ring_x_m",
+    "dock.ring_y_m",
+    "dock.ring_z_m",
+    "dock.ring_rot_x_deg",
+    "dock.ring_rot_y_deg",
+    "dock.ring_rot_z_deg",
+    "dock.iface_fx_n",
+    "dock.iface_fy_n",
+    "dock.iface_fz_n",
+    "dock.iface_mx_nm",
+    "dock.iface_my_nm",
+    "dock.iface_mz_nm",
+    "dock.retraction_m",
+];
+
+/// The mechanism's state at t = 0 (column indices unset; `soft.cols` holds one placeholder per
+/// leg).
+fn new_docking(world: &World, loaded: &LoadedScene) -> Result<Option<Docking>, SceneError> {
     let Some(spec) = loaded.scene.docking.clone() else {
-        return Ok(());
+        return Ok(None);
     };
-    let roster = app.world().resource::<super::Roster>().clone();
+    let roster = world.resource::<super::Roster>().clone();
     let find = |name: &str, field: &str| {
         roster.names.iter().position(|n| n == name).ok_or_else(|| {
             loaded.error_at(&format!("docking.{field}"), format!("no body `{name}`"))
@@ -365,17 +447,6 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         crate::scene::parts::port_frame(&loaded.scene.bodies[bi], name).expect("validated port")
     };
     let ports = (port(ci, &spec.chaser_port), port(ti, &spec.target_port));
-    let mut diag = app.world_mut().resource_mut::<Diagnostics>();
-    let cols = [
-        diag.column("dock.gap_m"),
-        diag.column("dock.axial_error_m"),
-        diag.column("dock.lateral_m"),
-        diag.column("dock.misalignment_deg"),
-        diag.column("dock.magnet_n"),
-        diag.column("dock.state"),
-        diag.column("dock.joint_force_n"),
-        diag.column("dock.joint_torque_nm"),
-    ];
     let soft = match &spec.mechanism {
         crate::scene::Mechanism::SoftCapture(sc) => {
             let n = crate::contact::platform::Platform::new(&sc.platform)
@@ -387,30 +458,8 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
                 })?
                 .legs
                 .len();
-            let mut c = Vec::with_capacity(2 * n + 13);
-            for i in 0..n {
-                c.push(diag.column(&format!("dock.leg{i}_stroke_m")));
-                c.push(diag.column(&format!("dock.leg{i}_force_n")));
-            }
-            for name in [
-                "dock.ring_x_m",
-                "dock.ring_y_m",
-                "dock.ring_z_m",
-                "dock.ring_rot_x_deg",
-                "dock.ring_rot_y_deg",
-                "dock.ring_rot_z_deg",
-                "dock.iface_fx_n",
-                "dock.iface_fy_n",
-                "dock.iface_fz_n",
-                "dock.iface_mx_nm",
-                "dock.iface_my_nm",
-                "dock.iface_mz_nm",
-                "dock.retraction_m",
-            ] {
-                c.push(diag.column(name));
-            }
             Some(SoftCaptureResults {
-                cols: c,
+                cols: vec![0; n],
                 ..Default::default()
             })
         }
@@ -421,8 +470,10 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
     let start_latched = spec.start_latched;
     if start_latched {
         let state = |e: Entity| {
-            let w = app.world();
-            (w.get::<BodyState>(e).cloned(), w.get::<SimBody>(e).cloned())
+            (
+                world.get::<BodyState>(e).cloned(),
+                world.get::<SimBody>(e).cloned(),
+            )
         };
         let (e_c, e_t) = (roster.bodies[ci], roster.bodies[ti]);
         if let ((Some(cs), Some(cb)), (Some(ts), Some(tb))) = (state(e_c), state(e_t)) {
@@ -447,8 +498,7 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
             }
         }
     }
-    app.init_resource::<DockingCommands>();
-    app.insert_resource(Docking {
+    Ok(Some(Docking {
         spec,
         bodies: (roster.bodies[ci], roster.bodies[ti]),
         ports,
@@ -486,14 +536,8 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
         separation_end: None,
         let_go: None,
         soft,
-        cols,
-    });
-    app.add_systems(
-        SimStep,
-        docking_actuate.in_set(super::Order::MechanismForces),
-    );
-    app.add_systems(SimStep, docking_monitor.in_set(super::Order::Mechanism));
-    Ok(())
+        cols: [0; 8],
+    }))
 }
 
 /// Actuate: the magnet's force on the chaser port and its reaction on the target.

@@ -147,8 +147,21 @@ pub const MAX_EVENTS_PER_RUN: u64 = 1_000_000;
 /// raise.
 pub const MAX_EVENT_BYTES_PER_RUN: u64 = 256 << 20;
 
-/// Adds the guard to an app whose `SimStep` schedule exists.
-pub fn install(app: &mut App) {
+/// The guard: owns the [`Guard`] resource and the [`GuardCheck`] sets, placed between the
+/// pipeline's stages (Forces after Environment, States after Physics, Outputs after Monitor,
+/// each before the next stage), with one check system in each. It makes every [`Stage`] and
+/// every check run only while no check has tripped. Added right after
+/// [`super::PipelinePlugin`] (it configures the pipeline's sets).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct GuardPlugin;
+
+impl Plugin for GuardPlugin {
+    fn build(&self, app: &mut App) {
+        install(app);
+    }
+}
+
+fn install(app: &mut App) {
     app.insert_resource(Guard::default());
     app.configure_sets(
         SimStep,

@@ -2,6 +2,16 @@
 //! step, the stages Sense → Control → Actuate → Environment → Physics (rapier) → Monitor →
 //! Record, each a [`SystemSet`] chained explicitly.
 //!
+//! # One plugin per feature
+//! [`Simulation::new`] adds, in this order: [`PipelinePlugin`] (the schedule, the [`Stage`] and
+//! [`Order`] sets, the core systems), [`guard::GuardPlugin`], [`environment::EnvironmentPlugin`],
+//! then, where the scene has them, [`overlap::OverlapPlugin`], [`docking::DockingPlugin`],
+//! [`airbearing::AirBearingPlugin`], and [`controllers::ControllersPlugin`]. Each plugin's doc
+//! comment names what it owns and the sets its systems run in; systems of different features
+//! that write the same data are ordered through [`Order`] (`tests/schedule.rs` fails on any
+//! unordered pair). A plugin's fallible part (checks against the scene and the built bodies,
+//! with located errors) is its constructor; `Plugin::build` only inserts and registers.
+//!
 //! # Why rapier is driven directly
 //! The rapier world ([`Physics`], a `rapier::PhysicsWorld` reached through
 //! `bevy_rapier3d::rapier`) is a resource stepped by our own system rather than through
@@ -107,8 +117,9 @@ pub enum Order {
     TableForces,
     /// Environment, then: gravity (differential, J2, gravity gradient).
     Gravity,
-    /// Monitor, first: the controllers' post-step diagnostics (they read the docking state the
-    /// step started with: the mechanism is updated below).
+    /// Monitor, first (after an air-bearing table's planar constraint, which runs before it):
+    /// the controllers' post-step diagnostics (they read the docking state the step started
+    /// with: the mechanism is updated below).
     PostStepDiagnostics,
     /// Monitor: full-geometry distances and contacts.
     Geometry,
@@ -167,13 +178,13 @@ pub struct Physics {
     pub substeps: u32,
 }
 
-/// The orbital environment: the reference orbit (f64) and the force model toggles.
+/// The orbital environment: the reference orbit (f64, with its gravity model: the list of
+/// terms every body's differential gravity also sums) and the torque toggle.
 #[derive(Resource, Debug, Clone)]
 pub struct OrbitEnv {
-    /// Reference orbit (the world frame's origin), ECI.
+    /// Reference orbit (the world frame's origin), ECI, and the gravity model's terms
+    /// ([`crate::orbit::integrate::ReferenceOrbit::gravity`]).
     pub reference: crate::orbit::integrate::ReferenceOrbit,
-    /// Include J2.
-    pub j2: bool,
     /// Apply gravity-gradient torques.
     pub gravity_gradient: bool,
 }
@@ -186,7 +197,11 @@ pub struct Gravity(pub Box<dyn GravityField>);
 
 impl GravityField for OrbitEnv {
     fn accel_m_s2(&self, pos_world_m: &Vector3<f64>) -> Vector3<f64> {
-        crate::orbit::gravity::differential_accel(&self.reference.state().0, pos_world_m, self.j2)
+        crate::orbit::gravity::differential_accel(
+            &self.reference.state().0,
+            pos_world_m,
+            self.reference.gravity(),
+        )
     }
     fn advance(&mut self, dt_s: f64) {
         self.reference.step(dt_s);
@@ -1169,7 +1184,7 @@ fn check_guarantees(
         motion: &motion,
         hill_rate_rad_s: orbit.and_then(|o| {
             let (r, v) = o.reference.state();
-            crate::orbit::lvlh::hill_rate_bound_rad_s(&r, &v, motion.dt_s, o.j2)
+            crate::orbit::lvlh::hill_rate_bound_rad_s(&r, &v, motion.dt_s, o.reference.gravity())
         }),
         rotation_read: std::cell::Cell::new(false),
     };
@@ -1463,57 +1478,69 @@ pub(crate) fn jets_view(
         .collect()
 }
 
-/// Adds the pipeline to an app: the `SimStep` schedule with its chained stages and the systems
-/// of the core (environment, physics, monitor, guarantees, recorder).
-pub fn add_pipeline(app: &mut App) {
-    let mut schedule = Schedule::new(SimStep);
-    schedule.configure_sets(
-        (
-            Stage::Sense,
-            Stage::Control,
-            Stage::Actuate,
-            Stage::Environment,
-            Stage::Physics,
-            Stage::Monitor,
-            Stage::Record,
-        )
-            .chain(),
-    );
-    schedule.configure_sets((
-        (
-            Order::Plan,
-            Order::MechanismForces,
-            Order::ControllerForces,
-            Order::PlumeForces,
-        )
-            .chain()
-            .in_set(Stage::Actuate),
-        (Order::TableForces, Order::Gravity)
-            .chain()
-            .in_set(Stage::Environment),
-        (
-            Order::PostStepDiagnostics,
-            Order::Geometry,
-            Order::Mechanism,
-            Order::Guarantees,
-        )
-            .chain()
-            .in_set(Stage::Monitor),
-    ));
-    schedule.add_systems((
-        multirate::plan_step.in_set(Order::Plan),
-        environment_gravity.in_set(Order::Gravity),
-        plume::plume_forces.in_set(Order::PlumeForces),
-        (physics_step, advance_orbit).chain().in_set(Stage::Physics),
-        (monitor::distances, monitor::contacts)
-            .chain()
-            .in_set(Order::Geometry),
-        check_guarantees.in_set(Order::Guarantees),
-        output::record.in_set(Stage::Record),
-    ));
-    app.add_schedule(schedule);
-    guard::install(app);
-    app.add_systems(Update, advance);
+/// The core of the pipeline, added first: the `SimStep` schedule with its chained [`Stage`]s
+/// and the [`Order`] sets inside Actuate, Environment and Monitor (every feature plugin puts its
+/// systems in these sets), the core's systems and the `Update` system that steps the schedule.
+///
+/// Systems, by set: [`multirate::plan_step`] in [`Order::Plan`]; `environment_gravity` in
+/// [`Order::Gravity`]; [`plume::plume_forces`] in [`Order::PlumeForces`]; `physics_step` then
+/// `advance_orbit` in [`Stage::Physics`]; [`monitor::distances`] then [`monitor::contacts`] in
+/// [`Order::Geometry`]; `check_guarantees` in [`Order::Guarantees`]; [`output::record`] in
+/// [`Stage::Record`]; `advance` in `Update`. It replaces any `SimStep` schedule, so it is added
+/// before every other plugin that puts systems there.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PipelinePlugin;
+
+impl Plugin for PipelinePlugin {
+    fn build(&self, app: &mut App) {
+        let mut schedule = Schedule::new(SimStep);
+        schedule.configure_sets(
+            (
+                Stage::Sense,
+                Stage::Control,
+                Stage::Actuate,
+                Stage::Environment,
+                Stage::Physics,
+                Stage::Monitor,
+                Stage::Record,
+            )
+                .chain(),
+        );
+        schedule.configure_sets((
+            (
+                Order::Plan,
+                Order::MechanismForces,
+                Order::ControllerForces,
+                Order::PlumeForces,
+            )
+                .chain()
+                .in_set(Stage::Actuate),
+            (Order::TableForces, Order::Gravity)
+                .chain()
+                .in_set(Stage::Environment),
+            (
+                Order::PostStepDiagnostics,
+                Order::Geometry,
+                Order::Mechanism,
+                Order::Guarantees,
+            )
+                .chain()
+                .in_set(Stage::Monitor),
+        ));
+        schedule.add_systems((
+            multirate::plan_step.in_set(Order::Plan),
+            environment_gravity.in_set(Order::Gravity),
+            plume::plume_forces.in_set(Order::PlumeForces),
+            (physics_step, advance_orbit).chain().in_set(Stage::Physics),
+            (monitor::distances, monitor::contacts)
+                .chain()
+                .in_set(Order::Geometry),
+            check_guarantees.in_set(Order::Guarantees),
+            output::record.in_set(Stage::Record),
+        ));
+        app.add_schedule(schedule);
+        app.add_systems(Update, advance);
+    }
 }
 
 /// Every pair of `SimStep` systems that access the same data (a component, a resource or the

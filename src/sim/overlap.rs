@@ -64,7 +64,7 @@ pub struct SuppressedPair {
 }
 
 /// Pairs still suppressed, with the bit each suppressed collider owns.
-#[derive(Resource, Debug, Default)]
+#[derive(Resource, Debug, Default, Clone)]
 pub struct InitialOverlaps {
     /// Pairs not yet separated.
     pub pairs: Vec<SuppressedPair>,
@@ -156,50 +156,68 @@ pub(crate) fn check_initial(
     Ok(allowed)
 }
 
-/// Turns the solver contact of each pair off (solver groups) and installs the system that
-/// turns it back on once the pair separates. Call after the pipeline and [`Physics`] exist.
-pub(crate) fn install(
-    app: &mut App,
-    loaded: &LoadedScene,
-    pairs: Vec<SuppressedPair>,
-) -> Result<(), SceneError> {
-    if pairs.is_empty() {
-        return Ok(());
-    }
-    let mut bits: Vec<(rp::ColliderHandle, u32)> = Vec::new();
-    for p in &pairs {
-        for (h, name) in [(p.handles.0, &p.names.0), (p.handles.1, &p.names.1)] {
-            if !bits.iter().any(|(k, _)| *k == h) {
-                if bits.len() == MAX_SUPPRESSED {
-                    let (body, part) = name.split_once('/').unwrap_or((name, ""));
-                    let part = part.split('.').next().unwrap_or(part);
-                    return Err(loaded.error_at(
-                        &format!("bodies.{body}.parts.{part}"),
-                        format!(
-                            "more than {MAX_SUPPRESSED} colliders overlap another body at t = 0 \
-                             (`{name}` is one too many): rpod can hold the contacts of at most \
-                             {MAX_SUPPRESSED} apart"
-                        ),
-                    ));
-                }
-                bits.push((h, 1u32 << bits.len()));
-            }
-        }
-    }
-    let state = InitialOverlaps { pairs, bits };
-    apply_groups(&state, &mut app.world_mut().resource_mut::<Physics>().world);
-    app.insert_resource(state);
-    app.add_systems(
-        super::SimStep,
-        release_separated
-            .after(super::Stage::Physics)
-            .before(super::Stage::Monitor),
-    );
-    Ok(())
+/// Parts allowed to overlap at t = 0 (`allow_initial_overlap`): owns [`InitialOverlaps`] and
+/// one system, `release_separated`, after [`super::Stage::Physics`] and before
+/// [`super::Stage::Monitor`], which gives a pair its solver contact back once it has separated.
+/// Building it turns the solver contact of each pair off (solver groups); add it after
+/// [`super::PipelinePlugin`] once [`Physics`] exists. Not added when no pair overlaps.
+#[derive(Debug, Clone)]
+pub struct OverlapPlugin {
+    state: InitialOverlaps,
 }
 
-/// Sets every suppressed collider's solver groups: its own bit as membership, every bit but
-/// those of its partners as filter; colliders without partners get all groups back.
+impl OverlapPlugin {
+    /// The plugin for the pairs [`check_initial`] allowed (`None` when there are none), or a
+    /// located error when more colliders overlap than the solver groups can hold apart.
+    pub(crate) fn new(
+        loaded: &LoadedScene,
+        pairs: Vec<SuppressedPair>,
+    ) -> Result<Option<Self>, SceneError> {
+        if pairs.is_empty() {
+            return Ok(None);
+        }
+        let mut bits: Vec<(rp::ColliderHandle, u32)> = Vec::new();
+        for p in &pairs {
+            for (h, name) in [(p.handles.0, &p.names.0), (p.handles.1, &p.names.1)] {
+                if !bits.iter().any(|(k, _)| *k == h) {
+                    if bits.len() == MAX_SUPPRESSED {
+                        let (body, part) = name.split_once('/').unwrap_or((name, ""));
+                        let part = part.split('.').next().unwrap_or(part);
+                        return Err(loaded.error_at(
+                            &format!("bodies.{body}.parts.{part}"),
+                            format!(
+                                "more than {MAX_SUPPRESSED} colliders overlap another body at \
+                                 t = 0 (`{name}` is one too many): rpod can hold the contacts \
+                                 of at most {MAX_SUPPRESSED} apart"
+                            ),
+                        ));
+                    }
+                    bits.push((h, 1u32 << bits.len()));
+                }
+            }
+        }
+        Ok(Some(Self {
+            state: InitialOverlaps { pairs, bits },
+        }))
+    }
+}
+
+impl Plugin for OverlapPlugin {
+    fn build(&self, app: &mut App) {
+        apply_groups(
+            &self.state,
+            &mut app.world_mut().resource_mut::<Physics>().world,
+        );
+        app.insert_resource(self.state.clone());
+        app.add_systems(
+            super::SimStep,
+            release_separated
+                .after(super::Stage::Physics)
+                .before(super::Stage::Monitor),
+        );
+    }
+}
+
 fn apply_groups(state: &InitialOverlaps, pw: &mut rp::PhysicsWorld) {
     for (h, bit) in &state.bits {
         let partners = state

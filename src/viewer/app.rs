@@ -4,7 +4,6 @@
 use super::geometry::{SceneGeom, part_look, primitive_mesh, to_transform, v3};
 use super::recording::{Recording, Snapshot};
 use super::timeline::{MarkerKind, SPEED_LADDER, Timeline};
-use crate::orbit::integrate::ReferenceOrbit;
 use crate::scene::{BodyRole, Environment, LoadedScene};
 use crate::sim::Simulation;
 use bevy::app::AppExit;
@@ -456,14 +455,13 @@ struct ReplayOrder(Vec<usize>);
 
 /// The reference orbit at each row time (propagated in f64 from the scene's t = 0 state).
 fn reference_track(loaded: &LoadedScene, times_s: &[f64]) -> Result<Option<RvTrack>, String> {
-    let Environment::Orbit { j2, .. } = loaded.scene.environment else {
+    if !matches!(loaded.scene.environment, Environment::Orbit { .. }) {
         return Ok(None);
-    };
+    }
     let sim = Simulation::new(loaded).map_err(|e| e.to_string())?;
-    let Some((r, v)) = sim.reference_state() else {
+    let Some(mut orbit) = sim.reference_orbit() else {
         return Ok(None);
     };
-    let mut orbit = ReferenceOrbit::from_state(r, v, j2);
     let mut out = Vec::with_capacity(times_s.len());
     let mut t = 0.0;
     for &ti in times_s {
