@@ -83,25 +83,6 @@ fn iso(p: Vector3<f64>, q: UnitQuaternion<f64>) -> Isometry3<f64> {
     Isometry3::from_parts(Translation3::from(p), q)
 }
 
-/// Monitor geometry of two bodies with one part each (part frames at the body origins).
-fn geometry(parts: [&(rp::SharedShape, f64); 2]) -> MonitorGeometry {
-    let mut g = MonitorGeometry::default();
-    for (s, r) in parts {
-        let pose = Isometry3::identity();
-        g.shapes.push(vec![s.clone()]);
-        g.pose_body.push(vec![pose]);
-        g.radius.push(vec![*r]);
-        g.docking.push(vec![false]);
-        g.com_body_m.push(Vector3::zeros());
-        g.extent_m.push(*r);
-        g.aabb_extent_m.push(3f64.sqrt() * r);
-        g.has_docking.push(false);
-        g.pieces.push(vec![PartPiece::of(&**s, &pose, *r)]);
-        g.hulls.push(vec![monitor::mesh_hull(&**s)]);
-    }
-    g
-}
-
 /// The hull bracket and the monitor's evaluation of part 0 of body 0 at `pa` and part 0 of
 /// body 1 at `pb`, with the tolerance of an exact value (GJK's and f32's).
 fn evaluate(
@@ -197,7 +178,7 @@ fn val_mesh_hull_box_mesh_is_exact_against_primitives() {
     let mesh = trimesh(&v, &t);
     let r = 0.3;
     let ball = (rp::SharedShape::ball(r as f32), r);
-    let g = geometry([&mesh, &ball]);
+    let g = common::one_part_bodies(&[&mesh, &ball]);
     let at = Isometry3::identity();
     for c in [20.0, 1.9, 0.05] {
         for p in [
@@ -227,8 +208,8 @@ fn val_mesh_hull_box_mesh_is_exact_against_primitives() {
         })
         .fold(f64::INFINITY, f64::min);
     for (mesh_first, g) in [
-        (true, geometry([&mesh, &cube])),
-        (false, geometry([&cube, &mesh])),
+        (true, common::one_part_bodies(&[&mesh, &cube])),
+        (false, common::one_part_bodies(&[&cube, &mesh])),
     ] {
         for c in [20.0, 1.9, 0.01] {
             let p = Vector3::new(0.3, -0.2, 0.75 + c - lowest);
@@ -245,7 +226,7 @@ fn val_mesh_hull_box_mesh_is_exact_against_primitives() {
     // Two box meshes, one above the other, 0.4 m apart (the hulls on both sides).
     let small = tessellated_box([1.0, 1.0, 1.0], [10, 10, 10]);
     let small = trimesh(&small.0, &small.1);
-    let g = geometry([&mesh, &small]);
+    let g = common::one_part_bodies(&[&mesh, &small]);
     let pb = iso(
         Vector3::new(0.6, 0.1, 0.75 + 0.4 + 0.5),
         UnitQuaternion::identity(),
@@ -262,7 +243,7 @@ fn val_mesh_hull_sphere_mesh_is_exact_at_its_vertices() {
     let mesh = trimesh(&v, &t);
     let r = 0.25;
     let ball = (rp::SharedShape::ball(r as f32), r);
-    let g = geometry([&mesh, &ball]);
+    let g = common::one_part_bodies(&[&mesh, &ball]);
     let at = Isometry3::identity();
     for dist in [21.25, 3.15, 1.3] {
         for axis in [Vector3::z(), -Vector3::z(), Vector3::x(), -Vector3::y()] {
@@ -288,7 +269,7 @@ fn val_mesh_hull_concavity_falls_back_to_the_mesh() {
     // In the slot: inside the hull, no bound from it; the mesh gives w − r.
     let r = 0.3;
     let ball = (rp::SharedShape::ball(r as f32), r);
-    let g = geometry([&mesh, &ball]);
+    let g = common::one_part_bodies(&[&mesh, &ball]);
     let pb = iso(Vector3::new(0.0, 1.25, 0.0), UnitQuaternion::identity());
     let (h, ..) = evaluate(&g, &at, &pb);
     assert_eq!(h, HullEval::None);
@@ -296,7 +277,7 @@ fn val_mesh_hull_concavity_falls_back_to_the_mesh() {
     // Above the mouth: the hull's top is h − r away, the arms' edges √(w² + h²) − r.
     let r = 0.1;
     let ball = (rp::SharedShape::ball(r as f32), r);
-    let g = geometry([&mesh, &ball]);
+    let g = common::one_part_bodies(&[&mesh, &ball]);
     for hgt in [0.4, 1.0, 3.0] {
         let pb = iso(
             Vector3::new(0.0, 2.0 + hgt, 0.0),
@@ -331,7 +312,7 @@ fn val_mesh_hull_point_inside_a_closed_mesh_is_judged_on_its_triangles() {
     let mesh = trimesh(&v, &t);
     let r = 0.1;
     let ball = (rp::SharedShape::ball(r as f32), r);
-    let g = geometry([&mesh, &ball]);
+    let g = common::one_part_bodies(&[&mesh, &ball]);
     let at = Isometry3::identity();
     for p in [Vector3::zeros(), Vector3::new(0.5, -0.4, 0.2)] {
         let pb = iso(p, UnitQuaternion::identity());
@@ -352,7 +333,7 @@ fn val_mesh_hull_closest_parts_prunes_soundly() {
     let bx = trimesh(&bv, &bt);
     let r = 0.2;
     let ball = (rp::SharedShape::ball(r as f32), r);
-    let mut g = geometry([&u, &ball]);
+    let mut g = common::one_part_bodies(&[&u, &ball]);
     let box_pose = iso(Vector3::new(6.0, 0.0, 0.0), UnitQuaternion::identity());
     g.shapes[0].push(bx.0.clone());
     g.pose_body[0].push(box_pose);

@@ -20,12 +20,14 @@
 //! lower bounds are checked against the brute force with no tolerance but the f32 rounding of
 //! the vertices (the reference uses the f32 vertices the mesh holds).
 
+mod common;
+
 use bevy_rapier3d::rapier::math::Vector;
 use bevy_rapier3d::rapier::prelude as rp;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rpod::math::rng::Lcg;
 use rpod::sim::monitor::memo::{self, displacement_bound_m};
-use rpod::sim::monitor::{self, F32_REL_TOL, GJK_REL_TOL, MonitorGeometry, PairEval, PartPiece};
+use rpod::sim::monitor::{self, F32_REL_TOL, GJK_REL_TOL, PairEval};
 
 /// A uniform draw in [a, b).
 trait UniformIn {
@@ -307,25 +309,6 @@ fn val_mesh_memo_advanced_bracket_holds_the_distance() {
     }
 }
 
-/// Monitor geometry: the collar (body 0) and a ball (body 1), part frames at the body origins.
-fn geometry(parts: [&(rp::SharedShape, f64); 2]) -> MonitorGeometry {
-    let mut g = MonitorGeometry::default();
-    for (s, r) in parts {
-        let pose = Isometry3::identity();
-        g.shapes.push(vec![s.clone()]);
-        g.pose_body.push(vec![pose]);
-        g.radius.push(vec![*r]);
-        g.docking.push(vec![false]);
-        g.com_body_m.push(Vector3::zeros());
-        g.extent_m.push(*r);
-        g.aabb_extent_m.push(3f64.sqrt() * r);
-        g.has_docking.push(false);
-        g.pieces.push(vec![PartPiece::of(&**s, &pose, *r)]);
-        g.hulls.push(vec![monitor::mesh_hull(&**s)]);
-    }
-    g
-}
-
 #[test]
 fn val_mesh_memo_pair_eval_along_the_axis_is_certified_and_reuses_it() {
     // A ball flies down the collar's axis at 3 cm/s (0.3 mm per 0.01 s step) with a small
@@ -335,7 +318,7 @@ fn val_mesh_memo_pair_eval_along_the_axis_is_certified_and_reuses_it() {
     let mesh = shape_of(&v, &t);
     let r = 0.03;
     let ball = (rp::SharedShape::ball(r as f32), r);
-    let g = geometry([&mesh, &ball]);
+    let g = common::one_part_bodies(&[&mesh, &ball]);
     let pm = Isometry3::identity();
     let (mut from_memo, mut steps, mut cleared) = (0, 0, 0);
     for k in 0..4500 {

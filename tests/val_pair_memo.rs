@@ -14,12 +14,13 @@
 //! rounding as slack; values may exceed the truth by GJK's tolerance and f32's, never fall below
 //! it by more than f32's.
 
+mod common;
+
 use bevy_rapier3d::rapier::prelude as rp;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rpod::sim::monitor::memo::{self, PAIR_MEMO_MAX_PAIRS};
 use rpod::sim::monitor::{
-    self, F32_REL_TOL, GJK_REL_TOL, MEMO_REL_WIDTH, MonitorGeometry, PairEval, PartPiece,
-    TOUCH_DISTANCE_M,
+    self, F32_REL_TOL, GJK_REL_TOL, MEMO_REL_WIDTH, PairEval, TOUCH_DISTANCE_M,
 };
 
 fn iso(p: Vector3<f64>, q: UnitQuaternion<f64>) -> Isometry3<f64> {
@@ -45,25 +46,6 @@ fn ball_box(p: Vector3<f64>, h: Vector3<f64>, r: f64) -> f64 {
 fn box_box(c: Vector3<f64>, ha: Vector3<f64>, hb: Vector3<f64>) -> f64 {
     let g = c.abs() - ha - hb;
     g.map(|x| x.max(0.0)).norm()
-}
-
-/// Monitor geometry of one part per body, part frames at the body origins.
-fn geometry(parts: &[(rp::SharedShape, f64)]) -> MonitorGeometry {
-    let mut g = MonitorGeometry::default();
-    for (s, r) in parts {
-        let pose = Isometry3::identity();
-        g.shapes.push(vec![s.clone()]);
-        g.pose_body.push(vec![pose]);
-        g.radius.push(vec![*r]);
-        g.docking.push(vec![false]);
-        g.com_body_m.push(Vector3::zeros());
-        g.extent_m.push(*r);
-        g.aabb_extent_m.push(3f64.sqrt() * r);
-        g.has_docking.push(false);
-        g.pieces.push(vec![PartPiece::of(&**s, &pose, *r)]);
-        g.hulls.push(vec![None]);
-    }
-    g
 }
 
 fn cuboid(h: Vector3<f64>) -> (rp::SharedShape, f64) {
@@ -154,7 +136,7 @@ fn val_pair_memo_latched_pair_is_answered_by_the_memo_and_certified() {
     let h = Vector3::new(0.4, 0.25, 0.6);
     let r = 0.07;
     let parts = [cuboid(h), (rp::SharedShape::ball(r as f32), r)];
-    let g = geometry(&parts);
+    let g = common::one_part_bodies(&[&parts[0], &parts[1]]);
     let pa = Isometry3::identity();
     let base = Vector3::new(0.0, h.y + r + 0.02, 0.1);
     let mut rng = rpod::math::rng::Lcg(7);
@@ -207,7 +189,7 @@ fn val_pair_memo_moving_pair_is_queried_fresh_and_touch_is_parrys() {
     let h = Vector3::new(0.4, 0.25, 0.6);
     let r = 0.07;
     let parts = [cuboid(h), (rp::SharedShape::ball(r as f32), r)];
-    let g = geometry(&parts);
+    let g = common::one_part_bodies(&[&parts[0], &parts[1]]);
     let pa = Isometry3::identity();
     for k in 0..=500 {
         let gap = 0.5 - 1e-3 * k as f64;

@@ -1,5 +1,6 @@
 //! Closed forms and an independent orbit integrator shared by the integration tests (each test file that uses them names them in
-//! its own `//!` header).
+//! its own `//!` header), and the set-up helpers several of them share (closed prisms, monitor
+//! geometry of one part per body).
 
 #![allow(dead_code)] // each test file uses its own part
 
@@ -157,4 +158,27 @@ pub fn closed_prism(outline: &[(f64, f64)], cap: &[[u32; 3]]) -> (Vec<[f64; 3]>,
         t.push([p, q + n, p + n]);
     }
     (v, t)
+}
+
+/// Monitor geometry of bodies with one part each, part frames at the body origins: (shape,
+/// bounding radius) per body, a triangle mesh's hull support map as the monitor builds it.
+pub fn one_part_bodies(
+    parts: &[&(bevy_rapier3d::rapier::prelude::SharedShape, f64)],
+) -> rpod::sim::monitor::MonitorGeometry {
+    use rpod::sim::monitor::{self, MonitorGeometry, PartPiece};
+    let mut g = MonitorGeometry::default();
+    for (s, r) in parts {
+        let pose = nalgebra::Isometry3::identity();
+        g.shapes.push(vec![s.clone()]);
+        g.pose_body.push(vec![pose]);
+        g.radius.push(vec![*r]);
+        g.docking.push(vec![false]);
+        g.com_body_m.push(Vector3::zeros());
+        g.extent_m.push(*r);
+        g.aabb_extent_m.push(3f64.sqrt() * r);
+        g.has_docking.push(false);
+        g.pieces.push(vec![PartPiece::of(&**s, &pose, *r)]);
+        g.hulls.push(vec![monitor::mesh_hull(&**s)]);
+    }
+    g
 }
