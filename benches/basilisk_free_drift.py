@@ -2,10 +2,10 @@
 """free_drift against Basilisk, side by side on this machine (a benchmark, not a test).
 
 Basilisk (`pip install bsk`, AVS Lab) propagates the same two 6-DOF spacecraft as
-`scenes/free_drift.ron` — target 800 kg, J = diag(620, 910, 1080) kg·m²; chaser 300 kg,
+`scenes/examples/free_drift.ron` — target 800 kg, J = diag(620, 910, 1080) kg·m²; chaser 300 kg,
 J = diag(110, 140, 160) kg·m² — in the same 7178 km orbit with two-body + J2 gravity, at the
 same fixed step (0.01 s; Basilisk's default RK4 integrator), for the same number of steps.
-rpod's figure is `rpod bench scenes/free_drift.ron` (the whole pipeline: f64 dynamics,
+rpod's figure is `rpod bench scenes/examples/free_drift.ron` (the whole pipeline: f64 dynamics,
 full-geometry monitor with interval bounds, guarantees) measured in the same run. The ratio
 printed is rpod steps/s over Basilisk steps/s.
 
@@ -27,7 +27,7 @@ J2 = 1.08262668e-3
 
 
 def rpod_steps_per_s(rpod, steps):
-    out = subprocess.run([rpod, "bench", "scenes/free_drift.ron", "--steps", str(steps)],
+    out = subprocess.run([rpod, "bench", "scenes/examples/free_drift.ron", "--steps", str(steps)],
                          check=True, capture_output=True, text=True).stdout
     m = re.search(r"pipeline\s+(\d+) steps/s", out)
     return float(m.group(1)), out
@@ -38,7 +38,7 @@ def rpod_flagship_wall_s(rpod, stepping):
     import json
     import tempfile
     with tempfile.TemporaryDirectory() as out:
-        subprocess.run([rpod, "run", "scenes/orbit_approach_latch.ron", "--out", out,
+        subprocess.run([rpod, "run", "scenes/examples/orbit_approach_latch.ron", "--out", out,
                         "--set", f"stepping={stepping}"], check=True, capture_output=True)
         with open(f"{out}/summary.json") as f:
             return json.load(f)["wall_s"]

@@ -1,5 +1,5 @@
 //! A user's own law, written outside rpod, registered under a name and flown on the flagship
-//! scene `scenes/orbit_approach_latch.ron` to LATCHED:
+//! scene `scenes/examples/orbit_approach_latch.ron` to LATCHED:
 //!
 //! ```sh
 //! cargo run --release --example custom_controller -- --out out/custom_controller
@@ -112,7 +112,7 @@ fn main() {
             my_pd(0.03, 0.2)
         ),
     ];
-    let mut sim = Simulation::from_file("scenes/orbit_approach_latch.ron", &overrides)
+    let mut sim = Simulation::from_file("scenes/examples/orbit_approach_latch.ron", &overrides)
         .unwrap_or_else(|e| {
             eprintln!("error: {e}");
             std::process::exit(2)

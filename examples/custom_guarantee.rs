@@ -1,5 +1,5 @@
 //! A user's own kind of guarantee, written outside rpod, registered under a name and checked
-//! on `scenes/free_drift.ron` next to the scene's own guarantees:
+//! on `scenes/examples/free_drift.ron` next to the scene's own guarantees:
 //!
 //! ```sh
 //! cargo run --release --example custom_guarantee -- --out out/custom_guarantee
@@ -117,10 +117,11 @@ fn main() {
         CommsRange(name: "radio_45m", body: "chaser", around: "target", max_range_m: 45.0),
     ]"#
     .to_string()];
-    let mut sim = Simulation::from_file("scenes/free_drift.ron", &overrides).unwrap_or_else(|e| {
-        eprintln!("error: {e}");
-        std::process::exit(2)
-    });
+    let mut sim = Simulation::from_file("scenes/examples/free_drift.ron", &overrides)
+        .unwrap_or_else(|e| {
+            eprintln!("error: {e}");
+            std::process::exit(2)
+        });
     sim.record_to(&out).expect("output folder");
     sim.run_for(sim.scene.duration_s);
     for g in &sim.guarantees().status {

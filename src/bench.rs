@@ -461,7 +461,7 @@ mod tests {
     /// scene format has: a broken override made `rpod bench --cliffs` fail at once).
     #[test]
     fn cliff_scenes_load_with_their_overrides() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/examples");
         let [plain, spin, latched, contact] = cliff_scenes(&dir).expect("cliff scenes load");
         let rate = |l: &LoadedScene| {
             let b = l

@@ -56,7 +56,7 @@
 //! ([`sim::Simulation::add_controller`] with a [`control::registry::Slot`]), declare diagnostic
 //! columns and register guarantees ([`control::Controller::columns`],
 //! [`control::Controller::guarantees`]). `examples/custom_controller.rs` flies a user law on the
-//! flagship scene `scenes/orbit_approach_latch.ron` to LATCHED and writes the standard outputs.
+//! flagship scene `scenes/examples/orbit_approach_latch.ron` to LATCHED and writes the standard outputs.
 //! rpod's own generic laws (`HillPd`, `Glideslope`, `Attitude`, `Sequencer`) are in
 //! [`control::generic`], one file each; the five paper laws in `control::<paper>`.
 //!

@@ -111,8 +111,8 @@ enum Cmd {
     },
     /// Measure steps/s of a scene against the bare rapier step and bare parry queries.
     Bench {
-        /// Scene file (default scenes/free_drift.ron).
-        #[arg(default_value = "scenes/free_drift.ron")]
+        /// Scene file (default scenes/examples/free_drift.ron).
+        #[arg(default_value = "scenes/examples/free_drift.ron")]
         scene: PathBuf,
         /// Steps per measurement (default 20000; with --meshes, 3000 per flagship and
         /// guarantee case, the fly-bys 400).

@@ -188,7 +188,7 @@ const VALUES: &[&str] = &[
 fn scenes() -> Vec<(String, String)> {
     let mut v = Vec::new();
     for dir in [
-        "scenes",
+        "scenes/examples",
         "scenes/papers/geng2015",
         "scenes/papers/guo2016",
         "scenes/papers/xu2015",

@@ -137,38 +137,46 @@ fn check(case: &str, scene: &str, args: &[&str]) {
 
 #[test]
 fn golden_free_drift() {
-    check("free_drift", "scenes/free_drift.ron", &[]);
+    check("free_drift", "scenes/examples/free_drift.ron", &[]);
 }
 
 #[test]
 fn golden_collision_course() {
-    check("collision_course", "scenes/collision_course.ron", &[]);
+    check(
+        "collision_course",
+        "scenes/examples/collision_course.ron",
+        &[],
+    );
 }
 
 #[test]
 fn golden_docking_aligned() {
-    check("docking_aligned", "scenes/docking_aligned.ron", &[]);
+    check(
+        "docking_aligned",
+        "scenes/examples/docking_aligned.ron",
+        &[],
+    );
 }
 
 #[test]
 fn golden_docking_offset_contact_points() {
     check(
         "docking_offset",
-        "scenes/docking_offset.ron",
+        "scenes/examples/docking_offset.ron",
         &["--contact-points"],
     );
 }
 
 #[test]
 fn golden_docking_miss() {
-    check("docking_miss", "scenes/docking_miss.ron", &[]);
+    check("docking_miss", "scenes/examples/docking_miss.ron", &[]);
 }
 
 #[test]
 fn golden_orbit_approach_latch() {
     check(
         "orbit_approach_latch",
-        "scenes/orbit_approach_latch.ron",
+        "scenes/examples/orbit_approach_latch.ron",
         &[],
     );
 }
@@ -251,7 +259,7 @@ fn golden_with_set_override() {
     // A `--set` path through the scene, so the override machinery is pinned too.
     check(
         "collision_course_set",
-        "scenes/collision_course.ron",
+        "scenes/examples/collision_course.ron",
         &["--set", "bodies.chaser.initial.vel_m_s=(-0.2, 0.0, 0.0)"],
     );
 }

@@ -55,7 +55,7 @@ fn regress_second_writer_refused_and_kill_9_leaves_nothing_that_looks_whole() {
     let r = rpod()
         .args([
             "run",
-            "scenes/free_drift.ron",
+            "scenes/examples/free_drift.ron",
             "--duration",
             "1",
             "--out",
@@ -69,7 +69,7 @@ fn regress_second_writer_refused_and_kill_9_leaves_nothing_that_looks_whole() {
     let mut long = rpod()
         .args([
             "run",
-            "scenes/free_drift.ron",
+            "scenes/examples/free_drift.ron",
             "--duration",
             "100000",
             "--out",
@@ -92,7 +92,7 @@ fn regress_second_writer_refused_and_kill_9_leaves_nothing_that_looks_whole() {
     let r = rpod()
         .args([
             "run",
-            "scenes/free_drift.ron",
+            "scenes/examples/free_drift.ron",
             "--duration",
             "1",
             "--out",
@@ -134,7 +134,7 @@ fn regress_second_writer_refused_and_kill_9_leaves_nothing_that_looks_whole() {
     let r = rpod()
         .args([
             "run",
-            "scenes/free_drift.ron",
+            "scenes/examples/free_drift.ron",
             "--duration",
             "1",
             "--out",
@@ -166,7 +166,13 @@ fn regress_planted_symlink_in_the_output_folder_is_not_followed() {
         std::os::unix::fs::symlink(&victim, d.join(n)).unwrap();
     }
     let r = rpod()
-        .args(["run", "scenes/free_drift.ron", "--duration", "1", "--out"])
+        .args([
+            "run",
+            "scenes/examples/free_drift.ron",
+            "--duration",
+            "1",
+            "--out",
+        ])
         .arg(&d)
         .output()
         .unwrap();
@@ -185,7 +191,13 @@ fn regress_links_planted_at_the_lock_runs_and_plots_are_refused() {
     std::fs::write(&victim, "precious\n").unwrap();
     std::os::unix::fs::symlink(&victim, d.join(".rpod.lock")).unwrap();
     let r = rpod()
-        .args(["run", "scenes/free_drift.ron", "--duration", "1", "--out"])
+        .args([
+            "run",
+            "scenes/examples/free_drift.ron",
+            "--duration",
+            "1",
+            "--out",
+        ])
         .arg(&d)
         .output()
         .unwrap();
@@ -196,7 +208,13 @@ fn regress_links_planted_at_the_lock_runs_and_plots_are_refused() {
     // A run, then RUN/plots as a link to a folder outside: `rpod plot` refuses it.
     std::fs::remove_file(d.join(".rpod.lock")).unwrap();
     let r = rpod()
-        .args(["run", "scenes/free_drift.ron", "--duration", "1", "--out"])
+        .args([
+            "run",
+            "scenes/examples/free_drift.ron",
+            "--duration",
+            "1",
+            "--out",
+        ])
         .arg(&d)
         .output()
         .unwrap();
@@ -317,7 +335,8 @@ fn regress_events_reach_the_partial_file_while_the_run_goes_on() {
     let dir = tmp("events-live");
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    let mut sim = rpod::sim::Simulation::from_file("scenes/collision_course.ron", &[]).unwrap();
+    let mut sim =
+        rpod::sim::Simulation::from_file("scenes/examples/collision_course.ron", &[]).unwrap();
     sim.record_to(&dir).unwrap();
     sim.run_for(30.0);
     let want: Vec<String> = sim.events().iter().map(|e| e.kind.clone()).collect();

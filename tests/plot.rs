@@ -33,7 +33,7 @@ fn val_run_plots_carry_the_run_data() {
     rpod(&[
         "-q",
         "run",
-        "scenes/docking_aligned.ron",
+        "scenes/examples/docking_aligned.ron",
         "--duration",
         "25",
         "--out",

@@ -1,4 +1,4 @@
-//! Determinism: two runs of `scenes/free_drift.ron` write byte-identical `trajectory.csv`,
+//! Determinism: two runs of `scenes/examples/free_drift.ron` write byte-identical `trajectory.csv`,
 //! `events.jsonl` and `contacts.csv`, and `summary.json` is identical except for the wall-clock fields.
 //!
 //! Reference: the first run. To see a difference, `diff` the two directories this test prints.
@@ -8,7 +8,7 @@ use std::process::Command;
 fn run(dir: &std::path::Path) {
     let _ = std::fs::remove_dir_all(dir);
     let r = Command::new(env!("CARGO_BIN_EXE_rpod"))
-        .args(["run", "scenes/free_drift.ron", "--out"])
+        .args(["run", "scenes/examples/free_drift.ron", "--out"])
         .arg(dir)
         .output()
         .unwrap();

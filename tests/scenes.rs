@@ -4,7 +4,7 @@
 //! nothing behind.
 //!
 //! Reference: the expected error of each broken file, written here by hand from the edit that
-//! broke it (each is `scenes/collision_course.ron` with one change).
+//! broke it (each is `scenes/examples/collision_course.ron` with one change).
 
 use rpod::scene::{load_scene_file, load_scene_str};
 use std::path::Path;
@@ -13,7 +13,7 @@ use std::process::Command;
 #[test]
 fn every_bundled_scene_passes_check() {
     let mut n = 0;
-    // The examples at the top of scenes/, the papers' scenes under scenes/papers/PAPER/ (the
+    // The examples under scenes/examples/, the papers' scenes under scenes/papers/PAPER/ (the
     // trials files in scenes/trials/ are campaigns, checked by their own tests).
     let mut paths: Vec<std::path::PathBuf> = Vec::new();
     let mut dirs = vec![std::path::PathBuf::from("scenes")];
@@ -178,7 +178,7 @@ const CORPUS: &[(&str, usize, &str, &str)] = &[
         "inside the Earth",
     ),
     (
-        // scenes/soft_capture.ron with a 0.60 m compression stroke on 0.395 m legs.
+        // scenes/examples/soft_capture.ron with a 0.60 m compression stroke on 0.395 m legs.
         "soft_capture_leg_unreachable",
         83,
         "docking.mechanism.platform.leg 0",
@@ -406,7 +406,7 @@ fn regress_broken_scene_corpus_gives_located_errors() {
 
 #[test]
 fn set_overrides_replace_and_insert_fields() {
-    let text = std::fs::read_to_string("scenes/collision_course.ron").unwrap();
+    let text = std::fs::read_to_string("scenes/examples/collision_course.ron").unwrap();
     let l = load_scene_str(
         &text,
         "cc",
@@ -481,7 +481,7 @@ fn regress_set_value_with_newlines_is_located_in_its_own_text() {
 
 #[test]
 fn regress_set_cannot_inject_scene_text() {
-    let text = std::fs::read_to_string("scenes/collision_course.ron").unwrap();
+    let text = std::fs::read_to_string("scenes/examples/collision_course.ron").unwrap();
     for (set, words) in [
         (
             "bodies.chaser.mass_kg=1.0, friction: 9.0",
@@ -540,7 +540,7 @@ fn regress_scene_and_files_beyond_the_size_limit_are_refused() {
     let d = std::env::temp_dir().join(format!("rpod-big-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     let f = d.join("big.ron");
-    let mut text = std::fs::read_to_string("scenes/collision_course.ron").unwrap();
+    let mut text = std::fs::read_to_string("scenes/examples/collision_course.ron").unwrap();
     text.push_str(&"// padding\n".repeat(2 << 20));
     std::fs::write(&f, text).unwrap();
     let e = load_scene_file(&f, &[]).unwrap_err();
@@ -553,7 +553,7 @@ fn regress_default_output_folder_is_a_safe_name_under_out() {
     let d = std::env::temp_dir().join(format!("rpod-outname-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(d.join("work")).unwrap();
-    let scene = std::fs::canonicalize("scenes/collision_course.ron").unwrap();
+    let scene = std::fs::canonicalize("scenes/examples/collision_course.ron").unwrap();
     for (name, dir) in [
         ("../../escaped", "_.._escaped"),
         ("/tmp/absolute", "_tmp_absolute"),
@@ -603,7 +603,7 @@ fn regress_symlinked_model_files_and_folders_are_refused() {
     for (assets, link) in [("file", "models/hga_dish.gltf"), ("folder", "models")] {
         let r = Command::new(env!("CARGO_BIN_EXE_rpod"))
             .env("RPOD_ASSETS", d.join(assets))
-            .args(["check", "scenes/free_drift.ron"])
+            .args(["check", "scenes/examples/free_drift.ron"])
             .output()
             .unwrap();
         assert_eq!(r.status.code(), Some(2));
@@ -618,7 +618,7 @@ fn regress_symlinked_model_files_and_folders_are_refused() {
     // The real folder is accepted.
     let r = Command::new(env!("CARGO_BIN_EXE_rpod"))
         .env("RPOD_ASSETS", real.parent().unwrap())
-        .args(["check", "scenes/free_drift.ron"])
+        .args(["check", "scenes/examples/free_drift.ron"])
         .output()
         .unwrap();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
@@ -630,7 +630,7 @@ fn regress_symlinked_model_files_and_folders_are_refused() {
 #[test]
 fn regress_sensor_faster_than_the_step_is_refused() {
     let e = load_scene_file(
-        Path::new("scenes/orbit_approach_latch.ron"),
+        Path::new("scenes/examples/orbit_approach_latch.ron"),
         &["controllers.0.sensor=Some((period_s: 1e-308))".to_string()],
     )
     .and_then(|l| rpod::sim::Simulation::new(&l).map(|_| ()))

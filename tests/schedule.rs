@@ -17,9 +17,9 @@ fn ambiguities(scene: &str) -> Vec<String> {
 #[test]
 fn regress_schedule_has_no_ambiguities() {
     let scenes = [
-        "scenes/orbit_approach_latch.ron", // controllers (Sequencer), docking, orbit, J2
-        "scenes/docking_aligned.ron",      // docking mechanism, compliant contact
-        "scenes/free_drift.ron",           // no controllers
+        "scenes/examples/orbit_approach_latch.ron", // controllers (Sequencer), docking, orbit, J2
+        "scenes/examples/docking_aligned.ron",      // docking mechanism, compliant contact
+        "scenes/examples/free_drift.ron",           // no controllers
         "scenes/papers/xu2019/xu2019_simulation.ron", // air-bearing table, sensor
         "scenes/papers/zhang2018/zhang2018_pair.ron", // Sun–Earth L2 frame
         "scenes/papers/guo2016/guo2016_corridor.ron", // a paper law's guarantees (post-step diagnostics)

@@ -18,7 +18,7 @@ fn tmp(name: &str) -> PathBuf {
 
 /// A small campaign: 3 lateral offsets (two latch, one misses) × 2 random closing speeds.
 fn campaign(dir: &Path) -> PathBuf {
-    let scene = std::fs::canonicalize("scenes/docking_aligned.ron").unwrap();
+    let scene = std::fs::canonicalize("scenes/examples/docking_aligned.ron").unwrap();
     let text = format!(
         r#"Trials(
     name: "small",
@@ -334,7 +334,7 @@ fn regress_merge_refuses_mismatched_missing_and_duplicated_shards() {
 #[test]
 fn regress_invalid_trials_are_their_own_outcome() {
     let d = tmp("invalid");
-    let scene = std::fs::canonicalize("scenes/docking_aligned.ron").unwrap();
+    let scene = std::fs::canonicalize("scenes/examples/docking_aligned.ron").unwrap();
     let f = d.join("inv.ron");
     std::fs::write(
         &f,
@@ -412,7 +412,7 @@ fn regress_invalid_trials_are_their_own_outcome() {
 #[test]
 fn val_success_criteria_match_the_recorded_columns() {
     let d = tmp("criteria");
-    let scene = std::fs::canonicalize("scenes/docking_aligned.ron").unwrap();
+    let scene = std::fs::canonicalize("scenes/examples/docking_aligned.ron").unwrap();
     let f = d.join("c.ron");
     let text = format!(
         r#"Trials(name: "criteria", scene: "{}", duration_s: 30.0, count: 4,
@@ -525,7 +525,7 @@ fn val_success_criteria_match_the_recorded_columns() {
         assert!(e.message.contains(words), "{e}");
     }
     // A docking criterion over a scene without a docking mechanism.
-    let free = std::fs::canonicalize("scenes/free_drift.ron").unwrap();
+    let free = std::fs::canonicalize("scenes/examples/free_drift.ron").unwrap();
     for criterion in ["Latched", "Docked"] {
         std::fs::write(
             &f,
@@ -595,7 +595,7 @@ fn regress_trials_file_limits_and_nesting_are_located() {
 #[test]
 fn regress_envelope_plot_colours_by_a_column_and_draws_small_multiples() {
     let d = tmp("envelope");
-    let scene = std::fs::canonicalize("scenes/docking_aligned.ron").unwrap();
+    let scene = std::fs::canonicalize("scenes/examples/docking_aligned.ron").unwrap();
     let text = format!(
         r#"Trials(
     name: "multiples",
@@ -661,7 +661,7 @@ fn regress_envelope_plot_colours_by_a_column_and_draws_small_multiples() {
 }
 
 /// The requirements campaign's per-requirement output, on 2 short trials of
-/// `scenes/requirements_approach.ron` (60 s: the hold 100 m out, where the passive-safety,
+/// `scenes/examples/requirements_approach.ron` (60 s: the hold 100 m out, where the passive-safety,
 /// line-of-sight and closing-speed requirements are active): every guarantee of the scene has
 /// its verdict column; each row's verdict is the one the trial's own `summary.json` gives
 /// (`--keep-runs`); `summary.json`'s per-requirement counts are the column's counts and its
@@ -669,7 +669,7 @@ fn regress_envelope_plot_colours_by_a_column_and_draws_small_multiples() {
 #[test]
 fn val_requirements_campaign_reports_each_requirement() {
     let d = tmp("requirements");
-    let scene = std::fs::canonicalize("scenes/requirements_approach.ron").unwrap();
+    let scene = std::fs::canonicalize("scenes/examples/requirements_approach.ron").unwrap();
     let f = d.join("r.ron");
     // The bundled campaign's dispersions, shortened.
     let bundled = read(Path::new("scenes/trials/requirements_campaign.ron"));

@@ -81,7 +81,10 @@ fn hull_distance(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> (f64, f64) {
 fn val_closest_tolerance_cone_at_the_slot_is_bracketed_and_cheap() {
     // The cone 0.50 → 0.48 m above the seat: 100 steps of approach, the closest approach at
     // the last sample.
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/docking_aligned.ron");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/examples/docking_aligned.ron"
+    );
     let mut sim = Simulation::from_file(path, &[]).unwrap_or_else(|e| panic!("{e}"));
     sim.step(100);
     let summary = sim.summary();

@@ -1,7 +1,7 @@
 //! Contact normals of the docking cone against the slot's wall pieces, for the rigid (rapier)
 //! and the compliant (rpod) contact, against the analytic surface normals of the funnel.
 //!
-//! Geometry (scenes/docking_aligned.ron): the slot on the target port (origin x = 0.82 m, axis
+//! Geometry (scenes/examples/docking_aligned.ron): the slot on the target port (origin x = 0.82 m, axis
 //! a = +x) is a 12-sided funnel, throat radius 0.04 m at the port plane, mouth radius 0.15 m
 //! 0.2 m above it (radii of the chord midpoints). Piece k spans the angles 30(k − 1)° to 30k°
 //! about the axis, measured from +y towards +z. Its inner face is the plane through its chord
@@ -73,7 +73,7 @@ fn scene(tip: Vector3<f64>, vel: Vector3<f64>, rigid: bool) -> Simulation {
     if rigid {
         set.push("docking.contact=Rigid".into());
     }
-    let loaded = load_scene_file("scenes/docking_aligned.ron".as_ref(), &set).unwrap();
+    let loaded = load_scene_file("scenes/examples/docking_aligned.ron".as_ref(), &set).unwrap();
     Simulation::new(&loaded).unwrap()
 }
 
@@ -252,7 +252,7 @@ fn regress_trial17_rim_contact_normal_and_latch() {
         if rigid {
             set.push("docking.contact=Rigid".into());
         }
-        let loaded = load_scene_file("scenes/docking_aligned.ron".as_ref(), &set).unwrap();
+        let loaded = load_scene_file("scenes/examples/docking_aligned.ron".as_ref(), &set).unwrap();
         let s = Simulation::new(&loaded).unwrap();
         let label = if rigid {
             "trial 17, rigid"
@@ -270,7 +270,7 @@ fn regress_trial17_rim_contact_normal_and_latch() {
             ],
         );
         // Run the trial to its end (50 s).
-        let loaded = load_scene_file("scenes/docking_aligned.ron".as_ref(), &set).unwrap();
+        let loaded = load_scene_file("scenes/examples/docking_aligned.ron".as_ref(), &set).unwrap();
         let mut s = Simulation::new(&loaded).unwrap();
         s.step(s.steps_for(50.0));
         let d = s.app.world().resource::<Docking>();

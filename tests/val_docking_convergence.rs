@@ -19,7 +19,7 @@ fn aligned_peak(dt: f64, rigid: bool) -> (f64, f64, bool) {
     if rigid {
         set.push("docking.contact=Rigid".into());
     }
-    let loaded = load_scene_file("scenes/docking_aligned.ron".as_ref(), &set).unwrap();
+    let loaded = load_scene_file("scenes/examples/docking_aligned.ron".as_ref(), &set).unwrap();
     let mut s = Simulation::new(&loaded).unwrap();
     s.step(s.steps_for(26.0));
     let d = s.app.world().resource::<Docking>();
@@ -34,7 +34,7 @@ fn aligned_peak(dt: f64, rigid: bool) -> (f64, f64, bool) {
 /// (k_m = 1/300 + 1/800 per newton) arriving on the back plate at the speed the magnet gives it
 /// (RK4 at 1 µs from the start), the law F = k·δ^{3/2}(1 + λ·δ̇) face on face, the magnet on.
 fn reference_peak() -> f64 {
-    let loaded = load_scene_file("scenes/docking_aligned.ron".as_ref(), &[]).unwrap();
+    let loaded = load_scene_file("scenes/examples/docking_aligned.ron".as_ref(), &[]).unwrap();
     let spec = loaded.scene.docking.clone().unwrap();
     let ContactModelSpec::Compliant(c) = &spec.contact else {
         panic!("compliant")
@@ -126,7 +126,7 @@ fn envelope_outcomes_at_three_dts(which: Option<&[usize]>) {
         which.map_or(0, |w| w.len())
     ));
     std::fs::create_dir_all(&dir).unwrap();
-    let base = std::fs::read_to_string("scenes/docking_aligned.ron").unwrap();
+    let base = std::fs::read_to_string("scenes/examples/docking_aligned.ron").unwrap();
     let trials = std::fs::read_to_string("scenes/trials/capture_envelope.ron").unwrap();
     let all: Vec<usize> = (0..rpod::trials::load("scenes/trials/capture_envelope.ron".as_ref())
         .unwrap()

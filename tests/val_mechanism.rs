@@ -139,7 +139,7 @@ fn val_capture_rate_limits_bad_input_is_located() {
         ("0.0", "positive number of deg/s"),
     ] {
         let e = load_scene_file(
-            "scenes/docking_aligned.ron".as_ref(),
+            "scenes/examples/docking_aligned.ron".as_ref(),
             &[format!(
                 "docking.latch.capture_rates=(max_angular_rate_deg_s: {v})"
             )],
@@ -156,7 +156,7 @@ fn val_capture_rate_limits_bad_input_is_located() {
     let r = Command::new(env!("CARGO_BIN_EXE_rpod"))
         .args([
             "run",
-            "scenes/docking_aligned.ron",
+            "scenes/examples/docking_aligned.ron",
             "--set",
             "docking.latch.capture_rates=(max_axial_rate_m_s: -1.0)",
             "--out",
@@ -251,12 +251,16 @@ fn val_compliant_latch_bad_input_is_located() {
             "docking.latch.joint.damping_n_s_m",
         ),
     ] {
-        let e = load_scene_file("scenes/docking_aligned.ron".as_ref(), &[set.into()]).unwrap_err();
+        let e = load_scene_file(
+            "scenes/examples/docking_aligned.ron".as_ref(),
+            &[set.into()],
+        )
+        .unwrap_err();
         assert_eq!(e.field, field, "{e}");
         assert!(e.line > 0 && e.message.contains("positive"), "{e}");
     }
     let e = load_scene_file(
-        "scenes/docking_aligned.ron".as_ref(),
+        "scenes/examples/docking_aligned.ron".as_ref(),
         &[LATCH.into(), "docking.contact=Rigid".into()],
     )
     .unwrap_err();
@@ -345,7 +349,7 @@ fn val_release_when_not_docked_is_an_event_and_bad_scenes_are_located() {
     assert_ne!(dock(&s).state, DockState::Released);
     // Scene errors: not seated at the start; bad separation springs; release without a mechanism.
     let e = load_scene_file(
-        "scenes/undock_depart.ron".as_ref(),
+        "scenes/examples/undock_depart.ron".as_ref(),
         &["bodies.chaser.initial.pos_m=(1.6, 0.0, 0.0)".into()],
     )
     .and_then(|l| Simulation::new(&l).map(|_| ()))
@@ -367,12 +371,13 @@ fn val_release_when_not_docked_is_an_event_and_bad_scenes_are_located() {
         ),
         ("docking.contact=Rigid", "docking.separation"),
     ] {
-        let e = load_scene_file("scenes/undock_depart.ron".as_ref(), &[set.into()]).unwrap_err();
+        let e = load_scene_file("scenes/examples/undock_depart.ron".as_ref(), &[set.into()])
+            .unwrap_err();
         assert_eq!(e.field, field, "{e}");
         assert!(e.line > 0, "{e}");
     }
     let e = load_scene_file(
-        "scenes/undock_depart.ron".as_ref(),
+        "scenes/examples/undock_depart.ron".as_ref(),
         &["docking=None".into()],
     )
     .and_then(|l| Simulation::new(&l).map(|_| ()))

@@ -144,7 +144,8 @@ fn val_monitor_cone_in_slot_clearances() {
 
 #[test]
 fn val_collision_course_names_the_panel_and_time() {
-    let loaded = rpod::scene::load_scene_file("scenes/collision_course.ron".as_ref(), &[]).unwrap();
+    let loaded =
+        rpod::scene::load_scene_file("scenes/examples/collision_course.ron".as_ref(), &[]).unwrap();
     let mut sim = Simulation::new(&loaded).unwrap();
     // Straight-line prediction from the initial world states: the chaser cube (half 0.3 m) and
     // the panel (half-thickness 0.015 m) share the target's x axis as normal.
@@ -201,7 +202,8 @@ fn val_collision_course_names_the_panel_and_time() {
 fn val_contacts_csv_impulses_add_up_to_the_momentum_exchanged() {
     let dir = std::env::temp_dir().join(format!("rpod_contacts_csv_{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let loaded = rpod::scene::load_scene_file("scenes/collision_course.ron".as_ref(), &[]).unwrap();
+    let loaded =
+        rpod::scene::load_scene_file("scenes/examples/collision_course.ron".as_ref(), &[]).unwrap();
     let mut sim = Simulation::new(&loaded).unwrap();
     sim.record_to(&dir).unwrap();
     sim.step(sim.steps_for(40.0));
@@ -327,7 +329,7 @@ fn val_monitor_no_interval_search_after_touching() {
     let loaded = rpod::scene::load_scene_file(
         std::path::Path::new(concat!(
             env!("CARGO_MANIFEST_DIR"),
-            "/scenes/docking_aligned.ron"
+            "/scenes/examples/docking_aligned.ron"
         )),
         &[law.to_string(), "duration_s=30.0".to_string()],
     )

@@ -12,7 +12,7 @@
 //!    Clohessy–Wiltshire closed form (`tests/common::cw`) within the linearisation error bound
 //!    `rpod::orbit::cw::cw_linearisation_error_bound`, plus the multi-rate integration's own
 //!    allowance: its stated per-step tolerance `tol_m` times the number of pipeline steps.
-//! 3. `val_multirate_matches_fixed_on_bundled_scenes`: every bundled example scene (`scenes/*.ron`)
+//! 3. `val_multirate_matches_fixed_on_bundled_scenes`: every bundled example scene (`scenes/examples/*.ron`)
 //!    but the mesh flagship run twice, `stepping: Fixed` and `MultiRate()` (defaults). Reference:
 //!    the fixed-step run. Required, from issue 29: identical docking outcome and latch time
 //!    within one control period (0.1 s, the flagship's), identical guarantee verdicts and
@@ -175,7 +175,7 @@ fn run(path: &std::path::Path, stepping: &str) -> (rpod::sim::Simulation, Sample
 
 #[test]
 fn val_multirate_matches_fixed_on_bundled_scenes() {
-    let mut paths: Vec<_> = std::fs::read_dir("scenes")
+    let mut paths: Vec<_> = std::fs::read_dir("scenes/examples")
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "ron"))

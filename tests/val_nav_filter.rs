@@ -41,7 +41,7 @@ fn sim(filter: bool, point: &str) -> Simulation {
         gains: Pd(natural_frequency_rad_s: 0.05, damping_ratio: 1.0)))"#
     );
     Simulation::from_file(
-        "scenes/orbit_approach_latch.ron",
+        "scenes/examples/orbit_approach_latch.ron",
         &[
             "duration_s=300.0".to_string(),
             "dt_s=0.05".to_string(),
@@ -110,7 +110,7 @@ fn a_filter_on_a_sensor_that_cannot_feed_it_is_a_located_error() {
         params: (hold_m: (0.0, -60.0, 0.0), gains: Pd(natural_frequency_rad_s: 0.05, damping_ratio: 1.0)))"#
     );
     let e = Simulation::from_file(
-        "scenes/orbit_approach_latch.ron",
+        "scenes/examples/orbit_approach_latch.ron",
         &[format!("controllers=[{TARGET_ATTITUDE}, {law}]")],
     )
     .err()

@@ -1,4 +1,4 @@
-//! The flagship scene `scenes/orbit_approach_latch.ron` (100 m → LATCHED in orbit with the
+//! The flagship scene `scenes/examples/orbit_approach_latch.ron` (100 m → LATCHED in orbit with the
 //! generic laws) checked against the physics, and the Hill-frame columns of `trajectory.csv`.
 //!
 //! References:
@@ -39,7 +39,7 @@ use std::path::Path;
 
 #[test]
 fn val_orbit_approach_latch_physics() {
-    let loaded = load_scene_file(Path::new("scenes/orbit_approach_latch.ron"), &[])
+    let loaded = load_scene_file(Path::new("scenes/examples/orbit_approach_latch.ron"), &[])
         .unwrap_or_else(|e| panic!("{e}"));
     let mut sim = Simulation::new(&loaded).unwrap();
     let chaser_slot = 1;

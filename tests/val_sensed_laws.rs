@@ -27,7 +27,7 @@ fn hill_pd(sensor: &str, point: &str) -> String {
 
 fn final_chaser(controllers: &str) -> nalgebra::Vector3<f64> {
     let mut sim = Simulation::from_file(
-        "scenes/orbit_approach_latch.ron",
+        "scenes/examples/orbit_approach_latch.ron",
         &[
             "duration_s=60.0".to_string(),
             format!("controllers=[{controllers}]"),
@@ -66,7 +66,7 @@ fn a_noisy_sensor_changes_a_generic_laws_trajectory_and_an_ideal_one_does_not() 
 
 fn error(controllers: &str) -> rpod::scene::SceneError {
     Simulation::from_file(
-        "scenes/orbit_approach_latch.ron",
+        "scenes/examples/orbit_approach_latch.ron",
         &[format!("controllers=[{controllers}]")],
     )
     .err()

@@ -2,7 +2,7 @@
 //! issue 28 item 3), run through the whole scene → ECS → compliant-model pipeline, against
 //! independent references.
 //!
-//! - **Pure axial soft capture** (`scenes/soft_capture.ron` with the chaser on the docking axis,
+//! - **Pure axial soft capture** (`scenes/examples/soft_capture.ron` with the chaser on the docking axis,
 //!   no yaw, dt = 1 ms): both centres of mass lie on the axis, so from the capture on the motion
 //!   is the 1-D motion of two free masses (chaser 300 kg, target 800 kg; the ring is held by the
 //!   target and lumped with it, so its mass does not enter) joined by the six legs. The
@@ -18,7 +18,7 @@
 //!   stroke's peak is the largest of the sub-step samples, within ½(ωh)² < 1e-5 of the true
 //!   one; the force peaks at the capture instant (the dampers), which both sample; RK4 at
 //!   10 µs is exact to 1e-12. Measured: 4.5e-7 (stroke), 0 (force).
-//! - **Event sequence**: in `scenes/soft_capture.ron` (3 cm off axis, yawed 1°, closing at
+//! - **Event sequence**: in `scenes/examples/soft_capture.ron` (3 cm off axis, yawed 1°, closing at
 //!   0.08 m/s) `SOFT_CAPTURED`, `RETRACTED`, `HARD_DOCKED` occur in that order; the retraction lasts
 //!   `retracted_stroke_m / retraction_speed_m_s` (the closed form of a constant-speed
 //!   retraction) to within one step (the retraction advances by whole steps and the state is
@@ -61,7 +61,7 @@ use rpod::sim::Simulation;
 use rpod::sim::docking::{DockState, Docking};
 use std::process::Command;
 
-const SCENE: &str = "scenes/soft_capture.ron";
+const SCENE: &str = "scenes/examples/soft_capture.ron";
 
 fn sim(set: &[String]) -> Simulation {
     let loaded = load_scene_file(SCENE.as_ref(), set).unwrap_or_else(|e| panic!("{e}"));
@@ -442,7 +442,7 @@ fn number_after(text: &str, key: &str) -> f64 {
 fn regress_missed_after_the_capture_latches_let_go_names_the_let_go() {
     let c = rpod::trials::load("scenes/trials/initial_contact_envelope.ron".as_ref())
         .unwrap_or_else(|e| panic!("{e}"));
-    let scene = load_scene_file("scenes/soft_capture.ron".as_ref(), &[]).unwrap();
+    let scene = load_scene_file("scenes/examples/soft_capture.ron".as_ref(), &[]).unwrap();
     let spec = scene.scene.docking.as_ref().unwrap();
     let break_n = spec.latch.break_force_n;
     let Mechanism::SoftCapture(sc) = &spec.mechanism else {
@@ -514,7 +514,7 @@ fn docked_success_is_the_soft_capture_end_state_and_latched_is_refused() {
     std::fs::create_dir_all(&d).unwrap();
     let f = d.join("latched.ron");
     let text = std::fs::read_to_string("scenes/trials/initial_contact_envelope.ron").unwrap();
-    let scene = std::fs::canonicalize("scenes/soft_capture.ron").unwrap();
+    let scene = std::fs::canonicalize("scenes/examples/soft_capture.ron").unwrap();
     std::fs::write(
         &f,
         text.replace("../soft_capture.ron", &scene.display().to_string())

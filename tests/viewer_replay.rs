@@ -37,7 +37,7 @@ use std::path::Path;
 use std::process::Command;
 
 fn record_free_drift(dir: &Path, seconds: f64) {
-    record("scenes/free_drift.ron", dir, seconds);
+    record("scenes/examples/free_drift.ron", dir, seconds);
 }
 
 fn record(scene: &str, dir: &Path, seconds: f64) {
@@ -248,7 +248,7 @@ fn orange_share(img: &Png, a: [f64; 2], b: [f64; 2]) -> f64 {
 fn val_viewer_replay_draws_contact_force_arrows() {
     let dir = display_and_dir("rpod_viewer_arrows");
     let run = dir.join("run");
-    record("scenes/collision_course.ron", &run, 40.0);
+    record("scenes/examples/collision_course.ron", &run, 40.0);
     // The first contact (from events.jsonl) and the contacts.csv row that closes the recorded
     // interval it falls in (the contact lasts 0.02 s, well inside one 0.1 s row interval).
     let events = std::fs::read_to_string(run.join("events.jsonl")).unwrap();
@@ -397,14 +397,15 @@ fn check_picture(img: &Png, side: &serde_json::Value) {
 #[test]
 fn val_viewer_live_view_screenshot_shows_spacecraft() {
     let dir = display_and_dir("rpod_viewer_live");
-    let loaded = rpod::scene::load_scene_file(Path::new("scenes/free_drift.ron"), &[]).unwrap();
+    let loaded =
+        rpod::scene::load_scene_file(Path::new("scenes/examples/free_drift.ron"), &[]).unwrap();
     let sim = rpod::sim::Simulation::new(&loaded).unwrap();
     // Full size, and the 3-D view drawn at half size and stretched to the window.
     for (png, extra) in [
         ("live.png", &["--no-overlays"][..]),
         ("half.png", &["--no-overlays", "--render-scale", "0.5"][..]),
     ] {
-        let cmd = ["view".as_ref(), "scenes/free_drift.ron".as_ref()];
+        let cmd = ["view".as_ref(), "scenes/examples/free_drift.ron".as_ref()];
         let (img, side) = screenshot_with(&cmd, &dir.join(png), extra);
         // Paused at t = 0: the bodies drawn are where the simulation starts them.
         assert_eq!(side["t_s"].as_f64().unwrap(), 0.0);
@@ -491,7 +492,7 @@ fn regress_viewer_bad_model_file_is_a_clear_error() {
     std::fs::create_dir_all(dir.join("models")).unwrap();
     std::fs::write(dir.join("models/hga_dish.gltf"), "this is not glTF\n").unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_rpod"))
-        .args(["view", "scenes/free_drift.ron", "--frames", "600"])
+        .args(["view", "scenes/examples/free_drift.ron", "--frames", "600"])
         .args(["--width", "320", "--height", "180", "--no-overlays"])
         .env("RPOD_ASSETS", &dir)
         .output()
@@ -590,12 +591,22 @@ fn check_lines(dir: &Path, scene: &str, camera: &str, layers: &str) -> Vec<Strin
 fn val_viewer_draws_frames_axes_and_closest_segment() {
     let dir = display_and_dir("rpod_viewer_lines");
     // Far out: the LVLH axes, the Earth direction and the 40 m closest-points segment.
-    let seen = check_lines(&dir, "scenes/free_drift.ron", "overview", "lvlh,closest");
+    let seen = check_lines(
+        &dir,
+        "scenes/examples/free_drift.ron",
+        "overview",
+        "lvlh,closest",
+    );
     for k in ["LVLH", "Earth", "closest"] {
         assert!(seen.iter().any(|s| s == k), "no {k} line checked");
     }
     // Close up: the two docking-port frames.
-    let seen = check_lines(&dir, "scenes/docking_aligned.ron", "overview", "ports");
+    let seen = check_lines(
+        &dir,
+        "scenes/examples/docking_aligned.ron",
+        "overview",
+        "ports",
+    );
     assert!(seen.iter().filter(|s| *s == "port").count() >= 2);
     let _ = std::fs::remove_dir_all(&dir);
 }

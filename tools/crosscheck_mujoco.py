@@ -6,7 +6,7 @@ time into a venv of your own:
 
     python3 -m venv .venv-mujoco && .venv-mujoco/bin/pip install mujoco numpy
     rpod trials scenes/trials/capture_envelope.ron --out out/envelope
-    rpod run scenes/docking_aligned.ron --out out/docking_aligned
+    rpod run scenes/examples/docking_aligned.ron --out out/docking_aligned
     .venv-mujoco/bin/python tools/crosscheck_mujoco.py out/envelope/trials.csv out/docking_aligned/summary.json
 
 What is the same as rpod: the geometry of the mechanism, rebuilt here from the scene's numbers

@@ -3,7 +3,7 @@
 
 A spacecraft as a CAD export would give it, one OBJ object per component (each becomes a
 collider named by the object, e.g. `target/solar_array_py_2`), in the body frame of the
-flagship's target (scenes/orbit_approach_latch.ron), metres:
+flagship's target (scenes/examples/orbit_approach_latch.ron), metres:
 
 * `bus`            a 1.6 x 1.5 x 1.5 m box centred on the origin, its faces subdivided;
 * `docking_port`   a collar (a ring 0.26-0.34 m in radius, x 0.80-0.86 m) around the +x port,

@@ -1,4 +1,4 @@
-"""Fly the flagship scene (scenes/orbit_approach_latch.ron) with a port-to-port PD law written
+"""Fly the flagship scene (scenes/examples/orbit_approach_latch.ron) with a port-to-port PD law written
 in Python, then plot the approach with matplotlib: range to the target port and lateral offset
 against time, and the chaser's track in the target's Hill frame.
 

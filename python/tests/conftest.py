@@ -7,7 +7,8 @@ import pytest
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
 SCENES = REPO / "scenes"
-FLAGSHIP = SCENES / "orbit_approach_latch.ron"
+EXAMPLES = SCENES / "examples"
+FLAGSHIP = EXAMPLES / "orbit_approach_latch.ron"
 
 
 @pytest.fixture
@@ -16,4 +17,4 @@ def out_dir(tmp_path):
 
 
 def scene(name: str) -> str:
-    return os.fspath(SCENES / name)
+    return os.fspath(EXAMPLES / name)

@@ -223,7 +223,7 @@ def test_failing_law_stops_the_run_and_no_summary_is_written(law, err, tmp_path)
 # -- 6. bundled scenes ---------------------------------------------------------------------------
 def test_bundled_scenes_are_the_repository_scenes():
     names = rpod.scenes.names()
-    # Every scene of the repository (examples at the top, papers under papers/PAPER/), not the
+    # Every scene of the repository (examples under examples/, papers under papers/PAPER/), not the
     # trials files.
     files = {p.stem: p for p in SCENES.rglob("*.ron") if "trials" not in p.relative_to(SCENES).parts}
     assert names == sorted(files)

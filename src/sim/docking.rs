@@ -1435,7 +1435,7 @@ mod tests {
         let sc = crate::scene::load_scene_file(
             std::path::Path::new(concat!(
                 env!("CARGO_MANIFEST_DIR"),
-                "/scenes/soft_capture.ron"
+                "/scenes/examples/soft_capture.ron"
             )),
             &[],
         )

@@ -355,7 +355,8 @@ mod tests {
 
     #[test]
     fn val_viewer_closest_points_and_contact_between_parallel_box_faces() {
-        let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/docking_aligned.ron");
+        let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("scenes/examples/docking_aligned.ron");
         let scene = crate::scene::load_scene_file(&p, &[]).unwrap().scene;
         let geom = SceneGeom::new(&scene);
         let (ca, cb) = (

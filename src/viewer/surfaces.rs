@@ -287,7 +287,7 @@ mod tests {
 
     fn load(name: &str) -> Scene {
         let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("scenes")
+            .join("scenes/examples")
             .join(name);
         crate::scene::load_scene_file(&p, &[])
             .expect("scene loads")

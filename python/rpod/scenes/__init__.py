@@ -5,8 +5,8 @@
 >>> rpod.scenes.names()[:3]
 ['collision_course', 'docking_aligned', 'docking_miss']
 
-In a source checkout the files here are links to ``scenes/*.ron`` at the repository's root (one
-copy of each scene); a wheel holds the files themselves.
+In a source checkout the files here are links to the scene files under ``scenes/examples/`` and
+``scenes/papers/PAPER/`` (one copy of each scene); a wheel holds the files themselves.
 """
 
 from __future__ import annotations
