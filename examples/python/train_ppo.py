@@ -8,9 +8,15 @@ Everything about the task is the environment's defaults (``rpod.gym.DockingEnv``
 0.2 N·m of authority held for 0.5 s, the observation scaled to order one, progress and
 alignment rewards as differences of a potential, +10 on LATCHED; see ``docs/python.md``).
 PPO runs at Stable-Baselines3's defaults (``MlpPolicy``, learning rate 3e-4, 10 epochs of
-64-sample minibatches, γ = 0.99, λ = 0.95, clip 0.2) with ``n_steps`` 512 per worker (1024 per
-update with two workers, half the default's 2048: an hour on this machine gives tens of thousands
-of steps, and more updates of fewer samples learn sooner). A curriculum over the start distance (the
+64-sample minibatches, γ = 0.99, λ = 0.95, clip 0.2) with three changes, each a standard knob of
+the library: ``n_steps`` 512 per worker (1024 per update with two workers, half the default's 2048:
+an hour on this machine gives about a hundred thousand steps, and more updates of fewer samples
+learn sooner); the policy's initial action noise ``log_std_init`` −1 (a standard deviation of
+0.37 of full scale instead of 1: at 1 the clipped Gaussian is nearly bang-bang, a random walk of
+about 0.07 m/s over an episode, larger than the mechanism's capture speeds, so exploration
+rarely lands); and the rewards scaled by their running standard deviation (``VecNormalize``,
+rewards only: the observation is already of order one) so that the +10 of a latch and the
+centimetre progress terms share one scale for the value function. A curriculum over the start distance (the
 environment's ``set_ranges``): starts 25–40 cm above the seat (the cone's tip 5–20 cm above the
 slot's mouth), widened to 30–70 cm, 40–100 cm and
 the environment's default 50–150 cm each time 60 % of the last rollout's episodes latched; the
@@ -157,6 +163,10 @@ def main():
     ap.add_argument("--plot", type=pathlib.Path, default=None, help="copy of the plot")
     ap.add_argument("--no-curriculum", dest="curriculum", action="store_false",
                     help="train on the default start ranges from the first step")
+    ap.add_argument("--log-std-init", type=float, default=-1.0,
+                    help="the policy's initial log standard deviation (SB3's default: 0)")
+    ap.add_argument("--no-norm-reward", dest="norm_reward", action="store_false",
+                    help="train on the raw rewards (no VecNormalize)")
     ap.add_argument("--eval-workers", type=int, default=2)
     ap.add_argument("--eval-minutes", type=float, default=None,
                     help="stop the evaluation after this (the episodes done are reported)")
@@ -170,13 +180,16 @@ def main():
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.callbacks import BaseCallback
-    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
 
     torch.set_num_threads(1)
     a.out.mkdir(parents=True, exist_ok=True)
     fns = [make_env(a.seed * 1000 + i) for i in range(a.n_envs)]
     venv = SubprocVecEnv(fns, start_method="forkserver") if a.n_envs > 1 else DummyVecEnv(fns)
-    model = PPO("MlpPolicy", venv, n_steps=512, seed=a.seed, verbose=0, device="cpu")
+    if a.norm_reward:
+        venv = VecNormalize(venv, norm_obs=False, norm_reward=True, gamma=0.99)
+    model = PPO("MlpPolicy", venv, n_steps=512, seed=a.seed, verbose=0, device="cpu",
+                policy_kwargs={"log_std_init": a.log_std_init})
     stages = [(0.25, 0.4), (0.3, 0.7), (0.4, 1.0), None]  # None: the environment's default
     default_range = venv.get_attr("ranges")[0]["start_range_m"]
     stage = [0]
@@ -239,7 +252,9 @@ def main():
     venv.close()
     (a.out / "train.json").write_text(json.dumps({
         "seed": a.seed, "n_envs": a.n_envs, "training_minutes": round(train_min, 2),
-        "env_steps": int(model.num_timesteps)}, indent=1))
+        "env_steps": int(model.num_timesteps), "log_std_init": a.log_std_init,
+        "norm_reward": a.norm_reward, "curriculum": a.curriculum, "final_stage": stage[0]},
+        indent=1))
     finish_evaluation(a)
 
 
