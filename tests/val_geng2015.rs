@@ -19,7 +19,7 @@
 
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use rpod::control::geng2015::{
-    BodyStateEci, Geng2015Controller, Geng2015Disturbances, Geng2015Law, Geng2015Obs,
+    BodyStateEci, Geng2015Disturbances, Geng2015Law, Geng2015Obs, Geng2015Twisting,
     gravity_gradient_torque_nm, relative_state,
 };
 use rpod::control::geng2015::{Geng2015Loop, observation};
@@ -188,7 +188,7 @@ fn val_geng2015_wiring_matches_independent_integration() {
         .clone();
     let n = (MU_EARTH_M3_S2 / 7170.0e3f64.powi(3)).sqrt();
     let dist = Geng2015Disturbances::paper_linear(n);
-    let mut ctrl = Geng2015Controller::new(Geng2015Law::M1, params.clone());
+    let mut ctrl = Geng2015Twisting::new(Geng2015Law::M1, params.clone());
     let (ms, mt) = (240.0, 320.0);
     let (js, jt) = (params.chaser_inertia_kg_m2, params.target_inertia_kg_m2);
     let h = 0.01;

@@ -22,7 +22,7 @@
 use nalgebra::{Vector2, Vector3};
 use rpod::actuation::thrusters::{G0_M_S2, ThrusterParams};
 use rpod::control::xu2019::Xu2019Instance;
-use rpod::control::xu2019::{Xu2019Controller, Xu2019Observation, Xu2019Params};
+use rpod::control::xu2019::{Xu2019Observation, Xu2019Params, Xu2019Potential};
 use rpod::reproduce::xu2019::{
     EXPERIMENT_SCENE, GOAL_ANGLE_TOL_DEG, GOAL_POS_TOL_M, SIMULATION_SCENE, claims, compute,
 };
@@ -37,7 +37,7 @@ fn sim(text: &str) -> Simulation {
 #[test]
 fn val_xu2019_ideal_case_matches_independent_integration() {
     let mut s = sim(SIMULATION_SCENE);
-    let law = Xu2019Controller::new(Xu2019Params::paper());
+    let law = Xu2019Potential::new(Xu2019Params::paper());
     let (m, iz, dt) = (9.0, 0.05, 0.005);
     // State (x, y, θ, ẋ, ẏ, θ̇).
     let mut x = [0.809, 0.224, 7f64.to_radians(), 0.0, 0.0, 0.0];

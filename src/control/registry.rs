@@ -77,11 +77,14 @@ static REGISTRY: LazyLock<RwLock<BTreeMap<String, Entry>>> = LazyLock::new(|| {
 fn builtin() -> Vec<(&'static str, Entry)> {
     use crate::control::{generic, geng2015, guo2016, xu2015, xu2019, zhang2018};
     vec![
-        ("Guo2016", Entry::Spec(de_spec::<guo2016::SceneSpec>)),
-        ("Geng2015", Entry::Spec(de_spec::<geng2015::SceneSpec>)),
-        ("Xu2015", Entry::Spec(de_spec::<xu2015::SceneSpec>)),
-        ("Zhang2018", Entry::Spec(de_spec::<zhang2018::SceneSpec>)),
-        ("Xu2019", Entry::Spec(de_spec::<xu2019::SceneSpec>)),
+        ("Guo2016", Entry::Spec(de_spec::<guo2016::Guo2016Spec>)),
+        ("Geng2015", Entry::Spec(de_spec::<geng2015::Geng2015Spec>)),
+        ("Xu2015", Entry::Spec(de_spec::<xu2015::Xu2015Spec>)),
+        (
+            "Zhang2018",
+            Entry::Spec(de_spec::<zhang2018::Zhang2018Spec>),
+        ),
+        ("Xu2019", Entry::Spec(de_spec::<xu2019::Xu2019Spec>)),
         (
             "HillPd",
             Entry::Law(de_params::<generic::hill::HillPdParams>),

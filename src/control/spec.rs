@@ -520,7 +520,7 @@ impl fmt::Debug for ControllerSpec {
 
 impl ControllerSpec {
     /// The entry as the spec type `S` of a [`register_spec`](crate::control::registry::register_spec) law (e.g. a paper law's
-    /// `SceneSpec`), if it is one.
+    /// `Guo2016Spec`), if it is one.
     pub fn spec<S: 'static>(&self) -> Option<&S> {
         match &self.body {
             ControllerBody::Spec(s) => (**s).as_any().downcast_ref::<S>(),

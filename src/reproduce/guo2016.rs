@@ -20,7 +20,7 @@
 //! plots and `claims.json`. Tests use [`run_case`] with shortened horizons.
 
 use super::guo2016_ct::{CtRun, CtSetup, run_continuous, run_sampled};
-use crate::control::guo2016::{Guo2016Instance, SceneSpec};
+use crate::control::guo2016::{Guo2016Instance, Guo2016Spec};
 use crate::geometry::cissoid::Cissoid;
 use crate::report::ClaimKind::{BeyondThePaper, Paper};
 use crate::report::{Claim, Color, Dash, Figure, LineStyle, Plot, ReportBuilder, held_word};
@@ -64,12 +64,12 @@ pub fn load_bundled(file: &str) -> Result<LoadedScene, String> {
 }
 
 /// The scene's (first) Guo2016 controller entry, for changes made before a run.
-pub fn spec_mut(loaded: &mut LoadedScene) -> Option<&mut SceneSpec> {
+pub fn spec_mut(loaded: &mut LoadedScene) -> Option<&mut Guo2016Spec> {
     loaded
         .scene
         .controllers
         .iter_mut()
-        .find_map(|c| c.spec_mut::<SceneSpec>())
+        .find_map(|c| c.spec_mut::<Guo2016Spec>())
 }
 
 /// One recorded sample of a run.
@@ -303,7 +303,10 @@ fn spec_name(loaded: &LoadedScene) -> String {
         .scene
         .controllers
         .iter()
-        .find_map(|c| c.spec::<SceneSpec>().map(|s| s.corridor_guarantee.clone()))
+        .find_map(|c| {
+            c.spec::<Guo2016Spec>()
+                .map(|s| s.corridor_guarantee.clone())
+        })
         .unwrap_or_default()
 }
 
@@ -454,11 +457,11 @@ pub fn campaign(n: usize, seed: u64, duration_s: f64) -> Result<Vec<CampaignRun>
 }
 
 /// The scene's Guo2016 entry.
-pub fn spec_of(l: &LoadedScene) -> SceneSpec {
+pub fn spec_of(l: &LoadedScene) -> Guo2016Spec {
     l.scene
         .controllers
         .iter()
-        .find_map(|c| c.spec::<SceneSpec>().cloned())
+        .find_map(|c| c.spec::<Guo2016Spec>().cloned())
         .expect("a Guo2016 controller")
 }
 

@@ -20,7 +20,7 @@
 //! and each case's `trajectory.csv`, `events.jsonl`, `summary.json` under `OUT/<case>/`.
 
 use crate::control::xu2019::Xu2019Instance;
-use crate::control::xu2019::{Xu2019Controller, Xu2019Params};
+use crate::control::xu2019::{Xu2019Params, Xu2019Potential};
 use crate::geometry::superquadric::RadialForm;
 use crate::report::ClaimKind::{BeyondThePaper, Paper};
 use crate::report::{Claim, Color, Dash, Figure, LineStyle, Plot, ReportBuilder, held_word};
@@ -254,7 +254,7 @@ pub fn run_loaded(
     let dt = sim.scene.dt_s;
     let per_sample = (SAMPLE_S / dt).round().max(1.0) as u64;
     let n_samples = sim.steps_for(duration) / per_sample;
-    let law = Xu2019Controller::new(Xu2019Params::paper());
+    let law = Xu2019Potential::new(Xu2019Params::paper());
     let goal = Vector3::new(
         law.params.goal_pos_lab_m[0],
         law.params.goal_pos_lab_m[1],
@@ -349,7 +349,7 @@ fn push_sample(
 fn read_final_state(
     run: &mut CaseRun,
     sim: &Simulation,
-    law: &Xu2019Controller,
+    law: &Xu2019Potential,
     goal: Vector3<f64>,
 ) {
     let act = &sim

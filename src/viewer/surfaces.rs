@@ -5,7 +5,7 @@
 //!
 //! - Xu, Wen, Wei (2019), air-bearing table: the superquadric obstacle and the heart-shaped
 //!   keep-out of the target, from the scene's `Xu2019` controller
-//!   ([`crate::control::xu2019::SceneSpec::params`]: `obstacle`, `heart`). Both laws act on the
+//!   ([`crate::control::xu2019::Xu2019Spec::params`]: `obstacle`, `heart`). Both laws act on the
 //!   chaser's centre of mass in the table plane, so each curve is drawn as a vertical prism over
 //!   the table (z from the top, 0, to twice the chaser's initial centre-of-mass height, so the
 //!   plane the law works in is at mid-height); the curve itself is also drawn as a line at the
@@ -305,7 +305,7 @@ mod tests {
     fn invariant_viewer_xu2019_prisms_on_the_laws_boundaries() {
         let scene = load("papers/xu2019/xu2019_simulation.ron");
         let surfaces = scene_surfaces(&scene);
-        let Some(spec) = scene.controllers[0].spec::<crate::control::xu2019::SceneSpec>() else {
+        let Some(spec) = scene.controllers[0].spec::<crate::control::xu2019::Xu2019Spec>() else {
             panic!("xu2019 scene has an Xu2019 controller");
         };
         let law = spec.params();
@@ -379,7 +379,8 @@ mod tests {
     fn invariant_viewer_capture_and_keep_out_spheres() {
         // Zhang 2018: a sphere of radius l about every body.
         let scene = load("papers/zhang2018/zhang2018_pair.ron");
-        let Some(spec) = scene.controllers[0].spec::<crate::control::zhang2018::SceneSpec>() else {
+        let Some(spec) = scene.controllers[0].spec::<crate::control::zhang2018::Zhang2018Spec>()
+        else {
             panic!("zhang2018 scene has a Zhang2018 controller");
         };
         let l = spec.capture_radius_m;
@@ -422,7 +423,7 @@ mod tests {
         // The corridor a Guo 2016 entry draws: every vertex at the cissoid's radius for its x,
         // to 1e-9 m, in the target's body frame, out to r = a.
         let scene = load("papers/guo2016/guo2016_corridor.ron");
-        let Some(spec) = scene.controllers[0].spec::<crate::control::guo2016::SceneSpec>() else {
+        let Some(spec) = scene.controllers[0].spec::<crate::control::guo2016::Guo2016Spec>() else {
             panic!("guo2016 scene has a Guo2016 controller");
         };
         let cis =

@@ -472,9 +472,11 @@ pub struct Geng2015Diag {
     pub u: Vector6<f64>,
 }
 
-/// One of T1/T2/M1/M2 with its integral state.
+/// One of T1/T2/M1/M2 (twisting and modified twisting) with its integral state: the law itself,
+/// called by the scene binding [`Geng2015Loop`] (which is the
+/// [`Controller`](crate::control::Controller)).
 #[derive(Debug, Clone)]
-pub struct Geng2015Controller {
+pub struct Geng2015Twisting {
     /// Which law.
     pub law: Geng2015Law,
     /// Parameters.
@@ -484,7 +486,7 @@ pub struct Geng2015Controller {
     diag: Geng2015Diag,
 }
 
-impl Geng2015Controller {
+impl Geng2015Twisting {
     /// New controller with zero integral state.
     pub fn new(law: Geng2015Law, params: Geng2015Params) -> Self {
         Self {

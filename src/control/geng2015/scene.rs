@@ -1,4 +1,4 @@
-//! The Geng 2015 law in a scene: the entry `Geng2015((...))` ([`SceneSpec`], its
+//! The Geng 2015 law in a scene: the entry `Geng2015((...))` ([`Geng2015Spec`], its
 //! [`LawSpec`](crate::control::spec::LawSpec) implementation), the paper's disturbances applied
 //! by the simulation ([`Geng2015Disturbance`]) and the controller the generic host runs
 //! ([`Geng2015Loop`]).
@@ -16,7 +16,7 @@ use super::*;
 /// blocks are boxed to keep [`crate::control::ControllerSpec`] small; scenes write them plainly.)
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct SceneSpec {
+pub struct Geng2015Spec {
     /// The body this law flies (the chaser S).
     pub body: String,
     /// The uncontrolled target T.
@@ -172,7 +172,7 @@ pub const COLUMNS: [&str; 25] = [
 #[derive(Debug, Clone)]
 pub struct Geng2015Loop {
     /// The law with its integral state (its `diagnostics()` hold the last call's e, s, u).
-    pub controller: Geng2015Controller,
+    pub controller: Geng2015Twisting,
     /// Chaser body index (scene order).
     pub chaser: usize,
     /// Target body index.
@@ -263,7 +263,7 @@ fn positive(x: f64) -> bool {
     x.is_finite() && x > 0.0
 }
 
-impl crate::control::spec::LawSpec for SceneSpec {
+impl crate::control::spec::LawSpec for Geng2015Spec {
     fn build(
         &self,
         ctx: &mut crate::control::spec::BuildContext,
@@ -443,7 +443,7 @@ impl crate::control::spec::LawSpec for SceneSpec {
                 actuator: crate::actuation::ActuatorSpec::Ideal,
                 ports: None,
                 law: Box::new(Geng2015Loop {
-                    controller: Geng2015Controller::new(spec.law, params),
+                    controller: Geng2015Twisting::new(spec.law, params),
                     chaser,
                     target,
                     force_body_n: Vector3::zeros(),

@@ -359,7 +359,7 @@ fn closed_loop_with(law: Geng2015Law, p: Geng2015Params, linear: bool, t_end: f6
     } else {
         Geng2015Disturbances::paper_periodic(n)
     };
-    let mut ctrl = Geng2015Controller::new(law, p.clone());
+    let mut ctrl = Geng2015Twisting::new(law, p.clone());
     let (s0, t0) = table1();
     let mut obs = Geng2015Obs {
         t_s: 0.0,

@@ -66,7 +66,7 @@
 //! - The corridor guarantee concerns the centre-of-mass point only.
 //!
 //! # In the full simulation (the controller in `scene.rs`, `rpod reproduce guo2016`)
-//! A scene asks for the law with [`SceneSpec`] (mass and inertia from the chaser body). The
+//! A scene asks for the law with [`Guo2016Spec`] (mass and inertia from the chaser body). The
 //! Section 5 scenes (`scenes/papers/guo2016/guo2016_corridor.ron`, `scenes/papers/guo2016/guo2016_no_avoidance.ron`) give the
 //! same numbers as the plant above: final |r_e| = 43.6 m, |σ_e| = 0.085 at 100 s, h > 0
 //! throughout with k2 = 0.02 and with k2 = 0 (paths equal to 1e-8 m), no contact. In a

@@ -1,4 +1,4 @@
-//! The Guo 2016 law in a scene: the entry `Guo2016((...))` ([`SceneSpec`], its
+//! The Guo 2016 law in a scene: the entry `Guo2016((...))` ([`Guo2016Spec`], its
 //! [`LawSpec`](crate::control::spec::LawSpec) implementation), the paper's disturbance torque
 //! ([`Guo2016Disturbance`]), the corridor guarantee and the controller the generic host runs
 //! ([`Guo2016Instance`]).
@@ -28,7 +28,7 @@ fn default_corridor_guarantee() -> String {
 /// scene they are written as plain `(x, y, z)`.)
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct SceneSpec {
+pub struct Guo2016Spec {
     /// The body this law flies.
     pub chaser: String,
     /// The body whose frame carries the corridor and the docking axis (+x).
@@ -73,7 +73,7 @@ pub struct SceneSpec {
     pub corridor_guarantee: String,
 }
 
-impl SceneSpec {
+impl Guo2016Spec {
     /// The Section 5 entry for chaser `chaser` and target `target`: the paper's gains and
     /// corridor (see [`Guo2016Params::paper`] for the choices), σ_d and d_τ of Section 5.
     pub fn paper(chaser: &str, target: &str) -> Self {
@@ -303,7 +303,7 @@ impl crate::guarantee::Guarantee for CorridorGuarantee {
 
 use crate::control::generic::mean_motion_rad_s;
 
-impl crate::control::spec::LawSpec for SceneSpec {
+impl crate::control::spec::LawSpec for Guo2016Spec {
     /// The cissoid approach corridor in the target's body frame, vertex at its centre of mass,
     /// axis +x, out to a radius of a (it is asymptotic to x = 2a); none without a corridor.
     fn drawn(&self, scene: &crate::scene::Scene) -> Vec<crate::geometry::drawn::DrawnSurface> {

@@ -499,9 +499,9 @@ mod scene_spec_tests {
             corridor_a_m: 25.0, corridor_tan_theta: 5.0, r_d_body_m: (2.0, 0.0, 0.0),
             sigma_d_amplitude: (0.001, 0.001, 0.001),
             disturbance_torque_amplitude_nm: (0.001, 0.002, 0.003))"#;
-        let s: SceneSpec = ron::from_str(text).unwrap();
+        let s: Guo2016Spec = ron::from_str(text).unwrap();
         assert!(s.validate().is_ok());
-        let want = SceneSpec::paper("c", "t");
+        let want = Guo2016Spec::paper("c", "t");
         let j = Matrix3::from_diagonal(&Vector3::new(15.0, 17.0, 20.0));
         let (a, b) = (s.params(100.0, j), Guo2016Params::paper());
         assert_eq!(
@@ -513,7 +513,7 @@ mod scene_spec_tests {
             serde_json::to_string(&want).unwrap()
         );
         // Unknown fields and bad numbers are refused, naming the field.
-        assert!(ron::from_str::<SceneSpec>(&text.replace("k3:", "k3_typo:")).is_err());
+        assert!(ron::from_str::<Guo2016Spec>(&text.replace("k3:", "k3_typo:")).is_err());
         let mut bad = s.clone();
         bad.corridor_tan_theta = -1.0;
         assert_eq!(bad.validate().unwrap_err().0, "corridor_tan_theta");

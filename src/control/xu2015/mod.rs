@@ -74,7 +74,7 @@
 //! than h (the model assumes exactly h between samples).
 //!
 //! # In the simulation
-//! [`SceneSpec`] (in `scene.rs`) is how a scene flies either law; the ECS wiring
+//! [`Xu2015Spec`] (in `scene.rs`) is how a scene flies either law; the ECS wiring
 //! (the controller in `scene.rs`) measures ξ in the reference orbit's target orbital frame,
 //! applies the target's maneuver and registers the thrust-authority margins. The bundled
 //! scenes `scenes/papers/xu2015/xu2015_*.ron` reproduce the numbers above to a few 1e−6 (relative) at 90

@@ -1,4 +1,4 @@
-//! The Xu 2015 law in a scene: the entry `Xu2015((...))` ([`SceneSpec`], its
+//! The Xu 2015 law in a scene: the entry `Xu2015((...))` ([`Xu2015Spec`], its
 //! [`LawSpec`](crate::control::spec::LawSpec) implementation), the target manoeuvre
 //! ([`Xu2015Maneuver`]), the measurement noise, the target orbital frame, the thrust-authority
 //! margin and the controller the generic host runs ([`Xu2015Loop`]).
@@ -93,7 +93,7 @@ impl Default for SensorSpec {
 /// mass, world frame); see the controller below for the frame choice.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct SceneSpec {
+pub struct Xu2015Spec {
     /// The body this law flies (the chaser; the paper's 5 N per axis acts on it).
     pub body: String,
     /// The maneuvering target (its centre of mass is the origin of the relative position and
@@ -129,7 +129,7 @@ fn yes() -> bool {
     true
 }
 
-impl SceneSpec {
+impl Xu2015Spec {
     /// Sample period of the flying law, s.
     pub fn sample_period_s(&self) -> f64 {
         match self.law {
@@ -354,7 +354,7 @@ pub struct Xu2015Loop {
     /// Column prefix (`xu2015` or `xu2015_N`).
     pub prefix: String,
     /// The scene's spec.
-    pub spec: SceneSpec,
+    pub spec: Xu2015Spec,
     /// Chaser body index (scene order).
     pub chaser: usize,
     /// Target body index.
@@ -462,7 +462,7 @@ const AXES: [&str; 3] = ["x", "y", "z"];
 #[derive(Default)]
 struct Xu2015Count(usize);
 
-impl crate::control::spec::LawSpec for SceneSpec {
+impl crate::control::spec::LawSpec for Xu2015Spec {
     fn build(
         &self,
         ctx: &mut crate::control::spec::BuildContext,

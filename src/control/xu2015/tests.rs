@@ -428,7 +428,7 @@ mod scene_tests {
     /// rejects a shift inside Ω and negative noise with the field named.
     #[test]
     fn regress_scene_spec_defaults_and_validation() {
-        let s: SceneSpec =
+        let s: Xu2015Spec =
             ron::from_str(r#"(body: "chaser", target: "target", law: Accm)"#).expect("parses");
         assert_eq!(s.accm.sample_period_s, 0.1);
         assert_eq!(s.pd.kp_s2, PdParams::paper().kp_s2);
@@ -440,7 +440,7 @@ mod scene_tests {
         let mut b = s.clone();
         b.sensor.noise_sigma_m = -1.0;
         assert_eq!(b.validate().unwrap_err().0, "sensor.noise_sigma_m");
-        let p: Result<SceneSpec, _> =
+        let p: Result<Xu2015Spec, _> =
             ron::from_str(r#"(body: "c", target: "t", law: Accm, accm: (eta: 1.0))"#);
         assert!(p.is_err(), "unknown field accepted");
     }

@@ -207,7 +207,7 @@ pub struct Xu2019Command {
 
 /// The eq (16) control law.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Xu2019Controller {
+pub struct Xu2019Potential {
     /// Constants and choices.
     pub params: Xu2019Params,
 }
@@ -230,7 +230,7 @@ fn radial_vector(q: Vector2<f64>, d: f64, grad_d: Vector2<f64>) -> (Vector2<f64>
     (e_rho * d, jac)
 }
 
-impl Xu2019Controller {
+impl Xu2019Potential {
     /// A controller with the given constants.
     pub fn new(params: Xu2019Params) -> Self {
         Self { params }

@@ -1,4 +1,4 @@
-//! The Xu 2019 law in a scene: the entry `Xu2019((...))` ([`SceneSpec`], its
+//! The Xu 2019 law in a scene: the entry `Xu2019((...))` ([`Xu2019Spec`], its
 //! [`LawSpec`](crate::control::spec::LawSpec) implementation), the vision system and actuation
 //! choices, the radial-distance guarantees and the controller the generic host runs
 //! ([`Xu2019Instance`]).
@@ -81,7 +81,7 @@ pub enum ActuationSpec {
 /// How a scene asks for the Xu, Wen, Wei (2019) law (`controllers: [Xu2019((...))]`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct SceneSpec {
+pub struct Xu2019Spec {
     /// The chaser simulator.
     pub chaser: String,
     /// Published or exact variant.
@@ -104,7 +104,7 @@ pub struct SceneSpec {
     pub release_on_magnet: bool,
 }
 
-impl SceneSpec {
+impl Xu2019Spec {
     /// The law's constants for this scene.
     pub fn params(&self) -> Xu2019Params {
         let mut p = match self.form {
@@ -235,9 +235,9 @@ pub const COLUMNS: [&str; 17] = [
 #[derive(Debug, Clone)]
 pub struct Xu2019Instance {
     /// The law.
-    pub law: Xu2019Controller,
+    pub law: Xu2019Potential,
     /// The scene's request.
-    pub spec: SceneSpec,
+    pub spec: Xu2019Spec,
     /// Chaser body index.
     pub chaser: usize,
     /// Last observation the law used.
@@ -322,7 +322,7 @@ impl VisionSpec {
     }
 }
 
-impl crate::control::spec::LawSpec for SceneSpec {
+impl crate::control::spec::LawSpec for Xu2019Spec {
     /// On an air-bearing table: the superquadric obstacle and the heart-shaped keep-out the law
     /// keeps the chaser's centre of mass out of (its own [`Xu2019Params`]), as prisms over the
     /// table up to twice the chaser's initial centre-of-mass height (its plane mid-way).
@@ -417,7 +417,7 @@ impl crate::control::spec::LawSpec for SceneSpec {
                 actuator,
                 ports: None,
                 law: Box::new(Xu2019Instance {
-                    law: Xu2019Controller::new(self.params()),
+                    law: Xu2019Potential::new(self.params()),
                     spec: self.clone(),
                     chaser,
                     observation: None,

@@ -7,7 +7,7 @@ use crate::actuation::thrusters::{ThrusterParams, ThrusterPwpf};
 #[test]
 fn val_xu2019_gradient_vs_finite_differences() {
     let h = 1e-7;
-    let fd = |c: &Xu2019Controller, pose: Vector3<f64>| {
+    let fd = |c: &Xu2019Potential, pose: Vector3<f64>| {
         let mut g = Vector3::zeros();
         for i in 0..3 {
             let mut a = pose;
@@ -25,12 +25,12 @@ fn val_xu2019_gradient_vs_finite_differences() {
         Vector3::new(0.35, 1.2, 1.4),
         Vector3::new(0.33, 1.45, 1.5),
     ];
-    let exact = Xu2019Controller::new(Xu2019Params::exact());
-    let eq8_true = Xu2019Controller::new(Xu2019Params {
+    let exact = Xu2019Potential::new(Xu2019Params::exact());
+    let eq8_true = Xu2019Potential::new(Xu2019Params {
         gradient_form: GradientForm::True,
         ..Xu2019Params::paper()
     });
-    let printed = Xu2019Controller::new(Xu2019Params::paper());
+    let printed = Xu2019Potential::new(Xu2019Params::paper());
     for pose in poses {
         for c in [&exact, &eq8_true] {
             let (g, f) = (c.gradient(pose), fd(c, pose));
@@ -54,7 +54,7 @@ fn val_xu2019_gradient_vs_finite_differences() {
 #[test]
 fn invariant_xu2019_goal_is_equilibrium() {
     for p in [Xu2019Params::paper(), Xu2019Params::exact()] {
-        let c = Xu2019Controller::new(p.clone());
+        let c = Xu2019Potential::new(p.clone());
         let goal = Vector3::new(p.goal_pos_lab_m[0], p.goal_pos_lab_m[1], p.goal_theta_rad);
         assert_eq!(c.gradient(goal), Vector3::zeros());
         assert_eq!(c.potential(goal), 0.0);
@@ -65,7 +65,7 @@ fn invariant_xu2019_goal_is_equilibrium() {
 /// body −y).
 #[test]
 fn invariant_xu2019_command_frames() {
-    let c = Xu2019Controller::new(Xu2019Params::paper());
+    let c = Xu2019Potential::new(Xu2019Params::paper());
     let obs = Xu2019Observation {
         t_s: 0.0,
         pos_lab_m: Vector2::new(0.9, 1.4),
@@ -140,7 +140,7 @@ fn start() -> [f64; 6] {
 /// numerical obstacle Euclidean distance (≈ 70 µs a call in release, ~1 ms in debug)
 /// only when `eucl` is set (5 Hz, `MONITOR_PERIOD_S`). Between two obstacle samples the true distance can drop by at most the displacement
 /// since the last sample (the distance is 1-Lipschitz): tracked in `max_frame_move_m`.
-fn monitor(c: &Xu2019Controller, run: &mut Run, s: &[f64; 6], eucl: bool) {
+fn monitor(c: &Xu2019Potential, run: &mut Run, s: &[f64; 6], eucl: bool) {
     let pos = Vector2::new(s[0], s[1]);
     let (dro, drh) = c.radial_distances_m(pos);
     let dre = c.params.obstacle.radial_distance_m(pos, RadialForm::Exact);
@@ -177,7 +177,7 @@ fn new_run() -> Run {
 /// Ideal continuous force: the law is evaluated at every RK4 stage with the true state.
 /// With `saturate`, the body command is clipped per channel to the fully-open valve
 /// wrench (±0.05 N per body axis, ±0.009 N·m), still continuous: saturation alone.
-fn ideal_run(c: &Xu2019Controller, dt: f64, t_end: f64, watch: bool, saturate: bool) -> Run {
+fn ideal_run(c: &Xu2019Potential, dt: f64, t_end: f64, watch: bool, saturate: bool) -> Run {
     let su = Xu2019Setup::paper();
     let tp = ThrusterParams::paper();
     let mut run = new_run();
@@ -218,7 +218,7 @@ fn ideal_run(c: &Xu2019Controller, dt: f64, t_end: f64, watch: bool, saturate: b
 /// difference of successive vision poses, the law held between frames, PWPF channels and
 /// valves stepped every `dt` (1 ms), the body-fixed valve wrench rotated with the true θ
 /// inside each RK4 stage.
-fn pwpf_run(c: &Xu2019Controller, dt: f64, t_end: f64) -> Run {
+fn pwpf_run(c: &Xu2019Potential, dt: f64, t_end: f64) -> Run {
     let su = Xu2019Setup::paper();
     let tp = ThrusterParams::paper();
     let mut pw = ThrusterPwpf::new(&tp);
@@ -278,13 +278,13 @@ fn settle_time(run: &Run, i: usize, goal: f64, frac: f64) -> f64 {
     t
 }
 
-fn final_errors(c: &Xu2019Controller, run: &Run) -> (f64, f64) {
+fn final_errors(c: &Xu2019Potential, run: &Run) -> (f64, f64) {
     let s = run.s.last().unwrap();
     let e = c.pose_error(Vector3::new(s[0], s[1], s[2]));
     (e.xy().norm(), e.z.abs())
 }
 
-fn arrival_time(c: &Xu2019Controller, run: &Run, pos_tol_m: f64, ang_tol_rad: f64) -> f64 {
+fn arrival_time(c: &Xu2019Potential, run: &Run, pos_tol_m: f64, ang_tol_rad: f64) -> f64 {
     let mut t = 0.0;
     for (tk, sk) in run.t.iter().zip(&run.s) {
         let e = c.pose_error(Vector3::new(sk[0], sk[1], sk[2]));
@@ -310,7 +310,7 @@ fn val_xu2019_fig13_ideal_closed_loop() {
         ("paper (eq 8, printed ∇)", Xu2019Params::paper()),
         ("exact (r(α), true ∇)", Xu2019Params::exact()),
     ] {
-        let c = Xu2019Controller::new(p);
+        let c = Xu2019Potential::new(p);
         let run = ideal_run(&c, 0.01, 150.0, true, false);
         let half = ideal_run(&c, 0.005, 60.0, false, false);
         let mut max_diff: f64 = 0.0;
@@ -364,7 +364,7 @@ fn val_xu2019_fig13_ideal_closed_loop() {
 fn invariant_xu2019_lyapunov_true_gradient() {
     let su = Xu2019Setup::paper();
     for p in [Xu2019Params::exact(), Xu2019Params::paper()] {
-        let c = Xu2019Controller::new(p);
+        let c = Xu2019Potential::new(p);
         let run = ideal_run(&c, 0.01, 60.0, false, false);
         let v = |s: &[f64; 6]| {
             c.potential(Vector3::new(s[0], s[1], s[2]))
@@ -421,7 +421,7 @@ fn val_xu2019_corner_attack_eq8_vs_exact() {
     for off in [0.0, 0.1] {
         let goal = o.centre() - diag * 0.5 + Vector2::new(off, -off);
         for (rf, gf) in combos {
-            let c = Xu2019Controller::new(Xu2019Params {
+            let c = Xu2019Potential::new(Xu2019Params {
                 goal_pos_lab_m: [goal.x, goal.y],
                 goal_theta_rad: 0.0,
                 heart: HeartParams {
@@ -483,7 +483,7 @@ fn val_xu2019_corner_attack_eq8_vs_exact() {
 /// ~1 N, 20× the 0.05 N available, so it cannot be matched).
 #[test]
 fn val_xu2019_fig13_pwpf_lag() {
-    let c = Xu2019Controller::new(Xu2019Params::paper());
+    let c = Xu2019Potential::new(Xu2019Params::paper());
     let p = &c.params;
     let ideal = ideal_run(&c, 0.01, 100.0, true, false);
     let sat = ideal_run(&c, 0.01, 100.0, true, true);

@@ -25,7 +25,7 @@
 //!   closed-loop simulator the reproduction and the validation use (`simulate_reconfiguration`,
 //!   `collision_course_plan`, `boundary_value_history`) is reproduction code, in
 //!   `crate::reproduce::zhang2018_sim` (feature `sim`).
-//! * How a scene asks for the law → [`SceneSpec`] (fixed thrust, planned maneuver in `rot`,
+//! * How a scene asks for the law → [`Zhang2018Spec`] (fixed thrust, planned maneuver in `rot`,
 //!   avoidance on/off, l, margin); the ECS wiring (floating origin at the formation centre,
 //!   capture guarantee) is in `scene.rs`.
 //!

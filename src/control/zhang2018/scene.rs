@@ -1,4 +1,4 @@
-//! The Zhang 2018 law in a scene: the entry `Zhang2018((...))` ([`SceneSpec`], its
+//! The Zhang 2018 law in a scene: the entry `Zhang2018((...))` ([`Zhang2018Spec`], its
 //! [`LawSpec`](crate::control::spec::LawSpec) implementation), the capture-distance guarantee
 //! ([`CaptureDistance`]) and the controller the generic host runs ([`LawState`]).
 
@@ -24,7 +24,7 @@ pub struct PlanSegmentSpec {
 /// `capture.A.B` (centre-of-mass separation ≥ l, margin in m) for every body pair.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct SceneSpec {
+pub struct Zhang2018Spec {
     /// The body this law flies.
     pub body: String,
     /// Thrust magnitude F, N (fixed; the paper gives none, [`Zhang2018Params::paper`] uses 1 N).
@@ -46,7 +46,7 @@ fn default_margin_m() -> f64 {
     1000.0
 }
 
-impl SceneSpec {
+impl Zhang2018Spec {
     /// The plan as a [`PlannedManeuver`] (directions in rad).
     pub fn planned_maneuver(&self) -> PlannedManeuver {
         PlannedManeuver {
@@ -200,7 +200,7 @@ fn game_state(states: &[L2State], p: usize, e: usize) -> GameState {
     x
 }
 
-impl crate::control::spec::LawSpec for SceneSpec {
+impl crate::control::spec::LawSpec for Zhang2018Spec {
     /// The capture sphere of radius l about every body's centre of mass (the law's capture
     /// guarantee is |r_a − r_b| ≥ l for every pair).
     fn drawn(&self, scene: &crate::scene::Scene) -> Vec<crate::geometry::drawn::DrawnSurface> {
