@@ -97,7 +97,7 @@ def main():
     ap.add_argument("--rpod", default="target/release/rpod")
     ap.add_argument("--flagship", action="store_true",
                     help="instead: the whole flagship (2 700 s) against Basilisk propagating "
-                         "the two spacecraft for 2 700 s at 0.1 s (issue 29's goal)")
+                         "the two spacecraft for 2 700 s at 0.1 s (the flagship's speed goal)")
     a = ap.parse_args()
     if a.flagship:
         fixed = rpod_flagship_wall_s(a.rpod, "Fixed")

@@ -4,7 +4,7 @@
 //! swarm table: N tumbling winged spacecraft in orbit ([`swarm_scene`]), pipeline against bare
 //! rapier, and the exact queries per step, for N = 2 … 256; and the cliffs ([`run_cliffs`]):
 //! the cases that used to run 5–50× slower than their plain scene, as ratios to it measured in
-//! the same run; and the meshes and guarantees of issues 26 and 27 ([`meshes::run_meshes`]).
+//! the same run; and the costs of mesh parts and requirements ([`meshes::run_meshes`]).
 
 pub mod meshes;
 
@@ -363,7 +363,7 @@ pub fn cliff_scenes(scenes: &Path) -> Result<[LoadedScene; 4], SceneError> {
     ])
 }
 
-/// The cliffs of issue 29, each a ratio of steps/s to its plain case measured in the same run,
+/// The cliffs (a spinning body, a law through the latch, contact), each a ratio of steps/s to its plain case measured in the same run,
 /// with bare rapier on the plain scene's world as the floor, as a Markdown table:
 ///
 /// * spin: `docking_aligned` with the chaser spinning at 100 rad/s about its docking axis, the

@@ -126,7 +126,7 @@ enum Cmd {
         /// case in the same run; SCENE's folder must hold docking_aligned.ron and free_drift.ron.
         #[arg(long)]
         cliffs: bool,
-        /// Instead of the scene: the mesh and guarantee costs of issues 26 and 27, each as a
+        /// Instead of the scene: the costs of mesh parts and of the RPOD requirement set, each as a
         /// ratio to its plain case in the same run — fly-bys of generated 100 000-triangle
         /// targets at 20 m and 1.9 m against the Box and Sphere primitives, the flagship with
         /// the example mesh vehicle against the flagship, each guarantee kind against the run

@@ -1,4 +1,4 @@
-//! The closest approach near the docking slot (issue 29): where the closest part pair's
+//! The closest approach near the docking slot (docs/verification.md): where the closest part pair's
 //! certified bracket is wider than the 0.1 % search tolerance (the faceted cone against a slot
 //! wall), the search takes twice that bracket as its tolerance instead of spending its budget
 //! every step, and `summary.json`'s `min_distance.tolerance_m` says so — the true distance is

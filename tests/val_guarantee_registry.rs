@@ -1,4 +1,4 @@
-//! The open guarantee registry (issue 27): a kind registered from outside the crate is read
+//! The open guarantee registry (docs/guarantees.md): a kind registered from outside the crate is read
 //! from a scene, checked with located errors and judged on the step intervals like a built-in
 //! one; every kind refuses a guarantee between a body and itself. Errors are located on the
 //! entry's line (line 8 of the test scene: two three-line bodies precede the list).

@@ -1,4 +1,4 @@
-//! Docking mechanism features of issue 28 against independent references.
+//! Docking mechanism features (docs/mechanisms.md) against independent references.
 //!
 //! - Capture rate limits: the decision is a comparison, so its reference is the limit itself:
 //!   a rate equal to the limit is accepted, the next f64 above it refused, for each of the
@@ -233,7 +233,7 @@ fn val_compliant_latch_loads_converge_in_dt_and_match_the_oscillator() {
         assert!((il.peak_moment_nm / m_ref - 1.0).abs() < 0.01);
         peaks.push((il.peak_force_n, il.peak_moment_nm));
     }
-    // Convergence in dt: within 10 % between 1 and 0.5 ms (issue 28's criterion).
+    // Convergence in dt: within 10 % between 1 and 0.5 ms (our convergence criterion, docs/mechanisms.md).
     let (a, b) = (peaks[0], peaks[1]);
     assert!((a.0 / b.0 - 1.0).abs() < 0.1, "{peaks:?}");
     assert!((a.1 / b.1 - 1.0).abs() < 0.1, "{peaks:?}");

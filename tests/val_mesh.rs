@@ -1,4 +1,4 @@
-//! Mesh parts (issue 26): judged exactly as triangle meshes, simulated as convex pieces.
+//! Mesh parts (docs/vehicles.md): judged exactly as triangle meshes, simulated as convex pieces.
 //!
 //! References (free space, no forces before contact, so every path is a straight line):
 //! * a 12-triangle cube mesh and the `Box` primitive of the same size are the same solid: the

@@ -1,4 +1,4 @@
-//! The monitor's convex-hull bracket of a mesh part's distance (issue 26's speed goals) is
+//! The monitor's convex-hull bracket of a mesh part's distance (the mesh speed goals of docs/performance.md) is
 //! sound, is exact where the hull is, and hands over to the exact triangle-mesh query where it
 //! is not.
 //!

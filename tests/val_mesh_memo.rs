@@ -1,4 +1,4 @@
-//! The monitor's memo of a mesh pair's exact distance (`sim::monitor::memo`, issue 26's cost
+//! The monitor's memo of a mesh pair's exact distance (`sim::monitor::memo`, the mesh cost
 //! near the example vehicle's docking collar) is certified: every bracket it gives holds the
 //! distance to the triangles, at the pose it was computed for and at any later pose.
 //!

@@ -14,7 +14,7 @@
 //!    allowance: its stated per-step tolerance `tol_m` times the number of pipeline steps.
 //! 3. `val_multirate_matches_fixed_on_bundled_scenes`: every bundled example scene (`scenes/examples/*.ron`)
 //!    but the mesh flagship run twice, `stepping: Fixed` and `MultiRate()` (defaults). Reference:
-//!    the fixed-step run. Required, from issue 29: identical docking outcome and latch time
+//!    the fixed-step run. Required (docs/scene-format.md, stepping): identical docking outcome and latch time
 //!    within one control period (0.1 s, the flagship's), identical guarantee verdicts and
 //!    violation counts, the same events in the same order with times within one control period,
 //!    and at every 1 s sample positions within 1 mm and attitudes within 1e-3 rad (ours: a
@@ -25,7 +25,7 @@
 //!    (RCS jets, a sensor or navigation filter, …) never takes a long step: its first 20 s must
 //!    show that and name the feature, and the full comparison is skipped (its multi-rate run is
 //!    the fixed-step run, span 1 at every step). The mesh flagship
-//!    (`orbit_approach_latch_truss.ron`) is left out: it costs minutes per run (issue 26).
+//!    (`orbit_approach_latch_truss.ron`) is left out: it costs minutes per run.
 
 mod common;
 

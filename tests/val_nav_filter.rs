@@ -1,4 +1,4 @@
-//! The relative-navigation filter in the pipeline (issue 27): a law flying on a sensor's
+//! The relative-navigation filter in the pipeline (docs/navigation.md): a law flying on a sensor's
 //! Kalman estimate instead of its raw measurement.
 //!
 //! References: the truth of the same run. The filter's columns carry its estimate's error

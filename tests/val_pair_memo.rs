@@ -1,5 +1,5 @@
 //! The monitor's memo for pairs of parts with support maps (`sim::monitor::memo::convex_exact`,
-//! `monitor::pair_eval`; issue 29's latched-stack cost): a kept evaluation answers a later pose
+//! `monitor::pair_eval`; the latched stack's cost): a kept evaluation answers a later pose
 //! only with a certified bracket no wider than a fresh query's, and never near touch.
 //!
 //! References (independent, closed forms in f64):

@@ -1,4 +1,4 @@
-//! Plume keep-off as a scene guarantee (issue 26 §6).
+//! Plume keep-off as a scene guarantee (docs/vehicles.md).
 //!
 //! Reference: the analytic cone-to-box distance. A chaser coasts at v = 1 m/s along +x
 //! (free space, no net force: two jets at its centre of mass thrust along ∓y with equal

@@ -1,4 +1,4 @@
-//! `Rcs` actuator in a scene (issue 26 §5).
+//! `Rcs` actuator in a scene (docs/vehicles.md).
 //!
 //! Reference: the closed-form small slew of the `Attitude` law (critically damped,
 //! θ(t) = θ₀(1 + ωt)e^{−ωt}, as in `val_generic_laws.rs`), now flown through twelve jets in

@@ -1,4 +1,4 @@
-//! `Rcs` jets through PWPF, and their firing events (issue 26 §5).
+//! `Rcs` jets through PWPF, and their firing events (docs/vehicles.md).
 //!
 //! References:
 //! - **Duty cycle.** A constant demand r = u/F_max on a jet through its pulse-width

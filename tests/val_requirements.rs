@@ -1,4 +1,4 @@
-//! The RPOD requirement set (issue 27) against closed forms.
+//! The RPOD requirement set (docs/guarantees.md) against closed forms.
 //!
 //! References (free space unless stated; straight-line motion, so the f64 path is exact):
 //! * `KeepOutEllipsoid` fly-by: a target yawed 90° (body x = world y, body y = −world x) with

@@ -1,4 +1,4 @@
-//! Laws fly on what they sense (issue 27): a generic law with a sensor reads the measured
+//! Laws fly on what they sense (docs/navigation.md): a generic law with a sensor reads the measured
 //! relative state, and a sensor a law cannot use is a located error.
 //!
 //! References: the same law and scene flown on the truth. An ideal sensor (no noise, no

@@ -1,4 +1,4 @@
-//! The soft-capture attenuation platform (`rpod::contact::platform`, issue 28 item 3) against
+//! The soft-capture attenuation platform (`rpod::contact::platform`, docs/mechanisms.md) against
 //! independent references.
 //!
 //! - **One leg** (the ring on a single axial leg through its centre, the base fixed): the damped
@@ -513,7 +513,7 @@ fn val_peak_leg_force_converges_in_dt() {
     // The axial capture above, its peak leg force as reported (the largest over every
     // sub-step) at dt = 1 ms and 0.5 ms: the sub-step bound does not depend on dt, so the two
     // differ only by where the sub-steps fall (the peak sampled every h ≤ T/40 of the stiffest
-    // mode). Required within 10 % (issue 28); expected within ½(ω_n h)² ≪ 1e-4.
+    // mode). Required within 10 % (our criterion for a mechanism model, docs/mechanisms.md); expected within ½(ω_n h)² ≪ 1e-4.
     let mut spec = hexapod(5e4, 1500.0, 820.0);
     spec.ring_inertia_kg_m2 = [500.0, 500.0, 800.0];
     let p = Platform::new(&spec).unwrap();

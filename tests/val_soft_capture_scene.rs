@@ -1,5 +1,5 @@
 //! The soft-capture docking mechanism in a scene (`docking.mechanism: SoftCapture((...))`,
-//! issue 28 item 3), run through the whole scene → ECS → compliant-model pipeline, against
+//! docs/mechanisms.md), run through the whole scene → ECS → compliant-model pipeline, against
 //! independent references.
 //!
 //! - **Pure axial soft capture** (`scenes/examples/soft_capture.ron` with the chaser on the docking axis,

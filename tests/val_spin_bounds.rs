@@ -879,7 +879,7 @@ fn val_under_resolved_step_only_looks_for_a_violation() {
     assert!(evals <= 3 * n, "{evals} evaluations over {n} steps");
 }
 
-/// Hostile input, class 8 of issue 30: a scene whose initial spin turns a body by more than
+/// Hostile input (an initial spin past the step's resolution): a scene whose initial spin turns a body by more than
 /// `UNDER_RESOLVED_TURN_RAD` (0.3 rad) a step is refused at load, located at the rate field, with
 /// the step that would resolve it (0.3 rad / 100 rad/s = 0.003 s), unless the monitor is told
 /// to run it anyway. Reference: the turn per step |ω|·dt = 100 rad/s × 0.01 s = 1 rad.

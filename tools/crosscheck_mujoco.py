@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Independent cross-check of rpod's docking mechanism against MuJoCo (issue 22).
+"""Independent cross-check of rpod's docking mechanism against MuJoCo.
 
 Not part of the default tests: it needs MuJoCo's Python package, installed once at set-up
 time into a venv of your own:

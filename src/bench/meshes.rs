@@ -1,4 +1,4 @@
-//! `rpod bench --meshes`: the measurements of issues 26 and 27, each a ratio to its plain case
+//! `rpod bench --meshes`: the costs of mesh parts, plumes and requirements, each a ratio to its plain case
 //! measured in the same run, with the floors (a bare rapier step of the same world, one bare
 //! parry distance query per tracked pair) measured in the same run too:
 //!
@@ -11,7 +11,7 @@
 //!    chaser held 100 m, 10 m and 1 m out (goal ≤ 2×);
 //! 4. the cost per step of each guarantee kind, as the ratio of a run with it alone to the same
 //!    run with no guarantee.
-//! 5. the cost per step of the plume impingement loads (issue 26 §6) on
+//! 5. the cost per step of the plume impingement loads on
 //!    `orbit_approach_plume.ron` held 10 m out, as the ratio of the run with them to the same
 //!    run with `plume_loads: false`.
 //!

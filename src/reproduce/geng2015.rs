@@ -1315,7 +1315,7 @@ fn contacts_section(rep: &mut ReportBuilder, runs: &Runs) {
          (bottom = P_t; 0.18 m deep, so that seated the chaser's bus face, where the 0.20 m \
          cone stands, is 2 cm outside the slot rim — with the earlier 0.20 m slot it was flush \
          and a perfect dock counted as a collision). Contacts are judged by the core monitor (cone–slot = docking contact, \
-         anything else = collision). The docking mechanism (issue 3, magnet and latch) is not in \
+         anything else = collision). The docking mechanism (magnet and latch) is not in \
          these scenes: the paper's laws bring the port points together with no capture model. \
          The last column but one gives cos(ρ, outward target port \
          axis) at the first contact: negative = the chaser port is behind the target port's \

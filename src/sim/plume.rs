@@ -1040,7 +1040,7 @@ mod tests {
     }
 }
 
-/// Plume impingement loads applied in a run (issue 26 §6): for every firing jet of an `Rcs`
+/// Plume impingement loads applied in a run (docs/vehicles.md): for every firing jet of an `Rcs`
 /// actuator with a plume, the load of [`plume_loads`] (the model of
 /// [`crate::actuation::plume_load`], the default ray grid) on the parts of every other body,
 /// added to the struck body's [`super::Wrench`] as a force through its centre of mass and the
