@@ -211,10 +211,10 @@ pub struct Sensor {
     noise: GaussianNoise,
 }
 
-/// Wraps an angle to (−π, π].
+/// Wraps an angle to (−π, π]: [`crate::orbit::kepler::wrap_pi`] (which wraps to [−π, π)) with
+/// −π sent to π.
 pub fn wrap_pi(a: f64) -> f64 {
-    let w =
-        (a + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI;
+    let w = crate::orbit::kepler::wrap_pi(a);
     if w == -std::f64::consts::PI {
         std::f64::consts::PI
     } else {
@@ -379,6 +379,39 @@ mod tests {
     //! of two noiseless samples of a uniform motion equals its velocity); the noise moments of
     //! the standard normal law.
     use super::*;
+
+    /// `wrap_pi` (through the orbit module's) equals, bit for bit, the inline formula it
+    /// replaced, `(a + π).rem_euclid(2π) − π` with −π sent to π, on the boundaries, their
+    /// neighbours and a sweep, and lands in (−π, π].
+    #[test]
+    fn wrap_pi_is_the_former_formula_bit_for_bit() {
+        use std::f64::consts::PI;
+        let former = |a: f64| {
+            let w = (a + PI).rem_euclid(2.0 * PI) - PI;
+            if w == -PI { PI } else { w }
+        };
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            PI,
+            -PI,
+            3.0 * PI,
+            -3.0 * PI,
+            1e-300,
+            -1e-300,
+            1e6,
+            -1e6,
+        ];
+        for b in [PI, -PI, 3.0 * PI, -3.0 * PI] {
+            xs.extend([b.next_up(), b.next_down()]);
+        }
+        xs.extend((-2000..=2000).map(|k| k as f64 * 0.0137));
+        for a in xs {
+            let w = wrap_pi(a);
+            assert_eq!(w.to_bits(), former(a).to_bits(), "a = {a:e}");
+            assert!(w > -PI && w <= PI, "a = {a:e}: {w}");
+        }
+    }
 
     fn truth(t: f64) -> SensorTruth {
         SensorTruth {
