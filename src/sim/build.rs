@@ -3,7 +3,7 @@
 use super::monitor::{ColliderRef, ContactState};
 use super::output::{Diagnostics, OutputFiles, Recorder};
 use super::{
-    BodyState, Clock, EventLog, Guarantees, MonitorState, OrbitEnv, Part, Physics, Roster, SimBody,
+    BodyState, Clock, Env, EventLog, Guarantees, MonitorState, Part, Physics, Roster, SimBody,
     StepBudget, Wrench, conv,
 };
 use crate::scene::parts::{PartCollider, Primitive, expand_body};
@@ -574,7 +574,8 @@ impl Simulation {
     pub fn reference_state(&self) -> Option<(Vector3<f64>, Vector3<f64>)> {
         self.app
             .world()
-            .get_resource::<OrbitEnv>()
+            .resource::<Env>()
+            .orbit()
             .map(|e| e.reference.state())
     }
 
@@ -583,7 +584,8 @@ impl Simulation {
     pub fn reference_orbit(&self) -> Option<crate::orbit::integrate::ReferenceOrbit> {
         self.app
             .world()
-            .get_resource::<OrbitEnv>()
+            .resource::<Env>()
+            .orbit()
             .map(|e| e.reference.clone())
     }
 
@@ -720,7 +722,7 @@ impl Simulation {
                 t_s: t,
                 bodies: &mon.bodies,
                 pairs: &mon.pairs,
-                reference: w.get_resource::<super::OrbitEnv>().map(|o| {
+                reference: w.resource::<Env>().orbit().map(|o| {
                     let (p, v) = o.reference.state();
                     crate::guarantee::ReferenceView {
                         pos_eci_m: p,

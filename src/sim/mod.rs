@@ -178,35 +178,8 @@ pub struct Physics {
     pub substeps: u32,
 }
 
-/// The orbital environment: the reference orbit (f64, with its gravity model: the list of
-/// terms every body's differential gravity also sums) and the torque toggle.
-#[derive(Resource, Debug, Clone)]
-pub struct OrbitEnv {
-    /// Reference orbit (the world frame's origin), ECI, and the gravity model's terms
-    /// ([`crate::orbit::integrate::ReferenceOrbit::gravity`]).
-    pub reference: crate::orbit::integrate::ReferenceOrbit,
-    /// Apply gravity-gradient torques.
-    pub gravity_gradient: bool,
-}
-
 pub use crate::environment::GravityField;
-
-/// The scene's gravity field, if any (orbit scenes: [`OrbitEnv`]'s differential gravity).
-#[derive(Resource)]
-pub struct Gravity(pub Box<dyn GravityField>);
-
-impl GravityField for OrbitEnv {
-    fn accel_m_s2(&self, pos_world_m: &Vector3<f64>) -> Vector3<f64> {
-        crate::orbit::gravity::differential_accel(
-            &self.reference.state().0,
-            pos_world_m,
-            self.reference.gravity(),
-        )
-    }
-    fn advance(&mut self, dt_s: f64) {
-        self.reference.step(dt_s);
-    }
-}
+pub use environment::{Env, OrbitEnv};
 
 /// A spacecraft.
 #[derive(Component, Debug, Clone)]
@@ -475,19 +448,17 @@ fn advance(world: &mut World) {
 }
 
 /// Environment: the gravity field on every body; in orbit, the gravity-gradient torque.
-fn environment_gravity(
-    gravity: Option<Res<Gravity>>,
-    orbit: Option<Res<OrbitEnv>>,
-    mut q: Query<(&SimBody, &BodyState, &mut Wrench)>,
-) {
+fn environment_gravity(env: Res<Env>, mut q: Query<(&SimBody, &BodyState, &mut Wrench)>) {
+    let gravity = env.gravity();
+    let orbit = env.orbit();
     for (b, s, mut w) in &mut q {
-        if let Some(g) = &gravity {
-            w.gravity_n += g.0.accel_m_s2(&s.pos_m) * b.mass_kg;
+        if let Some(g) = gravity {
+            w.gravity_n += g.accel_m_s2(&s.pos_m) * b.mass_kg;
         }
-        if let Some(env) = &orbit
-            && env.gravity_gradient
+        if let Some(o) = orbit
+            && o.gravity_gradient
         {
-            let r = env.reference.state().0 + s.pos_m;
+            let r = o.reference.state().0 + s.pos_m;
             let dcm_body_from_world = s.att.inverse().to_rotation_matrix().into_inner();
             let tb = crate::orbit::gravity::gravity_gradient_torque_body(
                 &r,
@@ -496,14 +467,6 @@ fn environment_gravity(
             );
             w.torque_nm += s.att * tb;
         }
-    }
-}
-
-/// Keeps the reference orbit used for gravity-gradient torques and frames in step with the
-/// gravity field (the field owns its own copy).
-fn advance_orbit(mut orbit: Option<ResMut<OrbitEnv>>, clock: Res<Clock>) {
-    if let Some(env) = orbit.as_mut() {
-        env.reference.step(clock.h_s());
     }
 }
 
@@ -686,7 +649,7 @@ fn step_rapier(phys: &mut Physics, h_s: f64, dt_s: f64) {
 fn physics_step(
     mut phys: ResMut<Physics>,
     mut clock: ResMut<Clock>,
-    gravity: Option<ResMut<Gravity>>,
+    mut env: ResMut<Env>,
     mut q: Query<(&SimBody, &mut BodyState, &mut Wrench)>,
     mut contact: ResMut<monitor::ContactState>,
     mut motion: ResMut<motion::StepMotion>,
@@ -703,11 +666,9 @@ fn physics_step(
     let t0 = clock.t_s();
     let n = roster.bodies.len();
     let sc = &mut *scratch;
-    // The gravity field moves to t + dt first: gravity at the new positions needs it.
-    let gravity = gravity.map(|mut g| {
-        g.0.advance(dt);
-        g
-    });
+    // The environment moves to t + dt first: gravity at the new positions needs it.
+    env.advance(dt);
+    let gravity = env.gravity();
     if motion.paths.len() != n {
         motion.paths = Vec::with_capacity(n);
         motion.extent_m = geo.extent_m.clone();
@@ -773,8 +734,8 @@ fn physics_step(
         let v0 = s.vel_m_s;
         let mut end = s.clone();
         end.pos_m += v0 * dt + (a_g0 + a_c) * (0.5 * dt * dt);
-        let a_g1 = match &gravity {
-            Some(g) => g.0.accel_m_s2(&end.pos_m),
+        let a_g1 = match gravity {
+            Some(g) => g.accel_m_s2(&end.pos_m),
             None => Vector3::zeros(),
         };
         end.vel_m_s = v0 + (a_g0 + a_g1) * (0.5 * dt) + a_c * dt;
@@ -1137,7 +1098,7 @@ fn check_guarantees(
     geo: Res<monitor::MonitorGeometry>,
     mut scratch: Local<monitor::DistanceScratch>,
     mut part_scratch: Local<monitor::DistanceScratch>,
-    orbit: Option<Res<OrbitEnv>>,
+    env: Res<Env>,
     host: Option<Res<controllers::ControllerHost>>,
 ) {
     use crate::geometry::bounds::{Bracket, Crossing, first_below, interval_lower_bound, minimize};
@@ -1161,7 +1122,7 @@ fn check_guarantees(
         );
     }
     let jets = jets_view(host.as_deref());
-    let orbit = orbit.as_deref();
+    let orbit = env.orbit();
     let reference_at = |back_s: f64| {
         orbit.map(|o| {
             let mut r = o.reference.clone();
@@ -1483,11 +1444,12 @@ pub(crate) fn jets_view(
 /// systems in these sets), the core's systems and the `Update` system that steps the schedule.
 ///
 /// Systems, by set: [`multirate::plan_step`] in [`Order::Plan`]; `environment_gravity` in
-/// [`Order::Gravity`]; [`plume::plume_forces`] in [`Order::PlumeForces`]; `physics_step` then
-/// `advance_orbit` in [`Stage::Physics`]; [`monitor::distances`] then [`monitor::contacts`] in
-/// [`Order::Geometry`]; `check_guarantees` in [`Order::Guarantees`]; [`output::record`] in
-/// [`Stage::Record`]; `advance` in `Update`. It replaces any `SimStep` schedule, so it is added
-/// before every other plugin that puts systems there.
+/// [`Order::Gravity`]; [`plume::plume_forces`] in [`Order::PlumeForces`]; `physics_step` (which
+/// advances the environment) in [`Stage::Physics`]; [`monitor::distances`] then
+/// [`monitor::contacts`] in [`Order::Geometry`]; `check_guarantees` in [`Order::Guarantees`];
+/// [`output::record`] in [`Stage::Record`]; `advance` in `Update`. Several read the scene's
+/// [`Env`], which [`environment::EnvironmentPlugin`] inserts. It replaces any `SimStep`
+/// schedule, so it is added before every other plugin that puts systems there.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct PipelinePlugin;
 
@@ -1531,7 +1493,7 @@ impl Plugin for PipelinePlugin {
             multirate::plan_step.in_set(Order::Plan),
             environment_gravity.in_set(Order::Gravity),
             plume::plume_forces.in_set(Order::PlumeForces),
-            (physics_step, advance_orbit).chain().in_set(Stage::Physics),
+            physics_step.in_set(Stage::Physics),
             (monitor::distances, monitor::contacts)
                 .chain()
                 .in_set(Order::Geometry),
