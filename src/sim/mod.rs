@@ -616,119 +616,110 @@ fn step_rapier(phys: &mut Physics, h_s: f64, dt_s: f64) {
     phys.world.integration_parameters.dt = full;
 }
 
-/// Physics: the f64 free flight of every body, a swept test of every pair that could come near
-/// within the step, rapier only where a contact is possible, then the f64 truth committed.
-///
-/// Free flight, in f64: with a_g(x) the differential gravity and a_c the held force per mass,
-/// x₁ = x₀ + v₀·dt + ½(a_g(x₀) + a_c)·dt², v₁ = v₀ + ½(a_g(x₀) + a_g(x₁))·dt + a_c·dt
-/// (velocity Verlet for gravity, exact for the held force: second order), and the rotation by
-/// [`rotate_rk4`]. rapier's own free-flight rotation (f32, implicit gyroscopic step) loses
-/// 1.7 % of the kinetic energy of a tumbling body over 600 s (`tests/val_tumbling.rs` measures
-/// it), so in free flight rapier only detects contacts; its result is overwritten by the f64
-/// state.
-///
-/// Each step, in order:
-/// 1. The f64 free-flight end state of every body, and its path over the step
-///    ([`motion::BodyPath`]); the broad phase's spheres follow ([`broadphase::BroadPhase`]).
-/// 2. For every near pair of bodies in free flight, the swept test: the distance over the step
-///    is at least d(t₀) − S·dt (S the pair's distance-rate bound); where that is not clear of
-///    [`RAPIER_ENGAGE_M`], the exact distance at t₀ and, if rapier would not see the pair at
-///    the start of its step (gap above [`SPLIT_GAP_M`]), conservative advancement and then
-///    bisection along the paths for the first time the gap is at most [`SPLIT_GAP_M`]: a time
-///    of impact inside the step.
-/// 3. rapier: not stepped at all when no pair is within [`RAPIER_ENGAGE_M`], no body touches
-///    and no joint exists (rapier's state is written from the f64 truth only when it steps
-///    next: [`RapierSync`]); split at the earliest time of impact — rapier-driven bodies are
-///    stepped to it, the free bodies placed on their paths at it, and rapier steps the rest,
-///    so the impact happens in rapier, where contacts are resolved and recorded; else one
-///    ordinary step.
-/// 4. Bodies touching another or jointed take rapier's state (and their contact impulse is
-///    measured); the others commit their f64 free-flight end state — the path is the same
-///    whether or not the step was split.
-#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it uses
-fn physics_step(
-    mut phys: ResMut<Physics>,
-    mut clock: ResMut<Clock>,
-    mut env: ResMut<Env>,
-    mut q: Query<(&SimBody, &mut BodyState, &mut Wrench)>,
-    mut contact: ResMut<monitor::ContactState>,
-    mut motion: ResMut<motion::StepMotion>,
-    mut bp: ResMut<broadphase::BroadPhase>,
-    mut sync: ResMut<RapierSync>,
-    mon: Res<MonitorState>,
-    geo: Res<monitor::MonitorGeometry>,
-    roster: Res<Roster>,
-    mut scratch: Local<PhysicsScratch>,
-    mut compliant: Option<ResMut<contact_model::CompliantContact>>,
-) {
-    // The step's length: dt_s, or a multiple of it that `multirate::plan_step` proved free.
-    let dt = clock.h_s();
-    let t0 = clock.t_s();
-    let n = roster.bodies.len();
-    let sc = &mut *scratch;
-    // The environment moves to t + dt first: gravity at the new positions needs it.
-    env.advance(dt);
-    let gravity = env.gravity();
-    if motion.paths.len() != n {
-        motion.paths = Vec::with_capacity(n);
-        motion.extent_m = geo.extent_m.clone();
-        motion.lambda_kg_m2 = roster
+/// What the physics step reads and writes (the system's parameters, one per resource).
+#[derive(bevy::ecs::system::SystemParam)]
+struct PhysicsStep<'w, 's> {
+    phys: ResMut<'w, Physics>,
+    clock: ResMut<'w, Clock>,
+    env: ResMut<'w, Env>,
+    q: Query<
+        'w,
+        's,
+        (
+            &'static SimBody,
+            &'static mut BodyState,
+            &'static mut Wrench,
+        ),
+    >,
+    contact: ResMut<'w, monitor::ContactState>,
+    motion: ResMut<'w, motion::StepMotion>,
+    bp: ResMut<'w, broadphase::BroadPhase>,
+    sync: ResMut<'w, RapierSync>,
+    mon: Res<'w, MonitorState>,
+    geo: Res<'w, monitor::MonitorGeometry>,
+    roster: Res<'w, Roster>,
+    compliant: Option<ResMut<'w, contact_model::CompliantContact>>,
+}
+
+/// A body has a joint in rapier.
+fn jointed(world: &rp::PhysicsWorld, h: rp::RigidBodyHandle) -> bool {
+    world.impulse_joints.attached_joints(h).next().is_some()
+}
+
+/// A body's state at the end of the step under the compliant docking contact, if it
+/// sub-stepped the body (`sub`: [`contact_model::CompliantContact::pre_step`]'s result).
+fn substepped_state(sub: &Option<contact_model::Substepped>, k: usize) -> Option<BodyState> {
+    sub.as_ref()
+        .and_then(|v| v.iter().find(|(i, _)| *i == k).map(|(_, s)| s.clone()))
+}
+
+/// The step's motion bookkeeping before the free flight: the per-body constants on the first
+/// step, the last step's paths kept (as `motion.prev`), this step's emptied; the scratch
+/// emptied.
+fn prepare_motion(p: &mut PhysicsStep, sc: &mut PhysicsScratch) {
+    let n = p.roster.bodies.len();
+    if p.motion.paths.len() != n {
+        p.motion.paths = Vec::with_capacity(n);
+        p.motion.extent_m = p.geo.extent_m.clone();
+        p.motion.lambda_kg_m2 = p
+            .roster
             .bodies
             .iter()
-            .map(|e| motion::principal_moments(&q.get(*e).expect("body").0.inertia_kg_m2))
+            .map(|e| motion::principal_moments(&p.q.get(*e).expect("body").0.inertia_kg_m2))
             .collect();
-        motion.axes_body = roster
+        p.motion.axes_body = p
+            .roster
             .bodies
             .iter()
-            .map(|e| motion::principal_axes(&q.get(*e).expect("body").0.inertia_kg_m2))
+            .map(|e| motion::principal_axes(&p.q.get(*e).expect("body").0.inertia_kg_m2))
             .collect();
-        sync.stale = vec![true; n];
+        p.sync.stale = vec![true; n];
     }
     sc.start.clear();
     sc.free_end.clear();
-    if motion.ready {
-        let paths = std::mem::replace(&mut motion.paths, Vec::with_capacity(n));
-        let free = std::mem::take(&mut motion.free_before);
-        motion.prev = Some(Box::new((paths, free)));
+    if p.motion.ready {
+        let paths = std::mem::replace(&mut p.motion.paths, Vec::with_capacity(n));
+        let free = std::mem::take(&mut p.motion.free_before);
+        p.motion.prev = Some(Box::new((paths, free)));
     }
-    motion.paths.clear();
-    motion.free_before.clear();
-    motion.free_before.resize(n, None);
-    let jointed = |world: &rp::PhysicsWorld, h: rp::RigidBodyHandle| {
-        world.impulse_joints.attached_joints(h).next().is_some()
-    };
-    let world_forces = |world: &mut rp::PhysicsWorld,
-                        q: &Query<(&SimBody, &mut BodyState, &mut Wrench)>| {
-        for (b, _, w) in q.iter() {
-            if let Some(rb) = world.bodies.get_mut(b.handle) {
-                // rapier keeps user forces and torques until cleared, and `reset_forces` clears
-                // only the forces: without `reset_torques` every torque ever commanded would
-                // act again whenever rapier is the truth (contact, latch).
-                rb.reset_forces(false);
-                rb.reset_torques(false);
-                rb.add_force(conv::v(&(w.force_n + w.gravity_n)), true);
-                rb.add_torque(conv::v(&w.torque_nm), true);
-            }
+    p.motion.paths.clear();
+    p.motion.free_before.clear();
+    p.motion.free_before.resize(n, None);
+}
+
+/// Hands every body's wrench to rapier (used if it steps).
+fn apply_wrenches(
+    world: &mut rp::PhysicsWorld,
+    q: &Query<(&SimBody, &mut BodyState, &mut Wrench)>,
+) {
+    for (b, _, w) in q.iter() {
+        if let Some(rb) = world.bodies.get_mut(b.handle) {
+            // rapier keeps user forces and torques until cleared, and `reset_forces` clears
+            // only the forces: without `reset_torques` every torque ever commanded would
+            // act again whenever rapier is the truth (contact, latch).
+            rb.reset_forces(false);
+            rb.reset_torques(false);
+            rb.add_force(conv::v(&(w.force_n + w.gravity_n)), true);
+            rb.add_torque(conv::v(&w.torque_nm), true);
         }
-    };
-    // The wrenches go to rapier first (used if it steps); then the compliant docking contact
-    // sub-steps the docking pair in f64 while it can touch (and adds its mean wrench to
-    // rapier's forces, for a step in which rapier holds one of the bodies).
-    world_forces(&mut phys.world, &q);
-    let substepped = compliant.as_deref_mut().and_then(|c| {
-        c.t_step_s = t0;
-        c.pre_step(&q, &mut phys.world, dt)
-    });
-    let sub_of = |k: usize| {
-        substepped
-            .as_ref()
-            .and_then(|v| v.iter().find(|(i, _)| *i == k).map(|(_, s)| s.clone()))
-    };
-    let mut any_attached = false;
+    }
+}
+
+/// Step 1 of [`physics_step`]: the f64 free flight of every body over `dt` from `t0`, in
+/// scene order (velocity Verlet for gravity, the held force exactly, the rotation by
+/// [`rotate_rk4`]; a body the compliant contact sub-stepped takes its end state), into
+/// `sc.start`, `sc.free_end` and `motion.paths`; the broad phase follows the paths.
+fn free_flight(
+    p: &mut PhysicsStep,
+    sc: &mut PhysicsScratch,
+    substepped: &Option<contact_model::Substepped>,
+    t0: f64,
+    dt: f64,
+) {
+    let gravity = p.env.gravity();
     let mut under_resolved = false;
-    // 1. f64 free flight of every body, in scene order.
-    for e in &roster.bodies {
-        let (b, s, w) = q.get(*e).expect("roster body");
+    for e in &p.roster.bodies {
+        let (b, s, w) = p.q.get(*e).expect("roster body");
         let a_g0 = w.gravity_n / b.mass_kg;
         let a_c = w.force_n / b.mass_kg;
         let v0 = s.vel_m_s;
@@ -752,11 +743,11 @@ fn physics_step(
         let turn = s.att.angle_to(&att);
         if turn > motion::UNDER_RESOLVED_TURN_RAD {
             under_resolved = true;
-            if turn > motion.max_turn_rad.0 {
-                motion.max_turn_rad = (turn, b.index);
+            if turn > p.motion.max_turn_rad.0 {
+                p.motion.max_turn_rad = (turn, b.index);
             }
         }
-        let path = match sub_of(b.index) {
+        let path = match substepped_state(substepped, b.index) {
             // Sub-stepped under the compliant contact: its end state, and (as for a step
             // rapier takes) a straight line plus constant-rate rotation between the ends.
             Some(sub) => {
@@ -768,171 +759,213 @@ fn physics_step(
                 a_g0 + a_c,
                 w.torque_nm,
                 b,
-                motion.lambda_kg_m2[b.index],
+                p.motion.lambda_kg_m2[b.index],
                 (&end.pos_m, &end.att, &end.omega_rad_s),
                 dt,
             ),
         };
-        motion.paths.push(path);
+        p.motion.paths.push(path);
         sc.start.push(s.clone());
         sc.free_end.push(end);
-        let attached = contact.touching.get(b.index).copied().unwrap_or(false)
-            || jointed(&phys.world, b.handle);
-        any_attached |= attached;
     }
-    motion.t0_s = t0;
-    motion.dt_s = dt;
-    motion.ready = true;
-    motion.under_resolved_steps += u64::from(under_resolved);
-    motion.under_resolved = under_resolved;
-    bp.update(&motion);
-    // 2. The swept test over the near pairs of bodies in free flight.
-    let prev_attached: Vec<bool> = roster
-        .bodies
-        .iter()
-        .map(|e| {
-            let b = q.get(*e).expect("body").0;
-            contact.touching.get(b.index).copied().unwrap_or(false)
-                || jointed(&phys.world, b.handle)
-        })
-        .collect();
-    // rapier keeps stepping while its own broad phase still pairs any colliders.
-    let mut engage = sync.every_step
-        || any_attached
-        || phys.world.impulse_joints.iter().next().is_some()
-        || phys.world.narrow_phase.contact_pairs().next().is_some();
-    let mut split: Option<f64> = None;
-    let pairs: Vec<(usize, usize)> = if bp.all_pairs {
+    p.motion.t0_s = t0;
+    p.motion.dt_s = dt;
+    p.motion.ready = true;
+    p.motion.under_resolved_steps += u64::from(under_resolved);
+    p.motion.under_resolved = under_resolved;
+    p.bp.update(&p.motion);
+}
+
+/// What the swept test found for one pair of bodies in free flight.
+struct PairSweep {
+    /// Their collider boxes may come within [`RAPIER_ENGAGE_M`] during the step.
+    engage: bool,
+    /// The first time into the step their gap is at most [`SPLIT_GAP_M`], s.
+    hit_s: Option<f64>,
+}
+
+/// The swept test of one pair (i, j) over the step (see [`physics_step`], step 2): whether
+/// rapier must step, and the time of impact inside the step if there is one.
+fn sweep_pair(
+    p: &PhysicsStep,
+    sc: &mut PhysicsScratch,
+    count: &mut monitor::QueryCount,
+    (i, j): (usize, usize),
+    t0: f64,
+    dt: f64,
+) -> PairSweep {
+    let (geo, motion) = (&*p.geo, &*p.motion);
+    let rate = motion.distance_rate_bound(i, j);
+    let sep0 = (sc.start[i].pos_m - sc.start[j].pos_m).norm();
+    let travel = (motion.speed_bound(i) + motion.speed_bound(j)) * dt;
+    let engage = sep0 - geo.aabb_extent_m[i] - geo.aabb_extent_m[j] - travel <= RAPIER_ENGAGE_M;
+    let none = PairSweep {
+        engage,
+        hit_s: None,
+    };
+    // Lower bound at t₀: the monitor's certified distance if it has one for t₀, else the
+    // bounding spheres about the centres of mass.
+    let lb0 = match p.mon.pair_index.get(&(i, j)).map(|k| &p.mon.pairs[*k]) {
+        Some(pd) if pd.t_s == t0 => pd.lower_m,
+        _ => sep0 - geo.extent_m[i] - geo.extent_m[j],
+    };
+    if lb0 - rate * dt > SPLIT_GAP_M {
+        return none;
+    }
+    let d0 = monitor::pair_at(geo, motion, i, j, 0.0, None, &mut sc.dist, count);
+    if d0.d.value <= RAPIER_SEES_M {
+        return none; // rapier sees it at the start of its step
+    }
+    if d0.d.lower - rate * dt > SPLIT_GAP_M {
+        return none;
+    }
+    let mut warm = Some((d0.a, d0.b));
+    let mut f = |tau: f64| {
+        let h = monitor::pair_at(geo, motion, i, j, tau, warm, &mut sc.dist, count);
+        warm = Some((h.a, h.b));
+        h.d
+    };
+    // Conservative advancement to the split gap, then bisection for the first time at or
+    // below it (CA alone crawls where the rate bound is loose, e.g. a spinning panel).
+    let Some((t_ca, d_ca)) =
+        crate::geometry::bounds::advance_to(dt, d0.d, rate, SPLIT_GAP_M, 0.0, 16, &mut f)
+    else {
+        return none;
+    };
+    let hit_s = if d_ca.value <= SPLIT_GAP_M {
+        Some(t_ca)
+    } else {
+        let d1 = f(dt);
+        let rest = dt - t_ca;
+        match crate::geometry::bounds::first_below(
+            rest,
+            d_ca,
+            d1,
+            rate,
+            SPLIT_GAP_M,
+            dt * 1e-6,
+            64,
+            |u| f(t_ca + u),
+        ) {
+            crate::geometry::bounds::Crossing::Never => None,
+            crate::geometry::bounds::Crossing::At { t_hi, .. } => Some(t_ca + t_hi),
+            crate::geometry::bounds::Crossing::Unresolved { t_lo } => Some(t_ca + t_lo),
+        }
+    };
+    PairSweep { engage, hit_s }
+}
+
+/// Step 2 of [`physics_step`]: the swept test over the near pairs of bodies in free flight
+/// (neither `attached`, not both sub-stepped by the compliant contact): whether some pair
+/// makes rapier step, and the earliest time of impact inside the step.
+fn swept_test(
+    p: &mut PhysicsStep,
+    sc: &mut PhysicsScratch,
+    attached: &[bool],
+    substepped: &Option<contact_model::Substepped>,
+    t0: f64,
+    dt: f64,
+) -> (bool, Option<f64>) {
+    let n = p.roster.bodies.len();
+    let pairs: Vec<(usize, usize)> = if p.bp.all_pairs {
         (0..n)
             .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
             .collect()
     } else {
-        bp.near.iter().copied().collect()
+        p.bp.near.iter().copied().collect()
     };
+    let mut engage = false;
+    let mut split: Option<f64> = None;
     let mut count = monitor::QueryCount::default();
     for (i, j) in pairs {
-        if prev_attached[i] || prev_attached[j] {
+        if attached[i] || attached[j] {
             continue;
         }
         // The compliant contact owns the docking pair's motion this step.
-        if sub_of(i).is_some() && sub_of(j).is_some() {
+        if substepped_state(substepped, i).is_some() && substepped_state(substepped, j).is_some() {
             continue;
         }
-        let rate = motion.distance_rate_bound(i, j);
-        let sep0 = (sc.start[i].pos_m - sc.start[j].pos_m).norm();
-        let travel = (motion.speed_bound(i) + motion.speed_bound(j)) * dt;
-        if sep0 - geo.aabb_extent_m[i] - geo.aabb_extent_m[j] - travel <= RAPIER_ENGAGE_M {
-            engage = true;
-        }
-        // Lower bound at t₀: the monitor's certified distance if it has one for t₀, else the
-        // bounding spheres about the centres of mass.
-        let lb0 = match mon.pair_index.get(&(i, j)).map(|k| &mon.pairs[*k]) {
-            Some(p) if p.t_s == t0 => p.lower_m,
-            _ => sep0 - geo.extent_m[i] - geo.extent_m[j],
-        };
-        if lb0 - rate * dt > SPLIT_GAP_M {
-            continue;
-        }
-        let d0 = monitor::pair_at(&geo, &motion, i, j, 0.0, None, &mut sc.dist, &mut count);
-        if d0.d.value <= RAPIER_SEES_M {
-            continue; // rapier sees it at the start of its step
-        }
-        if d0.d.lower - rate * dt > SPLIT_GAP_M {
-            continue;
-        }
-        let mut warm = Some((d0.a, d0.b));
-        let mut f = |tau: f64| {
-            let h = monitor::pair_at(&geo, &motion, i, j, tau, warm, &mut sc.dist, &mut count);
-            warm = Some((h.a, h.b));
-            h.d
-        };
-        // Conservative advancement to the split gap, then bisection for the first time at or
-        // below it (CA alone crawls where the rate bound is loose, e.g. a spinning panel).
-        let Some((t_ca, d_ca)) =
-            crate::geometry::bounds::advance_to(dt, d0.d, rate, SPLIT_GAP_M, 0.0, 16, &mut f)
-        else {
-            continue;
-        };
-        let t_hit = if d_ca.value <= SPLIT_GAP_M {
-            Some(t_ca)
-        } else {
-            let d1 = f(dt);
-            let rest = dt - t_ca;
-            match crate::geometry::bounds::first_below(
-                rest,
-                d_ca,
-                d1,
-                rate,
-                SPLIT_GAP_M,
-                dt * 1e-6,
-                64,
-                |u| f(t_ca + u),
-            ) {
-                crate::geometry::bounds::Crossing::Never => None,
-                crate::geometry::bounds::Crossing::At { t_hi, .. } => Some(t_ca + t_hi),
-                crate::geometry::bounds::Crossing::Unresolved { t_lo } => Some(t_ca + t_lo),
-            }
-        };
-        if let Some(th) = t_hit {
+        let sweep = sweep_pair(p, sc, &mut count, (i, j), t0, dt);
+        engage |= sweep.engage;
+        if let Some(th) = sweep.hit_s {
             engage = true;
             split = Some(split.map_or(th, |s: f64| s.min(th)));
         }
     }
-    // 3. rapier.
-    let stepped = engage || split.is_some();
-    sync.last_split_s = None;
-    if stepped {
-        // rapier's copy of every body in free flight since its last step.
-        for (k, e) in roster.bodies.iter().enumerate() {
-            if sync.stale[k] {
-                let (b, s, _) = q.get(*e).expect("body");
-                if let Some(rb) = phys.world.bodies.get_mut(b.handle) {
-                    write_rapier(rb, b, s);
-                }
-                sync.stale[k] = false;
+    p.sync.swept_queries += count.exact;
+    (engage, split)
+}
+
+/// Step 3 of [`physics_step`], when rapier steps: rapier's copy of every body in free flight
+/// since its last step written from the f64 truth, then one step of `dt` — or, split at `split`
+/// s into the step, the bodies rapier holds stepped to it, the free bodies placed on their
+/// paths at it, and the rest of the step.
+fn run_rapier(
+    p: &mut PhysicsStep,
+    attached: &[bool],
+    any_attached: bool,
+    split: Option<f64>,
+    t0: f64,
+    dt: f64,
+) {
+    for (k, e) in p.roster.bodies.iter().enumerate() {
+        if p.sync.stale[k] {
+            let (b, s, _) = p.q.get(*e).expect("body");
+            if let Some(rb) = p.phys.world.bodies.get_mut(b.handle) {
+                write_rapier(rb, b, s);
             }
+            p.sync.stale[k] = false;
         }
-        sync.rapier_steps += 1;
-        match split {
-            Some(tc) if tc > 0.0 => {
-                sync.split_steps += 1;
-                sync.last_split_s = Some(t0 + tc);
-                if any_attached || phys.world.impulse_joints.iter().next().is_some() {
-                    step_rapier(&mut phys, tc, clock.dt_s);
-                }
-                for (k, e) in roster.bodies.iter().enumerate() {
-                    if prev_attached[k] {
-                        continue;
-                    }
-                    let b = q.get(*e).expect("body").0;
-                    let s = motion.paths[k].state_at(tc);
-                    if let Some(rb) = phys.world.bodies.get_mut(b.handle) {
-                        write_rapier(rb, b, &s);
-                    }
-                }
-                step_rapier(&mut phys, dt - tc, clock.dt_s);
-            }
-            _ => step_rapier(&mut phys, dt, clock.dt_s),
-        }
-        contact.refresh_touching(&phys.world);
-    } else {
-        sync.skipped_steps += 1;
-        contact.touching.iter_mut().for_each(|t| *t = false);
     }
-    sync.swept_queries += count.exact;
-    sync.stepped = stepped;
-    // 4. Commit.
-    let world = &mut phys.world;
-    for e in &roster.bodies {
-        let (b, mut s, mut w) = q.get_mut(*e).expect("body");
+    p.sync.rapier_steps += 1;
+    let step_dt = p.clock.dt_s;
+    match split {
+        Some(tc) if tc > 0.0 => {
+            p.sync.split_steps += 1;
+            p.sync.last_split_s = Some(t0 + tc);
+            if any_attached || p.phys.world.impulse_joints.iter().next().is_some() {
+                step_rapier(&mut p.phys, tc, step_dt);
+            }
+            for (k, e) in p.roster.bodies.iter().enumerate() {
+                if attached[k] {
+                    continue;
+                }
+                let b = p.q.get(*e).expect("body").0;
+                let s = p.motion.paths[k].state_at(tc);
+                if let Some(rb) = p.phys.world.bodies.get_mut(b.handle) {
+                    write_rapier(rb, b, &s);
+                }
+            }
+            step_rapier(&mut p.phys, dt - tc, step_dt);
+        }
+        _ => step_rapier(&mut p.phys, dt, step_dt),
+    }
+    p.contact.refresh_touching(&p.phys.world);
+}
+
+/// Step 4 of [`physics_step`]: bodies touching another or jointed (when rapier `stepped`) take
+/// rapier's state, their contact impulse measured and their path made straight; the others
+/// commit their f64 free-flight end state. Every wrench is cleared.
+fn commit(
+    p: &mut PhysicsStep,
+    sc: &PhysicsScratch,
+    was_attached: &[bool],
+    substepped: &Option<contact_model::Substepped>,
+    stepped: bool,
+    t0: f64,
+    dt: f64,
+) {
+    let world = &mut p.phys.world;
+    for e in &p.roster.bodies {
+        let (b, mut s, mut w) = p.q.get_mut(*e).expect("body");
         let k = b.index;
         let attached = stepped
-            && (contact.touching.get(k).copied().unwrap_or(false) || jointed(world, b.handle));
+            && (p.contact.touching.get(k).copied().unwrap_or(false) || jointed(world, b.handle));
         if attached {
             let Some(rb) = world.bodies.get(b.handle) else {
                 continue;
             };
-            contact_model::note_rapier_held(compliant.as_deref_mut(), &substepped, k);
+            contact_model::note_rapier_held(p.compliant.as_deref_mut(), substepped, k);
             let pose = rb.position();
             let att = conv::naq(pose.rotation);
             s.att = att;
@@ -940,32 +973,118 @@ fn physics_step(
             let v_new = conv::na(rb.linvel());
             // The contact (and joint) impulse on this body: its momentum change less what the
             // applied forces gave it over the step.
-            contact.body_impulse[k] =
+            p.contact.body_impulse[k] =
                 (v_new - sc.start[k].vel_m_s) * b.mass_kg - (w.force_n + w.gravity_n) * dt;
             s.vel_m_s = v_new;
             s.omega_rad_s = conv::na(rb.angvel());
             // … and its angular impulse about the centre of mass.
             let st = &sc.start[k];
-            contact.body_angular_impulse[k] =
+            p.contact.body_angular_impulse[k] =
                 monitor::angular_momentum(&s.att, &b.inertia_kg_m2, &s.omega_rad_s)
                     - monitor::angular_momentum(&st.att, &b.inertia_kg_m2, &st.omega_rad_s)
                     - w.torque_nm * dt;
-            if !prev_attached[k] {
-                motion.free_before[k] = Some(motion.paths[k].clone());
+            if !was_attached[k] {
+                p.motion.free_before[k] = Some(p.motion.paths[k].clone());
             }
-            match sync.last_split_s {
-                Some(ts) if !prev_attached[k] => motion.paths[k].split_then_straight(ts - t0, &s),
-                _ => motion.paths[k] = motion::BodyPath::straight(&sc.start[k], &s, dt),
+            match p.sync.last_split_s {
+                Some(ts) if !was_attached[k] => p.motion.paths[k].split_then_straight(ts - t0, &s),
+                _ => p.motion.paths[k] = motion::BodyPath::straight(&sc.start[k], &s, dt),
             }
         } else {
-            contact.body_impulse[k] = Vector3::zeros();
-            contact.body_angular_impulse[k] = Vector3::zeros();
+            p.contact.body_impulse[k] = Vector3::zeros();
+            p.contact.body_angular_impulse[k] = Vector3::zeros();
             *s = sc.free_end[k].clone();
-            sync.stale[k] = true;
+            p.sync.stale[k] = true;
         }
         *w = Wrench::default();
     }
-    clock.step += clock.span;
+}
+
+/// Physics: the environment advanced to the step's end, then (see the steps below) the f64
+/// free flight of every body, the swept test for contacts within the step, rapier only where a
+/// contact is possible, then the f64 truth committed.
+///
+/// Free flight, in f64: with a_g(x) the differential gravity and a_c the held force per mass,
+/// x₁ = x₀ + v₀·dt + ½(a_g(x₀) + a_c)·dt², v₁ = v₀ + ½(a_g(x₀) + a_g(x₁))·dt + a_c·dt
+/// (velocity Verlet for gravity, exact for the held force: second order), and the rotation by
+/// [`rotate_rk4`]. rapier's own free-flight rotation (f32, implicit gyroscopic step) loses
+/// 1.7 % of the kinetic energy of a tumbling body over 600 s (`tests/val_tumbling.rs` measures
+/// it), so in free flight rapier only detects contacts; its result is overwritten by the f64
+/// state.
+///
+/// Each step, in order:
+/// 1. The f64 free-flight end state of every body, and its path over the step
+///    ([`motion::BodyPath`]); the broad phase's spheres follow ([`broadphase::BroadPhase`])
+///    ([`free_flight`]).
+/// 2. For every near pair of bodies in free flight, the swept test: the distance over the step
+///    is at least d(t₀) − S·dt (S the pair's distance-rate bound); where that is not clear of
+///    [`RAPIER_ENGAGE_M`], the exact distance at t₀ and, if rapier would not see the pair at
+///    the start of its step (gap above [`SPLIT_GAP_M`]), conservative advancement and then
+///    bisection along the paths for the first time the gap is at most [`SPLIT_GAP_M`]: a time
+///    of impact inside the step ([`swept_test`], [`sweep_pair`]).
+/// 3. rapier: not stepped at all when no pair is within [`RAPIER_ENGAGE_M`], no body touches
+///    and no joint exists (rapier's state is written from the f64 truth only when it steps
+///    next: [`RapierSync`]); split at the earliest time of impact — rapier-driven bodies are
+///    stepped to it, the free bodies placed on their paths at it, and rapier steps the rest,
+///    so the impact happens in rapier, where contacts are resolved and recorded; else one
+///    ordinary step ([`run_rapier`]).
+/// 4. Bodies touching another or jointed take rapier's state (and their contact impulse is
+///    measured); the others commit their f64 free-flight end state — the path is the same
+///    whether or not the step was split ([`commit`]).
+fn physics_step(mut p: PhysicsStep, mut scratch: Local<PhysicsScratch>) {
+    // The step's length: dt_s, or a multiple of it that `multirate::plan_step` proved free.
+    let dt = p.clock.h_s();
+    let t0 = p.clock.t_s();
+    let sc = &mut *scratch;
+    // The environment moves to t + dt first: gravity at the new positions needs it.
+    p.env.advance(dt);
+    prepare_motion(&mut p, sc);
+    // The wrenches go to rapier first (used if it steps); then the compliant docking contact
+    // sub-steps the docking pair in f64 while it can touch (and adds its mean wrench to
+    // rapier's forces, for a step in which rapier holds one of the bodies).
+    apply_wrenches(&mut p.phys.world, &p.q);
+    let PhysicsStep {
+        compliant, q, phys, ..
+    } = &mut p;
+    let substepped = compliant.as_deref_mut().and_then(|c| {
+        c.t_step_s = t0;
+        c.pre_step(q, &mut phys.world, dt)
+    });
+    // 1. f64 free flight of every body, in scene order.
+    free_flight(&mut p, sc, &substepped, t0, dt);
+    // Bodies touching another or jointed when the step starts: rapier holds them.
+    let attached: Vec<bool> = p
+        .roster
+        .bodies
+        .iter()
+        .map(|e| {
+            let b = p.q.get(*e).expect("body").0;
+            p.contact.touching.get(b.index).copied().unwrap_or(false)
+                || jointed(&p.phys.world, b.handle)
+        })
+        .collect();
+    let any_attached = attached.iter().any(|a| *a);
+    // 2. The swept test; rapier keeps stepping while its own broad phase still pairs any
+    // colliders.
+    let (near, split) = swept_test(&mut p, sc, &attached, &substepped, t0, dt);
+    let engage = p.sync.every_step
+        || any_attached
+        || p.phys.world.impulse_joints.iter().next().is_some()
+        || p.phys.world.narrow_phase.contact_pairs().next().is_some()
+        || near;
+    // 3. rapier.
+    let stepped = engage || split.is_some();
+    p.sync.last_split_s = None;
+    if stepped {
+        run_rapier(&mut p, &attached, any_attached, split, t0, dt);
+    } else {
+        p.sync.skipped_steps += 1;
+        p.contact.touching.iter_mut().for_each(|t| *t = false);
+    }
+    p.sync.stepped = stepped;
+    // 4. Commit.
+    commit(&mut p, sc, &attached, &substepped, stepped, t0, dt);
+    p.clock.step += p.clock.span;
 }
 
 /// The monitor's running results.
