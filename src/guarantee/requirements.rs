@@ -892,8 +892,8 @@ fn term_gradient_bound(term: GravityTerm, r_m: f64) -> f64 {
 }
 
 /// Bound on the gradient of the Earth gravity model `gravity` (its terms) at radius ≥ `r_m`,
-/// s⁻²: the sum of its terms' bounds, in order ([`term_gradient_bound`]: 2μ/r³ for the point
-/// mass plus [`J2_GRADIENT_FACTOR`]·(3/2)J2μR_E²/r⁵ for J2); zero for an empty model.
+/// s⁻²: the sum of its terms' bounds, in order (2μ/r³ for the point mass, the spectral norm of
+/// its gradient, plus [`J2_GRADIENT_FACTOR`]·(3/2)J2μR_E²/r⁵ for J2); zero for an empty model.
 pub fn gravity_gradient_bound(r_m: f64, gravity: &[GravityTerm]) -> f64 {
     let mut terms = gravity.iter().map(|t| term_gradient_bound(*t, r_m));
     let first = terms.next().unwrap_or(0.0);
