@@ -1192,6 +1192,422 @@ pub const EVENT_TIME_TOL: f64 = 1.0 / 65_536.0;
 /// Margin evaluations allowed to locate one violation or restoration time.
 const MAX_CROSSING_EVALS: u32 = 256;
 
+/// The first step whose rotation the rate bounds do not cover: said once, as an event, with
+/// the step that would (the count is in summary.json's monitor).
+fn note_under_resolved(
+    t: f64,
+    motion: &motion::StepMotion,
+    mon: &MonitorState,
+    log: &mut EventLog,
+) {
+    if motion.under_resolved && motion.under_resolved_steps == 1 {
+        let (turn, body) = motion.max_turn_rad;
+        let name = mon.bodies.get(body).map_or("", |b| b.name.as_str());
+        log.push(
+            t,
+            "rotation_under_resolved",
+            serde_json::json!({
+                "body": name,
+                "turn_rad": turn,
+                "limit_rad": motion::UNDER_RESOLVED_TURN_RAD,
+                "dt_s_to_resolve": motion.dt_s * motion::UNDER_RESOLVED_TURN_RAD / turn,
+                "consequence": "guarantees whose rate bound rests on the rotation are unresolved over such steps, never held",
+            }),
+        );
+    }
+}
+
+/// The reference orbit `back_s` from its current time (negative: earlier), in orbit scenes.
+fn reference_at(orbit: Option<&OrbitEnv>, back_s: f64) -> Option<crate::guarantee::ReferenceView> {
+    orbit.map(|o| {
+        let mut r = o.reference.clone();
+        r.step(back_s);
+        let (p, v) = r.state();
+        crate::guarantee::ReferenceView {
+            pos_eci_m: p,
+            vel_eci_m_s: v,
+        }
+    })
+}
+
+/// A guarantee without a rate bound, judged at the sample (margin `m` at `view.t_s`): its
+/// verdict, and an event if it changed.
+fn judge_at_sample(
+    inv: &dyn Guarantee,
+    st: &mut GuaranteeStatus,
+    view: &MonitorView,
+    m: f64,
+    log: &mut EventLog,
+) {
+    let t = view.t_s;
+    if let Some(violated) = st.update(t, m) {
+        let kind = if violated {
+            "guarantee_violated"
+        } else {
+            "guarantee_restored"
+        };
+        let mut e = serde_json::json!({"name": st.name, "margin": m, "unit": st.unit});
+        if let Some(d) = inv.detail(view) {
+            e["detail"] = d;
+        }
+        log.push(t, kind, e);
+    }
+}
+
+/// One guarantee with a rate bound, judged over one step.
+struct IntervalCase<'g> {
+    /// The guarantee.
+    inv: &'g dyn Guarantee,
+    /// What its margin reads (the pairs evaluated at τ into the step).
+    reads: crate::guarantee::Reads,
+    /// Its margin at t₀: the last sample's, or re-evaluated under this step's inputs if it
+    /// reads them ([`Guarantee::step_inputs`]).
+    m0: crate::geometry::bounds::Bracket,
+    /// Its margin at the sample t.
+    m1: crate::geometry::bounds::Bracket,
+    /// Its rate bound over the step, margin unit/s.
+    rate: f64,
+    /// The rate bound rests on a rotation the step under-resolves (it cannot be held).
+    rotation_unproven: bool,
+}
+
+/// What the guarantees are judged on over the step [t₀, t] (t₀ = t − dt): the monitor's sample
+/// at t, the bodies' paths over the step, and the buffers and counts of the evaluations inside
+/// it.
+struct StepJudge<'a> {
+    /// The sample at t.
+    view: MonitorView<'a>,
+    /// The monitor's results at t.
+    mon: &'a MonitorState,
+    /// The bodies' paths over the step.
+    motion: &'a motion::StepMotion,
+    /// The monitor's geometry.
+    geo: &'a monitor::MonitorGeometry,
+    /// The orbital environment (orbit scenes): the reference at τ.
+    orbit: Option<&'a OrbitEnv>,
+    /// Bodies at τ into the step (the last evaluation's).
+    bodies_at: Vec<BodyView>,
+    /// The pairs a guarantee reads, at τ into the step.
+    pairs_at: Vec<PairDistance>,
+    /// Distance buffers of the evaluations at τ.
+    scratch: &'a mut monitor::DistanceScratch,
+    /// Distance buffers of the per-part searches.
+    part_scratch: &'a mut monitor::DistanceScratch,
+    /// Exact queries of the evaluations at τ.
+    count: monitor::QueryCount,
+    /// Exact queries of the per-part searches.
+    part_count: monitor::QueryCount,
+}
+
+impl StepJudge<'_> {
+    /// The step's start t₀, s.
+    fn t0(&self) -> f64 {
+        self.view.t_s - self.motion.dt_s
+    }
+
+    /// The bodies, and the pairs `reads` names, at τ into the step (their queries counted only
+    /// if `counted`: an event's detail is not part of the judgement's cost).
+    fn fill(&mut self, reads: &crate::guarantee::Reads, tau: f64, counted: bool) {
+        use crate::guarantee::Reads;
+        let t0 = self.t0();
+        let (mon, motion, geo) = (self.mon, self.motion, self.geo);
+        let mut uncounted = monitor::QueryCount::default();
+        let count = if counted {
+            &mut self.count
+        } else {
+            &mut uncounted
+        };
+        if self.bodies_at.len() != mon.bodies.len() {
+            self.bodies_at = mon.bodies.clone();
+        }
+        for (v, p) in self.bodies_at.iter_mut().zip(&motion.paths) {
+            let s = p.state_at(tau);
+            v.pos_m = s.pos_m;
+            v.vel_m_s = s.vel_m_s;
+            v.att = s.att;
+            v.omega_rad_s = s.omega_rad_s;
+        }
+        self.pairs_at.clear();
+        let list: Vec<(usize, usize)> = match reads {
+            Reads::Bodies => Vec::new(),
+            Reads::Pairs(l) => l.clone(),
+            Reads::Everything => mon.pairs.iter().map(|p| (p.a, p.b)).collect(),
+        };
+        for (i, j) in list {
+            let warm = mon.pair_index.get(&(i, j)).map(|k| {
+                let p = &mon.pairs[*k];
+                (p.part_a, p.part_b)
+            });
+            let h = monitor::pair_at(geo, motion, i, j, tau, warm, self.scratch, count);
+            self.pairs_at.push(PairDistance {
+                a: i,
+                b: j,
+                distance_m: h.d.value,
+                part_a: h.a,
+                part_b: h.b,
+                clearance_m: h.d.value,
+                lower_m: h.d.lower,
+                t_s: t0 + tau,
+            });
+        }
+    }
+
+    /// The view at τ into the step (after [`StepJudge::fill`]).
+    fn view_at(&self, tau: f64) -> MonitorView<'_> {
+        MonitorView {
+            t_s: self.t0() + tau,
+            bodies: &self.bodies_at,
+            pairs: &self.pairs_at,
+            reference: reference_at(self.orbit, tau - self.motion.dt_s),
+            jets: self.view.jets,
+        }
+    }
+
+    /// A guarantee's margin at τ into the step.
+    fn margin_at(
+        &mut self,
+        inv: &dyn Guarantee,
+        reads: &crate::guarantee::Reads,
+        tau: f64,
+    ) -> crate::geometry::bounds::Bracket {
+        self.fill(reads, tau, true);
+        inv.margin_bracket(&self.view_at(tau))
+    }
+
+    /// The case of guarantee `inv` over the step: its margin at t₀ (`last`, the last sample's,
+    /// or re-evaluated under this step's inputs) and at t (`m1`), its rate bound.
+    fn case<'g>(
+        &mut self,
+        inv: &'g dyn Guarantee,
+        last: crate::geometry::bounds::Bracket,
+        m1: crate::geometry::bounds::Bracket,
+        rate: f64,
+        rotation_unproven: bool,
+    ) -> IntervalCase<'g> {
+        let reads = inv.reads();
+        let m0 = if inv.step_inputs() {
+            self.margin_at(inv, &reads, 0.0)
+        } else {
+            last
+        };
+        IntervalCase {
+            inv,
+            reads,
+            m0,
+            m1,
+            rate,
+            rotation_unproven,
+        }
+    }
+
+    /// The search inside the step for the smallest margin, to the threshold `thr` (see
+    /// [`check_guarantees`]): over the per-part-pair bounds for a distance margin with a body
+    /// turning fast ([`monitor::search_parts`]), else by bisection on the margin's rate bound;
+    /// on an under-resolved step, first only a look for a margin below zero (or below the worst
+    /// so far `w`, once violated).
+    fn search(
+        &mut self,
+        c: &IntervalCase,
+        thr: &dyn Fn(f64) -> f64,
+        w: f64,
+    ) -> crate::geometry::bounds::MinSearch {
+        let (t, dt) = (self.view.t_s, self.motion.dt_s);
+        // A margin that is a distance less a constant, with a body turning fast: the
+        // per-part-pair bounds (`monitor::search_parts`).
+        let per_part = c.inv.distance_margin().and_then(|(a, b, offset)| {
+            let (i, j) = (a.min(b), a.max(b));
+            let p = &self.mon.pairs[*self.mon.pair_index.get(&(i, j))?];
+            if p.t_s != t {
+                return None;
+            }
+            let (pair_rate, body_rate) = monitor::pair_rate_gain(
+                self.geo,
+                self.motion,
+                i,
+                j,
+                (p.part_a, p.part_b),
+                self.part_scratch,
+            );
+            (body_rate >= monitor::PER_PART_MIN_GAIN * pair_rate).then_some((
+                i,
+                j,
+                offset,
+                (p.part_a, p.part_b),
+            ))
+        });
+        let mut search = |thr: &dyn Fn(f64) -> f64, budget: u32| match per_part {
+            Some((i, j, offset, warm)) => {
+                monitor::search_parts(
+                    self.geo,
+                    self.motion,
+                    i,
+                    j,
+                    (c.m0, c.m1),
+                    offset,
+                    thr,
+                    budget,
+                    Some(warm),
+                    self.part_scratch,
+                    &mut self.part_count,
+                )
+                .0
+            }
+            None => crate::geometry::bounds::minimize(
+                dt,
+                c.m0,
+                c.m1,
+                c.rate,
+                thr,
+                budget,
+                dt * 1e-9,
+                |tau| self.margin_at(c.inv, &c.reads, tau),
+            ),
+        };
+        if c.rotation_unproven {
+            // Nothing this search finds can make the step held (its rate bound is not
+            // proven): it only looks, on a small budget, for a margin below zero (or below
+            // the worst so far, once violated) — a real margin at a real pose. Only when it
+            // finds one is the worst margin refined as on any other step.
+            let below = w.min(0.0);
+            let look = |b: f64| {
+                if b < below {
+                    f64::NEG_INFINITY
+                } else {
+                    thr(b).min(0.0)
+                }
+            };
+            let r = search(&look, UNRESOLVED_LOOK_EVALS);
+            if r.value < below {
+                let mut full = search(thr, MAX_GUARANTEE_EVALS);
+                full.evals += r.evals;
+                full
+            } else {
+                r
+            }
+        } else {
+            search(thr, MAX_GUARANTEE_EVALS)
+        }
+    }
+
+    /// The judgement of a case over the step (see [`check_guarantees`]): the smallest margin
+    /// and its certified lower bound, refined where the verdict needs it (the worst margin so
+    /// far is `w`), then the first violation and the restoration located. `was_ok`: the last
+    /// sample held.
+    fn finding(
+        &mut self,
+        c: &IntervalCase,
+        w: f64,
+        was_ok: bool,
+    ) -> crate::guarantee::IntervalFinding {
+        use crate::geometry::bounds::{Crossing, first_below, interval_lower_bound};
+        let (t, dt) = (self.view.t_s, self.motion.dt_s);
+        let t0 = t - dt;
+        let (m0, m1, rate) = (c.m0, c.m1, c.rate);
+        let abs_tol = c.inv.tolerance();
+        let floor = c.inv.margin_floor();
+        let thr = |b: f64| {
+            let x = w.min(b);
+            let t = if x >= 0.0 {
+                (x - abs_tol.max(POSITIVE_MARGIN_REL_TOL * x)).max(0.0)
+            } else {
+                x - abs_tol.max(NEGATIVE_MARGIN_REL_TOL * x.abs())
+            };
+            // The margin never goes below its floor: every sub-interval clears a threshold at
+            // or under it, whatever its rate bound says.
+            if t <= floor { f64::NEG_INFINITY } else { t }
+        };
+        let mut finding = crate::guarantee::IntervalFinding {
+            min_value: m1.value,
+            min_t_s: t,
+            inside: false,
+            lower: interval_lower_bound(m0.lower, m1.lower, rate, dt).max(floor),
+            first_violation_s: None,
+            restored_s: None,
+            unresolved: false,
+            evals: 0,
+        };
+        if c.inv.step_inputs() && m0.value < finding.min_value {
+            // Only a margin re-evaluated at t₀ under this step's inputs can be below both the
+            // sample at t₁ and what the search finds: it holds just after t₀.
+            finding.min_value = m0.value;
+            finding.min_t_s = t0;
+            finding.inside = true;
+        }
+        // A floor the step's inputs give (see `Guarantee::step_floor`).
+        let floor = floor.max(c.inv.step_floor(&self.view).unwrap_or(f64::NEG_INFINITY));
+        finding.lower = finding.lower.max(floor);
+        if finding.lower < thr(m1.value) {
+            let r = self.search(c, &thr, w);
+            if r.value < finding.min_value && r.t > 0.0 && r.t < dt {
+                finding.min_value = r.value;
+                finding.min_t_s = t0 + r.t;
+                finding.inside = true;
+            }
+            finding.lower = r.lower.max(floor);
+            finding.evals += r.evals;
+        }
+        let t_tol = dt * EVENT_TIME_TOL;
+        let went_negative = finding.min_value < 0.0 || m1.value < 0.0;
+        if was_ok && m0.value < 0.0 {
+            // Violated from the step's start (the step's inputs changed there).
+            finding.first_violation_s = Some((t0, t0));
+        }
+        let mut eval = |tau: f64| self.margin_at(c.inv, &c.reads, tau);
+        if m0.value >= 0.0 && went_negative {
+            let cr = first_below(dt, m0, m1, rate, 0.0, t_tol, MAX_CROSSING_EVALS, &mut eval);
+            finding.first_violation_s = match cr {
+                Crossing::At { t_lo, t_hi } => Some((t0 + t_lo, t0 + t_hi)),
+                Crossing::Unresolved { t_lo } => Some((t0 + t_lo, t)),
+                Crossing::Never => None,
+            };
+        }
+        if m1.value >= 0.0 && (m0.value < 0.0 || finding.min_value < 0.0) {
+            // The last time it was below zero: the first, going backwards from t₁.
+            let cr = first_below(dt, m1, m0, rate, 0.0, t_tol, MAX_CROSSING_EVALS, |u| {
+                eval(dt - u)
+            });
+            finding.restored_s = match cr {
+                Crossing::At { t_lo, t_hi } => Some((t - t_hi, t - t_lo)),
+                Crossing::Unresolved { t_lo } => Some((t0, t - t_lo)),
+                Crossing::Never => None,
+            };
+        }
+        finding.unresolved = !went_negative && (finding.lower < 0.0 || c.rotation_unproven);
+        finding
+    }
+
+    /// The verdict of a case from its finding, and an event for every change (with the
+    /// guarantee's detail where the new state is known to hold).
+    fn report(
+        &mut self,
+        c: &IntervalCase,
+        st: &mut GuaranteeStatus,
+        finding: &crate::guarantee::IntervalFinding,
+        log: &mut EventLog,
+    ) {
+        let (t, dt) = (self.view.t_s, self.motion.dt_s);
+        let t0 = t - dt;
+        for ch in st.update_interval(t, c.m1.value, finding, dt) {
+            let kind = if ch.violated {
+                "guarantee_violated"
+            } else {
+                "guarantee_restored"
+            };
+            let mut e = serde_json::json!({"name": st.name, "margin": ch.margin, "unit": st.unit,
+                "found": if ch.inside { "interval" } else { "sample" },
+                "t_tol_s": ch.t_tol_s, "t_step_s": t});
+            // The detail where the new state is known to hold: the end of the time bracket.
+            // (Its queries are not counted: the counts report the judgement's cost.)
+            let tau = (ch.t_s + ch.t_tol_s - t0).clamp(0.0, dt);
+            self.fill(&c.reads, tau, false);
+            if let Some(d) = c.inv.detail(&self.view_at(tau)) {
+                e["detail"] = d;
+            }
+            log.push(ch.t_s, kind, e);
+        }
+    }
+}
+
 /// Evaluates guarantees: at the step's sample and, for a guarantee with a rate bound, on the
 /// whole interval since the last one.
 ///
@@ -1207,6 +1623,10 @@ const MAX_CROSSING_EVALS: u32 = 256;
 /// the samples only. On a step whose rotation is under-resolved, a guarantee whose rate bound
 /// reads the rotation cannot be held: its search only looks for a violation (threshold 0, at
 /// most [`UNRESOLVED_LOOK_EVALS`] evaluations) and refines as above only once it finds one.
+///
+/// In order, per guarantee: its margin at the sample and its rate bound; without one,
+/// [`judge_at_sample`]; with one, its [`IntervalCase`], then [`StepJudge::finding`] (the
+/// search, [`StepJudge::search`], and the crossings) and [`StepJudge::report`].
 #[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource
 fn check_guarantees(
     clock: Res<Clock>,
@@ -1220,45 +1640,29 @@ fn check_guarantees(
     env: Res<Env>,
     host: Option<Res<controllers::ControllerHost>>,
 ) {
-    use crate::geometry::bounds::{Bracket, Crossing, first_below, interval_lower_bound, minimize};
-    use crate::guarantee::{IntervalFinding, Reads, ReferenceView};
+    use crate::geometry::bounds::Bracket;
     let t = clock.t_s();
-    if motion.under_resolved && motion.under_resolved_steps == 1 {
-        // The first step whose rotation the rate bounds do not cover: say so once, with the
-        // step that would (the count is in summary.json's monitor).
-        let (turn, body) = motion.max_turn_rad;
-        let name = mon.bodies.get(body).map_or("", |b| b.name.as_str());
-        log.push(
-            t,
-            "rotation_under_resolved",
-            serde_json::json!({
-                "body": name,
-                "turn_rad": turn,
-                "limit_rad": motion::UNDER_RESOLVED_TURN_RAD,
-                "dt_s_to_resolve": motion.dt_s * motion::UNDER_RESOLVED_TURN_RAD / turn,
-                "consequence": "guarantees whose rate bound rests on the rotation are unresolved over such steps, never held",
-            }),
-        );
-    }
+    note_under_resolved(t, &motion, &mon, &mut log);
     let jets = jets_view(host.as_deref());
     let orbit = env.orbit();
-    let reference_at = |back_s: f64| {
-        orbit.map(|o| {
-            let mut r = o.reference.clone();
-            r.step(back_s);
-            let (p, v) = r.state();
-            ReferenceView {
-                pos_eci_m: p,
-                vel_eci_m_s: v,
-            }
-        })
-    };
-    let view = MonitorView {
-        t_s: t,
-        bodies: &mon.bodies,
-        pairs: &mon.pairs,
-        reference: reference_at(0.0),
-        jets: &jets,
+    let mut judge = StepJudge {
+        view: MonitorView {
+            t_s: t,
+            bodies: &mon.bodies,
+            pairs: &mon.pairs,
+            reference: reference_at(orbit, 0.0),
+            jets: &jets,
+        },
+        mon: &mon,
+        motion: &motion,
+        geo: &geo,
+        orbit,
+        bodies_at: Vec::new(),
+        pairs_at: Vec::new(),
+        scratch: &mut scratch,
+        part_scratch: &mut part_scratch,
+        count: monitor::QueryCount::default(),
+        part_count: monitor::QueryCount::default(),
     };
     let frame_motion = FrameMotion {
         motion: &motion,
@@ -1271,14 +1675,9 @@ fn check_guarantees(
     let g = &mut *g;
     g.last.resize(g.list.len(), Bracket::exact(f64::INFINITY));
     g.last_rate.resize(g.list.len(), None);
-    let mut bodies_at: Vec<BodyView> = Vec::new();
-    let mut pairs_at: Vec<PairDistance> = Vec::new();
-    let mut count = monitor::QueryCount::default();
-    // The per-part searches' queries (counted with the others at the end).
-    let mut part_count = monitor::QueryCount::default();
     for k in 0..g.list.len() {
-        let inv = &g.list[k];
-        let m1 = inv.margin_bracket(&view);
+        let inv = &*g.list[k];
+        let m1 = inv.margin_bracket(&judge.view);
         frame_motion.rotation_read.set(false);
         let rate = if motion.ready {
             inv.rate_bound(&frame_motion)
@@ -1290,249 +1689,18 @@ fn check_guarantees(
         let rotation_unproven = motion.under_resolved && frame_motion.rotation_read.get();
         g.last_rate[k] = rate;
         let st = &mut g.status[k];
-        let Some(rate) = rate else {
-            let m = m1.value;
-            if let Some(violated) = st.update(t, m) {
-                let kind = if violated {
-                    "guarantee_violated"
-                } else {
-                    "guarantee_restored"
-                };
-                let mut e = serde_json::json!({"name": st.name, "margin": m, "unit": st.unit});
-                if let Some(d) = inv.detail(&view) {
-                    e["detail"] = d;
-                }
-                log.push(t, kind, e);
+        match rate {
+            None => judge_at_sample(inv, st, &judge.view, m1.value, &mut log),
+            Some(rate) => {
+                let was_ok = g.last[k].value >= 0.0;
+                let case = judge.case(inv, g.last[k], m1, rate, rotation_unproven);
+                let finding = judge.finding(&case, st.worst_margin, was_ok);
+                judge.report(&case, st, &finding, &mut log);
             }
-            g.last[k] = m1;
-            continue;
-        };
-        let dt = motion.dt_s;
-        let t0 = t - dt;
-        let m0 = g.last[k];
-        let reads = inv.reads();
-        // The bodies (and the pairs the guarantee reads) at τ into the step.
-        let mut fill = |tau: f64,
-                        bodies_at: &mut Vec<BodyView>,
-                        pairs_at: &mut Vec<PairDistance>,
-                        count: &mut monitor::QueryCount| {
-            if bodies_at.len() != mon.bodies.len() {
-                *bodies_at = mon.bodies.clone();
-            }
-            for (v, p) in bodies_at.iter_mut().zip(&motion.paths) {
-                let s = p.state_at(tau);
-                v.pos_m = s.pos_m;
-                v.vel_m_s = s.vel_m_s;
-                v.att = s.att;
-                v.omega_rad_s = s.omega_rad_s;
-            }
-            pairs_at.clear();
-            let list: Vec<(usize, usize)> = match &reads {
-                Reads::Bodies => Vec::new(),
-                Reads::Pairs(l) => l.clone(),
-                Reads::Everything => mon.pairs.iter().map(|p| (p.a, p.b)).collect(),
-            };
-            for (i, j) in list {
-                let warm = mon.pair_index.get(&(i, j)).map(|k| {
-                    let p = &mon.pairs[*k];
-                    (p.part_a, p.part_b)
-                });
-                let h = monitor::pair_at(&geo, &motion, i, j, tau, warm, &mut scratch, count);
-                pairs_at.push(PairDistance {
-                    a: i,
-                    b: j,
-                    distance_m: h.d.value,
-                    part_a: h.a,
-                    part_b: h.b,
-                    clearance_m: h.d.value,
-                    lower_m: h.d.lower,
-                    t_s: t0 + tau,
-                });
-            }
-        };
-        let mut eval = |tau: f64| -> Bracket {
-            fill(tau, &mut bodies_at, &mut pairs_at, &mut count);
-            let v = MonitorView {
-                t_s: t0 + tau,
-                bodies: &bodies_at,
-                pairs: &pairs_at,
-                reference: reference_at(tau - dt),
-                jets: &jets,
-            };
-            inv.margin_bracket(&v)
-        };
-        // A margin reading step inputs starts the step from its value under this step's
-        // inputs (the sample at t₀ was taken under the previous step's).
-        let was_ok = g.last[k].value >= 0.0;
-        let m0 = if inv.step_inputs() { eval(0.0) } else { m0 };
-        let w = st.worst_margin;
-        let abs_tol = inv.tolerance();
-        let floor = inv.margin_floor();
-        let thr = |b: f64| {
-            let x = w.min(b);
-            let t = if x >= 0.0 {
-                (x - abs_tol.max(POSITIVE_MARGIN_REL_TOL * x)).max(0.0)
-            } else {
-                x - abs_tol.max(NEGATIVE_MARGIN_REL_TOL * x.abs())
-            };
-            // The margin never goes below its floor: every sub-interval clears a threshold at
-            // or under it, whatever its rate bound says.
-            if t <= floor { f64::NEG_INFINITY } else { t }
-        };
-        let mut finding = IntervalFinding {
-            min_value: m1.value,
-            min_t_s: t,
-            inside: false,
-            lower: interval_lower_bound(m0.lower, m1.lower, rate, dt).max(floor),
-            first_violation_s: None,
-            restored_s: None,
-            unresolved: false,
-            evals: 0,
-        };
-        if inv.step_inputs() && m0.value < finding.min_value {
-            // Only a margin re-evaluated at t₀ under this step's inputs can be below both the
-            // sample at t₁ and what the search finds: it holds just after t₀.
-            finding.min_value = m0.value;
-            finding.min_t_s = t0;
-            finding.inside = true;
-        }
-        // A floor the step's inputs give (see `Guarantee::step_floor`).
-        let floor = floor.max(inv.step_floor(&view).unwrap_or(f64::NEG_INFINITY));
-        finding.lower = finding.lower.max(floor);
-        if finding.lower < thr(m1.value) {
-            // A margin that is a distance less a constant, with a body turning fast: the
-            // per-part-pair bounds (`monitor::search_parts`).
-            let per_part = inv.distance_margin().and_then(|(a, b, offset)| {
-                let (i, j) = (a.min(b), a.max(b));
-                let p = &mon.pairs[*mon.pair_index.get(&(i, j))?];
-                if p.t_s != t {
-                    return None;
-                }
-                let (pair_rate, body_rate) = monitor::pair_rate_gain(
-                    &geo,
-                    &motion,
-                    i,
-                    j,
-                    (p.part_a, p.part_b),
-                    &mut part_scratch,
-                );
-                (body_rate >= monitor::PER_PART_MIN_GAIN * pair_rate).then_some((
-                    i,
-                    j,
-                    offset,
-                    (p.part_a, p.part_b),
-                ))
-            });
-            let mut search = |thr: &dyn Fn(f64) -> f64, budget: u32| match per_part {
-                Some((i, j, offset, warm)) => {
-                    monitor::search_parts(
-                        &geo,
-                        &motion,
-                        i,
-                        j,
-                        (m0, m1),
-                        offset,
-                        thr,
-                        budget,
-                        Some(warm),
-                        &mut part_scratch,
-                        &mut part_count,
-                    )
-                    .0
-                }
-                None => minimize(dt, m0, m1, rate, thr, budget, dt * 1e-9, &mut eval),
-            };
-            let r = if rotation_unproven {
-                // Nothing this search finds can make the step held (its rate bound is not
-                // proven): it only looks, on a small budget, for a margin below zero (or below
-                // the worst so far, once violated) — a real margin at a real pose. Only when it
-                // finds one is the worst margin refined as on any other step.
-                let below = w.min(0.0);
-                let look = |b: f64| {
-                    if b < below {
-                        f64::NEG_INFINITY
-                    } else {
-                        thr(b).min(0.0)
-                    }
-                };
-                let r = search(&look, UNRESOLVED_LOOK_EVALS);
-                if r.value < below {
-                    let mut full = search(&thr, MAX_GUARANTEE_EVALS);
-                    full.evals += r.evals;
-                    full
-                } else {
-                    r
-                }
-            } else {
-                search(&thr, MAX_GUARANTEE_EVALS)
-            };
-            if r.value < finding.min_value && r.t > 0.0 && r.t < dt {
-                finding.min_value = r.value;
-                finding.min_t_s = t0 + r.t;
-                finding.inside = true;
-            }
-            finding.lower = r.lower.max(floor);
-            finding.evals += r.evals;
-        }
-        let t_tol = dt * EVENT_TIME_TOL;
-        let went_negative = finding.min_value < 0.0 || m1.value < 0.0;
-        if was_ok && m0.value < 0.0 {
-            // Violated from the step's start (the step's inputs changed there).
-            finding.first_violation_s = Some((t0, t0));
-        }
-        if m0.value >= 0.0 && went_negative {
-            let c = first_below(dt, m0, m1, rate, 0.0, t_tol, MAX_CROSSING_EVALS, &mut eval);
-            finding.first_violation_s = match c {
-                Crossing::At { t_lo, t_hi } => Some((t0 + t_lo, t0 + t_hi)),
-                Crossing::Unresolved { t_lo } => Some((t0 + t_lo, t)),
-                Crossing::Never => None,
-            };
-        }
-        if m1.value >= 0.0 && (m0.value < 0.0 || finding.min_value < 0.0) {
-            // The last time it was below zero: the first, going backwards from t₁.
-            let c = first_below(dt, m1, m0, rate, 0.0, t_tol, MAX_CROSSING_EVALS, |u| {
-                eval(dt - u)
-            });
-            finding.restored_s = match c {
-                Crossing::At { t_lo, t_hi } => Some((t - t_hi, t - t_lo)),
-                Crossing::Unresolved { t_lo } => Some((t0, t - t_lo)),
-                Crossing::Never => None,
-            };
-        }
-        finding.unresolved = !went_negative && (finding.lower < 0.0 || rotation_unproven);
-        for c in st.update_interval(t, m1.value, &finding, dt) {
-            let kind = if c.violated {
-                "guarantee_violated"
-            } else {
-                "guarantee_restored"
-            };
-            let mut e = serde_json::json!({"name": st.name, "margin": c.margin, "unit": st.unit,
-                "found": if c.inside { "interval" } else { "sample" },
-                "t_tol_s": c.t_tol_s, "t_step_s": t});
-            // The detail where the new state is known to hold: the end of the time bracket.
-            // (Its queries are not counted: the counts report the judgement's cost.)
-            let tau = (c.t_s + c.t_tol_s - t0).clamp(0.0, dt);
-            fill(
-                tau,
-                &mut bodies_at,
-                &mut pairs_at,
-                &mut monitor::QueryCount::default(),
-            );
-            let v = MonitorView {
-                t_s: t0 + tau,
-                bodies: &bodies_at,
-                pairs: &pairs_at,
-                reference: reference_at(tau - dt),
-                jets: &jets,
-            };
-            if let Some(d) = inv.detail(&v) {
-                e["detail"] = d;
-            }
-            log.push(c.t_s, kind, e);
         }
         g.last[k] = m1;
     }
-    g.interval_queries += count.exact + part_count.exact;
+    g.interval_queries += judge.count.exact + judge.part_count.exact;
 }
 
 /// Every `Rcs` actuator's jets and their firing flags over the current step, for
