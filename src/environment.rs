@@ -1,51 +1,66 @@
 //! The environment layer, Bevy-free: gravity fields acting on the bodies' centres of mass and
 //! what a controller may know about the environment it flies in.
 //!
-//! The Bevy layer (`sim::environment`) turns a scene's `environment` into one of these fields
-//! and steps it; the controller host hands every law an [`EnvObs`] (the one snapshot type of
-//! the environment) with the same numbers. An orbit's gravity is a list of
+//! The Bevy layer (`sim::environment`) turns a scene's `environment` into one of these models
+//! ([`EnvironmentModel`]), kept in its one environment resource (`sim::Env`), and advances it;
+//! the controller host hands every law an [`EnvObs`] (the one snapshot type of the environment)
+//! with the same numbers. An orbit's gravity is a list of
 //! [`crate::orbit::gravity::GravityTerm`]s.
 
 use crate::orbit::gravity::GravityTerm;
 use crate::orbit::l2::L2Centre;
 use nalgebra::Vector3;
 
-/// A gravity field acting on every body's centre of mass, in the world frame. The physics step
-/// evaluates it twice per step (velocity Verlet), so it must be a function of position (and of
-/// the field's own time, advanced by [`GravityField::advance`]) only.
+/// A gravity field acting on every body's centre of mass, in the world frame, at its
+/// environment model's current time (the model moves it on: [`EnvironmentModel::advance`]). The
+/// physics step evaluates it twice per step (velocity Verlet), so it must be a function of
+/// position (and of that time) only.
 pub trait GravityField: Send + Sync {
     /// Acceleration at a world position, m/s², at the field's current time.
     fn accel_m_s2(&self, pos_world_m: &Vector3<f64>) -> Vector3<f64>;
-    /// Moves the field's time on by `dt_s` (e.g. propagates a reference orbit).
-    fn advance(&mut self, dt_s: f64);
 }
 
 /// The gravity field of a `SunEarthL2` scene (Zhang et al. 2018): differential Sun + Earth–Moon
 /// barycentre gravity about a thrust-free formation centre (see [`crate::orbit::l2`]). The world
 /// frame is non-rotating, its axes those of the Sun–EMB rotating frame at t = 0, its origin on
 /// the centre.
+#[derive(Debug, Clone)]
 pub struct L2Gravity(pub L2Centre);
 
 impl GravityField for L2Gravity {
     fn accel_m_s2(&self, pos_world_m: &Vector3<f64>) -> Vector3<f64> {
         self.0.differential_accel_world_m_s2(pos_world_m)
     }
+}
+
+impl EnvironmentModel for L2Gravity {
+    fn gravity(&self) -> Option<&dyn GravityField> {
+        Some(self)
+    }
     /// Advances one scene step (the centre steps by its own `dt_s`, the scene's step).
     fn advance(&mut self, dt_s: f64) {
         debug_assert!((dt_s - self.0.dt_s).abs() <= 1e-12 * dt_s);
         self.0.advance();
     }
+    /// The centre; `states_rot` is left empty (the controller host fills its own copy).
+    fn observe(&self, env: &mut EnvObs) {
+        env.set_l2(&self.0);
+    }
 }
 
-/// An environment model: the gravity field it applies to every body and what a controller
-/// knows of it. A new kind of environment implements this (and adds its [`EnvObs`] variant); the
-/// pipeline asks it for its field once and for its [`EnvObs`] after each of its own updates, so
-/// neither the physics nor the controller host match on the kinds.
+/// An environment model: its state (a reference orbit, a formation centre, …), the gravity
+/// field it applies to every body and what a controller knows of it. A new kind of environment
+/// implements this (and adds its [`EnvObs`] variant); the pipeline advances it once per step and
+/// asks it for its field and for its [`EnvObs`], so neither the physics nor the controller host
+/// match on the kinds.
 pub trait EnvironmentModel: Send + Sync {
-    /// A copy of the gravity field this environment applies to every body's centre of mass (the
-    /// pipeline advances it), or `None` (force-free space; a table whose forces are its own
+    /// The gravity field this environment applies to every body's centre of mass, at the
+    /// model's current time, or `None` (force-free space; a table whose forces are its own
     /// systems').
-    fn gravity_field(&self) -> Option<Box<dyn GravityField>>;
+    fn gravity(&self) -> Option<&dyn GravityField>;
+    /// Moves the model's time (and its gravity field's) on by `dt_s`: the pipeline calls it once
+    /// per step, at the head of the physics step.
+    fn advance(&mut self, dt_s: f64);
     /// Writes what a controller knows of the environment now into `env`, in place.
     fn observe(&self, env: &mut EnvObs);
 }
@@ -55,9 +70,11 @@ pub trait EnvironmentModel: Send + Sync {
 pub struct FreeSpace;
 
 impl EnvironmentModel for FreeSpace {
-    fn gravity_field(&self) -> Option<Box<dyn GravityField>> {
+    fn gravity(&self) -> Option<&dyn GravityField> {
         None
     }
+    /// Nothing moves.
+    fn advance(&mut self, _dt_s: f64) {}
     fn observe(&self, env: &mut EnvObs) {
         *env = EnvObs::FreeSpace;
     }
@@ -72,9 +89,11 @@ pub struct Table {
 }
 
 impl EnvironmentModel for Table {
-    fn gravity_field(&self) -> Option<Box<dyn GravityField>> {
+    fn gravity(&self) -> Option<&dyn GravityField> {
         None
     }
+    /// The lab gravity is constant.
+    fn advance(&mut self, _dt_s: f64) {}
     fn observe(&self, env: &mut EnvObs) {
         *env = EnvObs::AirBearing {
             gravity_lab_m_s2: self.gravity_lab_m_s2,

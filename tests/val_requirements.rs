@@ -369,7 +369,7 @@ fn val_passive_safety_propagated_elliptic_against_kepler() {
     let found = propagate_drift(
         &DriftSetup {
             zone: Zone::Sphere(radius),
-            j2: false,
+            gravity: rpod::orbit::gravity::TWO_BODY,
             horizon_s: horizon,
             intervals: k,
         },
@@ -431,7 +431,7 @@ fn val_passive_safety_reused_drift_is_sound_after_a_coast_and_a_kick() {
     let track = propagate_drift_track(
         &DriftSetup {
             zone: Zone::Sphere(radius),
-            j2: false,
+            gravity: rpod::orbit::gravity::TWO_BODY,
             horizon_s: horizon,
             intervals: k,
         },
@@ -570,7 +570,7 @@ fn val_passive_safety_propagated_j2_against_an_independent_integration() {
     let found = propagate_drift(
         &DriftSetup {
             zone: Zone::Sphere(radius),
-            j2: true,
+            gravity: rpod::orbit::gravity::TWO_BODY_J2,
             horizon_s: horizon,
             intervals: k,
         },
@@ -640,6 +640,7 @@ fn val_passive_safety_propagated_j2_against_an_independent_integration() {
 #[test]
 fn val_passive_safety_with_j2_in_a_scene() {
     use rpod::guarantee::requirements::gravity_gradient_bound;
+    use rpod::orbit::gravity::{TWO_BODY, TWO_BODY_J2};
     let n = (MU_EARTH_M3_S2 / 7.0e6_f64.powi(3)).sqrt();
     let (x0, y0, r, h) = (20.0, 30.0, 5.0, 2000.0);
     let sim = sim_of(&orbit_scene(
@@ -653,7 +654,7 @@ fn val_passive_safety_with_j2_in_a_scene() {
     ));
     let g = &sim.guarantees().status[0];
     let rho_max = (x0 * x0 + (y0 - 1.5 * n * x0 * h).powi(2)).sqrt();
-    let g_j2 = gravity_gradient_bound(7.0e6, true) - gravity_gradient_bound(7.0e6, false);
+    let g_j2 = gravity_gradient_bound(7.0e6, TWO_BODY_J2) - gravity_gradient_bound(7.0e6, TWO_BODY);
     let j2_effect = 0.5 * g_j2 * rho_max * h * h;
     let tol = drift_tolerance(x0, y0, n, h, 5.0) + j2_effect;
     println!(

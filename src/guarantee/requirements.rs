@@ -6,6 +6,7 @@
 use super::registry::{GuaranteeContext, GuaranteeParams};
 use super::{Guarantee, MonitorView, MotionBounds, Reads};
 use crate::control::registry::BuildError;
+use crate::orbit::gravity::{GravityTerm, earth_gravity};
 use crate::scene::validate::MAX_POSITION_M;
 use crate::scene::{Environment, OrbitSpec, Scene};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
@@ -430,8 +431,8 @@ pub struct PassiveSafetyParams {
 pub const MAX_DRIFT_GRID_POINTS: f64 = 100_000.0;
 
 /// How a scene's drift is propagated: the CW closed form for a circular two-body reference
-/// (mean motion rad/s, orbit radius m), else the scene's own gravity (J2 on or off), or why
-/// the scene cannot have one.
+/// (mean motion rad/s, orbit radius m), else the scene's own gravity model (its list of terms:
+/// two-body, plus J2 if the scene's `j2` is set), or why the scene cannot have one.
 fn drift_model_of(scene: &Scene) -> Result<ModelKind, String> {
     match &scene.environment {
         Environment::Orbit {
@@ -442,7 +443,11 @@ fn drift_model_of(scene: &Scene) -> Result<ModelKind, String> {
             n_rad_s: (crate::orbit::constants::MU_EARTH_M3_S2 / a_m.powi(3)).sqrt(),
             r0_m: *a_m,
         }),
-        Environment::Orbit { j2, .. } => Ok(ModelKind::Propagated { j2: *j2 }),
+        // The scene's `j2` flag becomes the gravity model's list of terms here, as in the
+        // simulation's environment.
+        Environment::Orbit { j2, .. } => Ok(ModelKind::Propagated {
+            gravity: earth_gravity(*j2),
+        }),
         _ => Err("PassiveSafety needs an orbit scene (`environment: Orbit(...)`)".into()),
     }
 }
@@ -485,7 +490,7 @@ fn reference_substep_s(scene: &Scene) -> Option<f64> {
 #[derive(Debug, Clone, Copy)]
 enum ModelKind {
     Cw { n_rad_s: f64, r0_m: f64 },
-    Propagated { j2: bool },
+    Propagated { gravity: &'static [GravityTerm] },
 }
 
 impl GuaranteeParams for PassiveSafetyParams {
@@ -579,7 +584,10 @@ impl GuaranteeParams for PassiveSafetyParams {
                     .map(|i| crate::orbit::cw::cw_stm(n_rad_s, i as f64 * dtau))
                     .collect(),
             },
-            ModelKind::Propagated { j2 } => DriftModel::Propagated { j2, intervals: k },
+            ModelKind::Propagated { gravity } => DriftModel::Propagated {
+                gravity,
+                intervals: k,
+            },
         };
         // A propagated drift about a sphere, evaluated every step, is kept and reused: it is
         // propagated REUSE_WINDOW_FRACTION further, within the sub-step budget.
@@ -648,8 +656,8 @@ pub enum DriftModel {
     },
     /// The scene's own gravity, propagated ([`propagate_drift`]).
     Propagated {
-        /// J2 on.
-        j2: bool,
+        /// The scene's gravity model, its terms summed in this order.
+        gravity: &'static [GravityTerm],
         /// Grid intervals K over the evaluated horizon.
         intervals: usize,
     },
@@ -783,11 +791,11 @@ impl PassiveSafety {
                 let (xb, xa) = (state(self.body), state(self.around));
                 self.drift(&(xb - xa), [&xb, &xa]).margin_m
             }
-            DriftModel::Propagated { j2, intervals } => {
+            DriftModel::Propagated { gravity, intervals } => {
                 let (b, a) = (&v.bodies[self.body], &v.bodies[self.around]);
                 let setup = DriftSetup {
                     zone: self.zone,
-                    j2: *j2,
+                    gravity,
                     horizon_s: self.horizon_s,
                     intervals: *intervals,
                 };
@@ -852,8 +860,9 @@ pub const MAX_PROPAGATED_GRID_S: f64 = 90.0;
 pub struct DriftSetup {
     /// Keep-out zone about `around`, axes of `around`'s own Hill frame at each grid time.
     pub zone: Zone,
-    /// J2 on (as the scene's `Orbit(j2: …)`).
-    pub j2: bool,
+    /// The gravity model, its terms summed in this order (the scene's `Orbit(j2: …)` gives
+    /// [`crate::orbit::gravity::TWO_BODY`] or [`crate::orbit::gravity::TWO_BODY_J2`]).
+    pub gravity: &'static [GravityTerm],
     /// Horizon, s.
     pub horizon_s: f64,
     /// Grid intervals K (grid spacing Δτ = horizon / K).
@@ -869,17 +878,26 @@ pub const J2_GRADIENT_FACTOR: f64 = 9.8;
 /// m/s².
 const G_SURFACE_BOUND_M_S2: f64 = 10.0;
 
-/// Bound on the gradient of Earth gravity (two-body, plus J2 if `j2`) at radius ≥ `r_m`, s⁻²:
-/// 2μ/r³ (the point mass's spectral norm) plus [`J2_GRADIENT_FACTOR`]·(3/2)J2μR_E²/r⁵.
-pub fn gravity_gradient_bound(r_m: f64, j2: bool) -> f64 {
+/// Bound on the gradient of one term of the Earth's gravity at radius ≥ `r_m`, s⁻²: the point
+/// mass, 2μ/r³ (its spectral norm); J2, [`J2_GRADIENT_FACTOR`]·(3/2)J2μR_E²/r⁵.
+fn term_gradient_bound(term: GravityTerm, r_m: f64) -> f64 {
     use crate::orbit::constants::{J2_EARTH, MU_EARTH_M3_S2, R_EARTH_M};
-    let pm = 2.0 * MU_EARTH_M3_S2 / r_m.powi(3);
-    if j2 {
-        pm + J2_GRADIENT_FACTOR * 1.5 * J2_EARTH * MU_EARTH_M3_S2 * R_EARTH_M * R_EARTH_M
-            / r_m.powi(5)
-    } else {
-        pm
+    match term {
+        GravityTerm::TwoBody => 2.0 * MU_EARTH_M3_S2 / r_m.powi(3),
+        GravityTerm::J2 => {
+            J2_GRADIENT_FACTOR * 1.5 * J2_EARTH * MU_EARTH_M3_S2 * R_EARTH_M * R_EARTH_M
+                / r_m.powi(5)
+        }
     }
+}
+
+/// Bound on the gradient of the Earth gravity model `gravity` (its terms) at radius ≥ `r_m`,
+/// s⁻²: the sum of its terms' bounds, in order (2μ/r³ for the point mass, the spectral norm of
+/// its gradient, plus [`J2_GRADIENT_FACTOR`]·(3/2)J2μR_E²/r⁵ for J2); zero for an empty model.
+pub fn gravity_gradient_bound(r_m: f64, gravity: &[GravityTerm]) -> f64 {
+    let mut terms = gravity.iter().map(|t| term_gradient_bound(*t, r_m));
+    let first = terms.next().unwrap_or(0.0);
+    terms.fold(first, |sum, b| sum + b)
 }
 
 /// The thrust-free drift of `body` (world-frame position and velocity) from `around`, under the
@@ -921,17 +939,17 @@ const BAD_FINDING: DriftFinding = DriftFinding {
 
 /// Time derivative of a drift state [R_a, V_a, p, v] (ECI axes: `around`'s absolute state,
 /// `body`'s relative one) under the scene's gravity.
-fn drift_rhs(y: &SVector<f64, 12>, j2: bool) -> SVector<f64, 12> {
-    use crate::orbit::gravity::{accel_earth, differential_accel, earth_gravity};
+fn drift_rhs(y: &SVector<f64, 12>, gravity: &[GravityTerm]) -> SVector<f64, 12> {
+    use crate::orbit::gravity::{accel_earth, differential_accel};
     let r = Vector3::new(y[0], y[1], y[2]);
     let p = Vector3::new(y[6], y[7], y[8]);
     let mut d = SVector::<f64, 12>::zeros();
     d.fixed_rows_mut::<3>(0).copy_from(&y.fixed_rows::<3>(3));
     d.fixed_rows_mut::<3>(3)
-        .copy_from(&accel_earth(&r, earth_gravity(j2)));
+        .copy_from(&accel_earth(&r, gravity));
     d.fixed_rows_mut::<3>(6).copy_from(&y.fixed_rows::<3>(9));
     d.fixed_rows_mut::<3>(9)
-        .copy_from(&differential_accel(&r, &p, earth_gravity(j2)));
+        .copy_from(&differential_accel(&r, &p, gravity));
     d
 }
 
@@ -945,8 +963,8 @@ pub struct DriftTrack {
     sub_fine: usize,
     /// The reference orbit's sub-step rule, s.
     h_max_s: f64,
-    /// J2 on.
-    j2: bool,
+    /// The gravity model, its terms summed in this order.
+    gravity: &'static [GravityTerm],
     /// Finer-run states [R_a, V_a, p, v] at the grid points (ECI axes), m and m/s.
     states: Vec<SVector<f64, 12>>,
     /// Zone margin at each grid point, m.
@@ -1032,7 +1050,7 @@ impl DriftTrack {
         let y0 = self.states[i0];
         let (y, step_err) = if sigma > 0.0 {
             let n = (sigma / self.h_max_s).ceil().max(1.0) as usize;
-            let mut f = |_t: f64, y: &SVector<f64, 12>| drift_rhs(y, self.j2);
+            let mut f = |_t: f64, y: &SVector<f64, 12>| drift_rhs(y, self.gravity);
             let mut run = |sub: usize| {
                 let h = sigma / sub as f64;
                 let mut y = y0;
@@ -1066,7 +1084,7 @@ impl DriftTrack {
         if r_lo.is_nan() || r_lo <= R_EARTH_M {
             return None;
         }
-        let g = gravity_gradient_bound(r_lo, self.j2).sqrt();
+        let g = gravity_gradient_bound(r_lo, self.gravity).sqrt();
         let s = i1 as f64 * dt - tau_s;
         let (ch, sh) = ((g * s).cosh(), (g * s).sinh() / g);
         let dev_a = da_p * ch + da_v * sh;
@@ -1105,21 +1123,17 @@ pub fn propagate_drift_track(
     use crate::orbit::constants::R_EARTH_M;
     use crate::orbit::integrate::{ReferenceOrbit, rk8_step};
     type S = SVector<f64, 12>;
-    let j2 = setup.j2;
+    let gravity = setup.gravity;
     let k0 = setup.intervals.max(1);
     let dtau = setup.horizon_s / k0 as f64;
     let k = k0 + extra;
-    let h_max = ReferenceOrbit::from_state(
-        reference.pos_eci_m,
-        reference.vel_eci_m_s,
-        crate::orbit::gravity::earth_gravity(j2),
-    )
-    .max_substep_s();
+    let h_max = ReferenceOrbit::from_state(reference.pos_eci_m, reference.vel_eci_m_s, gravity)
+        .max_substep_s();
     let mut track = DriftTrack {
         dtau_s: dtau,
         sub_fine: 2,
         h_max_s: h_max,
-        j2,
+        gravity,
         states: Vec::new(),
         grid_m: vec![f64::NEG_INFINITY; k + 1],
         lows: vec![f64::NEG_INFINITY; k],
@@ -1144,7 +1158,7 @@ pub fn propagate_drift_track(
     ] {
         y0.fixed_rows_mut::<3>(off).copy_from(&v);
     }
-    let mut f = |_t: f64, y: &S| -> S { drift_rhs(y, j2) };
+    let mut f = |_t: f64, y: &S| -> S { drift_rhs(y, gravity) };
     // Grid states of both runs.
     let mut run = |sub: usize| -> Vec<S> {
         let h = dtau / sub as f64;
@@ -1213,7 +1227,7 @@ pub fn propagate_drift_track(
             let r_seg =
                 r0.min(r_lo) - (vh0.max(v_hi) + G_SURFACE_BOUND_M_S2 * dtau) * dtau * 0.5 - p_seg0;
             if !r_seg.is_nan() && r_seg > R_EARTH_M {
-                let g = gravity_gradient_bound(r_seg, j2);
+                let g = gravity_gradient_bound(r_seg, gravity);
                 if g * dtau * dtau <= 1.0 {
                     let p_seg = p_seg0 * (1.0 + g * dtau * dtau);
                     let a = g * p_seg;

@@ -27,8 +27,8 @@ use crate::reproduce::zhang2018_sim::{
     boundary_value_history, collision_course_plan, simulate_reconfiguration,
 };
 use crate::scene::load_scene_file;
+use crate::sim::Env;
 use crate::sim::Simulation;
-use crate::sim::environment::L2Frame;
 use crate::sim::output::Diagnostics;
 use nalgebra::{Vector2, Vector3};
 use std::path::{Path, PathBuf};
@@ -80,14 +80,17 @@ impl Trace {
     }
 }
 
-/// The controllers' frame brought to the simulation's current step (its copy is synced at
-/// the start of each step, so after stepping it is one step behind).
+/// The formation centre at the simulation's current step (the environment advances it with
+/// the physics, one scene step per step).
 fn frame_now(sim: &Simulation) -> L2Centre {
-    let mut f = sim.app.world().resource::<L2Frame>().0.clone();
-    let step = sim.steps();
-    while f.steps < step {
-        f.advance();
-    }
+    let f = sim
+        .app
+        .world()
+        .resource::<Env>()
+        .l2_centre()
+        .expect("a SunEarthL2 scene")
+        .clone();
+    debug_assert_eq!(f.steps, sim.steps());
     f
 }
 

@@ -3,7 +3,7 @@
 use super::monitor::{ColliderRef, ContactState};
 use super::output::{Diagnostics, OutputFiles, Recorder};
 use super::{
-    BodyState, Clock, EventLog, Guarantees, MonitorState, OrbitEnv, Part, Physics, Roster, SimBody,
+    BodyState, Clock, Env, EventLog, Guarantees, MonitorState, Part, Physics, Roster, SimBody,
     StepBudget, Wrench, conv,
 };
 use crate::scene::parts::{PartCollider, Primitive, expand_body};
@@ -129,355 +129,505 @@ fn principal(j: &Matrix3<f64>) -> (Vector3<f64>, UnitQuaternion<f64>) {
     (vals, rot)
 }
 
+/// The rapier world of a scene: no gravity (the environment applies it), no speed cap, the
+/// scene's step over its substeps, contact recycling off.
+fn physics_world(scene: &Scene) -> rp::PhysicsWorld {
+    let dt = scene.dt_s;
+    let mut pw = rp::PhysicsWorld::new();
+    pw.gravity = rp::Vector::ZERO;
+    // No speed cap: debris and fly-bys move at km/s (rapier's default clamps at 400 m/s).
+    pw.integration_parameters.normalized_max_linear_velocity = f32::MAX;
+    pw.integration_parameters.dt = (dt / f64::from(scene.physics_substeps)) as f32;
+    // rapier 0.35 "recycles" a contact pair whose relative pose moved less than 5 cm (2 cm
+    // without contact points) since its last full narrow-phase update: it keeps the old
+    // contact points, normal and lever arms and only advances their separations along the
+    // frozen normal. A speculative contact made 2 cm above the slot's rim (its normal along
+    // the rim edge) then stops the cone when it crosses the mouth plane, millimetres clear of
+    // the real wall (trial 17 of `scenes/trials/capture_envelope.ron`). Every pair is
+    // recomputed every step instead: `tests/val_contact_normals.rs`.
+    pw.integration_parameters.contact_recycling = false;
+    pw
+}
+
+/// Spawns a scene's bodies, in scene order: each body's rapier body and colliders, its entity
+/// ([`SimBody`], [`BodyState`], [`Wrench`]) and one [`Part`] entity per collider.
+struct BodyBuilder<'a> {
+    /// The scene (errors are located in its text).
+    loaded: &'a LoadedScene,
+    /// The app the entities are spawned in.
+    app: &'a mut App,
+    /// The rapier world the bodies and colliders are inserted in.
+    pw: &'a mut rp::PhysicsWorld,
+    /// The reference orbit's ECI state at t = 0 (orbit scenes: Hill-frame initial states).
+    reference: Option<(Vector3<f64>, Vector3<f64>)>,
+    /// Body and part entities so far.
+    roster: Roster,
+    /// Collider → body and part, so far.
+    contacts: ContactState,
+    /// Each body's colliders so far, scene order.
+    all_parts: Vec<Vec<PartCollider>>,
+    /// Mesh parts so far.
+    meshes: Vec<MeshPartReport>,
+}
+
+impl BodyBuilder<'_> {
+    /// Spawns body `index` (its colliders with it).
+    fn body(&mut self, index: usize, b: &BodySpec) -> Result<(), SceneError> {
+        let loaded = self.loaded;
+        if matches!(b.initial.frame, InitFrame::Hill) && self.reference.is_none() {
+            return Err(loaded.error_at(
+                &format!("bodies.{}.initial.frame", b.name),
+                "frame `Hill` needs an `Orbit` environment",
+            ));
+        }
+        let state = initial_state(b, self.reference);
+        let com = Vector3::from(b.com_m);
+        let j = b.inertia_kg_m2.matrix();
+        let (moments, frame) = principal(&j);
+        let mprops = rp::MassProperties::with_principal_inertia_frame(
+            conv::v(&com),
+            b.mass_kg as f32,
+            conv::v(&moments),
+            conv::q(&frame),
+        );
+        let Some(inertia_inv) = j.try_inverse().filter(|m| m.iter().all(|v| v.is_finite())) else {
+            return Err(loaded.error_at(
+                &format!("bodies.{}.inertia_kg_m2", b.name),
+                "the inertia tensor cannot be inverted in f64",
+            ));
+        };
+        let colliders = expand_body(b);
+        let has_docking = colliders.iter().any(|c| c.role.is_docking());
+        let has_mesh = colliders
+            .iter()
+            .any(|c| matches!(c.shape, Primitive::Mesh { .. }));
+        let rb = rp::RigidBodyBuilder::dynamic()
+            .pose(conv::pose(&state.body_pose(&com)))
+            .linvel(conv::v(&state.vel_m_s))
+            .angvel(conv::v(&state.omega_rad_s))
+            .can_sleep(false)
+            .gyroscopic_forces_enabled(true)
+            .ccd_enabled(has_docking || has_mesh)
+            .additional_mass_properties(mprops)
+            .build();
+        let handle = self.pw.insert_body(rb);
+        let body_entity = self
+            .app
+            .world_mut()
+            .spawn((
+                SimBody {
+                    index,
+                    name: b.name.clone(),
+                    role: b.role,
+                    handle,
+                    mass_kg: b.mass_kg,
+                    inertia_kg_m2: j,
+                    com_body_m: com,
+                    inertia_inv,
+                },
+                state,
+                Wrench::default(),
+            ))
+            .id();
+        let mut part_entities = Vec::new();
+        for (part_index, pc) in colliders.iter().enumerate() {
+            part_entities.push(self.part(b, (index, body_entity, handle), part_index, pc)?);
+        }
+        self.roster.bodies.push(body_entity);
+        self.roster.parts.push(part_entities);
+        self.roster.names.push(b.name.clone());
+        self.all_parts.push(colliders);
+        Ok(())
+    }
+
+    /// Spawns collider `part_index` of body `b` (its index, entity and rapier handle): the
+    /// rapier collider (a mesh's convex pieces), its [`ColliderRef`] and its [`Part`] entity.
+    fn part(
+        &mut self,
+        b: &BodySpec,
+        (index, body_entity, handle): (usize, Entity, rp::RigidBodyHandle),
+        part_index: usize,
+        pc: &PartCollider,
+    ) -> Result<Entity, SceneError> {
+        let loaded = self.loaded;
+        let Some(shape) = primitive_shape(&pc.shape) else {
+            return Err(loaded.error_at(
+                &format!("bodies.{}.parts.{}", b.name, pc.part),
+                format!("collider `{}` has a degenerate convex hull", pc.name),
+            ));
+        };
+        // Judged as the mesh; simulated as its convex pieces.
+        let simulated = match &pc.shape {
+            Primitive::Mesh {
+                mesh,
+                decomposition,
+            } => {
+                let Some(s) = super::mesh::simulated_shape(mesh, decomposition) else {
+                    return Err(loaded.error_at(
+                        &format!("bodies.{}.parts.{}.shape.decomposition", b.name, pc.part),
+                        format!(
+                            "collider `{}`: the convex decomposition gave no piece",
+                            pc.name
+                        ),
+                    ));
+                };
+                let d = super::mesh::decomposition(mesh, decomposition);
+                self.meshes.push(MeshPartReport {
+                    part: format!("{}/{}", b.name, pc.name),
+                    triangles: mesh.triangles.len(),
+                    convex_pieces: d.hulls.len(),
+                    decomposition_max_deviation_m: d.max_deviation_m,
+                });
+                s
+            }
+            _ => shape.clone(),
+        };
+        let col = rp::ColliderBuilder::new(simulated)
+            .position(conv::pose(&pc.pose_body))
+            .density(0.0)
+            .friction(b.friction as f32)
+            .restitution(b.restitution as f32)
+            .build();
+        let ch = self.pw.insert_collider(col, Some(handle));
+        self.contacts.colliders.insert(
+            ch,
+            ColliderRef {
+                body: index,
+                part: part_index,
+                full_name: format!("{}/{}", b.name, pc.name),
+                docking: pc.role.is_docking(),
+            },
+        );
+        Ok(self
+            .app
+            .world_mut()
+            .spawn(Part {
+                body: body_entity,
+                body_index: index,
+                part: pc.part.clone(),
+                name: pc.name.clone(),
+                role: pc.role,
+                collider: ch,
+                shape,
+                pose_body: pc.pose_body,
+                bound_radius_m: pc.shape.bounding_radius_m(),
+            })
+            .id())
+    }
+}
+
+/// A scene's bodies as spawned.
+struct SpawnedBodies {
+    /// Body and part entities, scene order.
+    roster: Roster,
+    /// Collider → body and part; the per-body contact state sized.
+    contacts: ContactState,
+    /// Each body's colliders, scene order.
+    all_parts: Vec<Vec<PartCollider>>,
+    /// Mesh parts.
+    meshes: Vec<MeshPartReport>,
+}
+
+/// Spawns every body of the scene, in scene order ([`BodyBuilder`]).
+fn spawn_bodies(
+    app: &mut App,
+    pw: &mut rp::PhysicsWorld,
+    loaded: &LoadedScene,
+    reference: Option<(Vector3<f64>, Vector3<f64>)>,
+) -> Result<SpawnedBodies, SceneError> {
+    let mut builder = BodyBuilder {
+        loaded,
+        app,
+        pw,
+        reference,
+        roster: Roster::default(),
+        contacts: ContactState::default(),
+        all_parts: Vec::new(),
+        meshes: Vec::new(),
+    };
+    for (index, b) in loaded.scene.bodies.iter().enumerate() {
+        builder.body(index, b)?;
+    }
+    let n = loaded.scene.bodies.len();
+    let mut contacts = builder.contacts;
+    contacts.touching = vec![false; n];
+    contacts.body_impulse = vec![Vector3::zeros(); n];
+    contacts.body_angular_impulse = vec![Vector3::zeros(); n];
+    Ok(SpawnedBodies {
+        roster: builder.roster,
+        contacts,
+        all_parts: builder.all_parts,
+        meshes: builder.meshes,
+    })
+}
+
+/// Parts of different bodies must not overlap at t = 0 unless marked: the overlaps the scene
+/// allows ([`super::overlap::check_initial`]), or the located error.
+fn check_initial_overlaps(
+    app: &App,
+    loaded: &LoadedScene,
+    bodies: &SpawnedBodies,
+) -> Result<Vec<super::overlap::SuppressedPair>, SceneError> {
+    let probes: Vec<Vec<super::overlap::Probe>> = bodies
+        .roster
+        .bodies
+        .iter()
+        .zip(&bodies.all_parts)
+        .zip(&bodies.roster.parts)
+        .enumerate()
+        .map(|(i, ((be, cols), pes))| {
+            let s = app.world().get::<BodyState>(*be).expect("state");
+            let body_pose = s.body_pose(&Vector3::from(loaded.scene.bodies[i].com_m));
+            cols.iter()
+                .zip(pes)
+                .map(|(c, pe)| {
+                    let part = app.world().get::<Part>(*pe).expect("part");
+                    super::overlap::Probe {
+                        collider: c,
+                        pose: body_pose * c.pose_body,
+                        shape: part.shape.clone(),
+                        handle: part.collider,
+                        entity: *pe,
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    super::overlap::check_initial(loaded, &probes)
+}
+
+/// The scene's `guarantees`, built (errors located under `guarantees.NAME`).
+fn scene_guarantees(
+    loaded: &LoadedScene,
+    all_parts: &[Vec<PartCollider>],
+) -> Result<Guarantees, SceneError> {
+    let scene = &loaded.scene;
+    let mut guarantees = Guarantees::default();
+    let gctx = crate::guarantee::registry::GuaranteeContext {
+        scene,
+        parts: all_parts,
+    };
+    for g in &scene.guarantees {
+        let p = format!("guarantees.{}", g.name());
+        let built = g.build(&gctx).map_err(|e| {
+            let e = e.within(&p);
+            loaded.error_at(&e.field, e.message)
+        })?;
+        guarantees.register(built);
+    }
+    Ok(guarantees)
+}
+
+/// Inserts the core's resources: the rapier world, the clock, the roster and contact state,
+/// the guarantees, the monitor's and the recorder's state (and the multi-rate planner if the
+/// scene asks for it).
+fn insert_core_resources(
+    app: &mut App,
+    pw: rp::PhysicsWorld,
+    scene: &Scene,
+    roster: Roster,
+    contacts: ContactState,
+    guarantees: Guarantees,
+    all_parts: &[Vec<PartCollider>],
+) {
+    let dt = scene.dt_s;
+    app.insert_resource(Physics {
+        world: pw,
+        substeps: scene.physics_substeps,
+    })
+    .insert_resource(Clock::new(dt))
+    .insert_resource(StepBudget(0))
+    .insert_resource(super::multirate::SpanCap::default())
+    .insert_resource(roster)
+    .insert_resource(contacts)
+    .insert_resource(guarantees)
+    .insert_resource(MonitorState {
+        part_names: all_parts
+            .iter()
+            .zip(&scene.bodies)
+            .map(|(ps, b)| {
+                ps.iter()
+                    .map(|p| format!("{}/{}", b.name, p.name))
+                    .collect()
+            })
+            .collect(),
+        part_docking: all_parts
+            .iter()
+            .map(|ps| ps.iter().map(|p| p.role.is_docking()).collect())
+            .collect(),
+        min_lower_m: f64::INFINITY,
+        ..Default::default()
+    })
+    .insert_resource(EventLog::default())
+    .insert_resource(Diagnostics::default())
+    .insert_resource(Recorder {
+        every: scene.record_every_steps,
+        files: None,
+        events_written: 0,
+        rows: 0,
+        last_row_step: None,
+        error: None,
+        history: Vec::new(),
+        force_row: false,
+        last_row_t_s: None,
+        contact_impulse_at_row: Default::default(),
+        pair_columns: Vec::new(),
+        contact_points: false,
+    });
+    if let Some(m) = super::multirate::MultiRate::from_scene(&scene.stepping, dt) {
+        app.insert_resource(m);
+    }
+}
+
+/// Adds one plugin per feature, in this order (each doc comment names the sets it runs in):
+/// the pipeline, the guard, the environment, then where the scene has them the t = 0 overlaps,
+/// the docking mechanism and its compliant contact, the air-bearing table, the controllers
+/// and the plume loads; then finishes the app.
+fn add_feature_plugins(
+    app: &mut App,
+    loaded: &LoadedScene,
+    environment: super::environment::EnvironmentPlugin,
+    suppressed: Vec<super::overlap::SuppressedPair>,
+    has_meshes: bool,
+) -> Result<(), SceneError> {
+    app.add_plugins((
+        super::PipelinePlugin,
+        super::guard::GuardPlugin,
+        environment,
+    ));
+    if let Some(p) = super::overlap::OverlapPlugin::new(loaded, suppressed)? {
+        app.add_plugins(p);
+    }
+    if let Some(p) = super::docking::DockingPlugin::new(app.world(), loaded)? {
+        app.add_plugins(p);
+    }
+    super::contact_model::install(app, loaded)?;
+    if let Some(p) = super::airbearing::AirBearingPlugin::new(app.world(), loaded)? {
+        app.add_plugins(p);
+    }
+    // rapier's continuous pass (CCD) sweeps every fast dynamic body (the `ccd_enabled`
+    // flag only widens what it sweeps against); in a scene with a mesh body where no sweep
+    // can have a target ([`ccd_has_targets`]) it is pure cost — the convex pieces' mass
+    // properties recomputed every sweep — and cannot change a result: switch it off there.
+    if has_meshes {
+        let mut phys = app.world_mut().resource_mut::<super::Physics>();
+        if !ccd_has_targets(&phys.world) {
+            phys.world.integration_parameters.max_ccd_substeps = 0;
+        }
+    }
+    super::controllers::install(app, loaded)?;
+    super::plume::install_loads(app);
+    app.finish();
+    app.cleanup();
+    Ok(())
+}
+
+/// Inserts the monitor's geometry, the step motion at rest, the broad phase, the pairs
+/// guarantees name and the rapier hand-over's bookkeeping.
+fn install_monitor(w: &mut World, scene: &Scene) {
+    let dt = scene.dt_s;
+    let geo = super::monitor::MonitorGeometry::from_world(w);
+    let n = geo.extent_m.len();
+    let states: Vec<BodyState> = w
+        .resource::<Roster>()
+        .bodies
+        .clone()
+        .iter()
+        .map(|e| w.get::<BodyState>(*e).expect("state").clone())
+        .collect();
+    let motion = super::motion::StepMotion {
+        t0_s: 0.0,
+        dt_s: dt,
+        paths: states
+            .iter()
+            .map(|s| super::motion::BodyPath::at_rest(s, dt))
+            .collect(),
+        extent_m: geo.extent_m.clone(),
+        ..Default::default()
+    };
+    // The physics stage engages rapier for pairs whose collider boxes may come within
+    // RAPIER_ENGAGE_M: boxes reach √3 of a part's bounding radius, so pairs up to
+    // that much beyond the extents must be seen by the broad phase.
+    let physics_reach = super::RAPIER_ENGAGE_M
+        + 2.0
+            * geo
+                .aabb_extent_m
+                .iter()
+                .zip(&geo.extent_m)
+                .map(|(a, e)| a - e)
+                .fold(0.0, f64::max);
+    let mut bp = super::broadphase::BroadPhase::new(n, scene.monitor.horizon_for(n), physics_reach);
+    bp.update(&motion);
+    let mut named: Vec<(usize, usize)> = w
+        .resource::<Guarantees>()
+        .list
+        .iter()
+        .flat_map(|g| match g.reads() {
+            crate::guarantee::Reads::Pairs(l) => l,
+            _ => Vec::new(),
+        })
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .filter(|(a, b)| a != b)
+        .collect();
+    named.sort_unstable();
+    named.dedup();
+    w.insert_resource(geo);
+    w.insert_resource(super::motion::StepMotion {
+        paths: Vec::new(),
+        ready: false,
+        ..motion
+    });
+    w.insert_resource(bp);
+    w.insert_resource(super::NamedPairs(named));
+    w.insert_resource(super::RapierSync {
+        every_step: scene.monitor.rapier_every_step,
+        ..Default::default()
+    });
+}
+
+/// The monitor's view of t = 0: distances, then the guarantees' first sample.
+fn monitor_t0(w: &mut World) {
+    use bevy::ecs::system::RunSystemOnce;
+    w.run_system_once(super::monitor::distances)
+        .expect("monitor resources exist");
+    w.run_system_once(super::check_guarantees)
+        .expect("monitor resources exist");
+}
+
 impl Simulation {
     /// Builds the app. Geometry checks that need the shapes (overlaps at t = 0) are reported
     /// against the scene text, like every other scene error.
+    ///
+    /// In order: the rapier world, the environment (its reference orbit places Hill-frame
+    /// initial states), the bodies, the t = 0 overlap check, the guarantees, the core's
+    /// resources, the feature plugins, the monitor's state and its view of t = 0.
     pub fn new(loaded: &LoadedScene) -> Result<Self, SceneError> {
         let scene = loaded.scene.clone();
         let mut app = App::new();
-        let dt = scene.dt_s;
-
-        let mut pw = rp::PhysicsWorld::new();
-        pw.gravity = rp::Vector::ZERO;
-        // No speed cap: debris and fly-bys move at km/s (rapier's default clamps at 400 m/s).
-        pw.integration_parameters.normalized_max_linear_velocity = f32::MAX;
-        pw.integration_parameters.dt = (dt / f64::from(scene.physics_substeps)) as f32;
-        // rapier 0.35 "recycles" a contact pair whose relative pose moved less than 5 cm (2 cm
-        // without contact points) since its last full narrow-phase update: it keeps the old
-        // contact points, normal and lever arms and only advances their separations along the
-        // frozen normal. A speculative contact made 2 cm above the slot's rim (its normal along
-        // the rim edge) then stops the cone when it crosses the mouth plane, millimetres clear of
-        // the real wall (trial 17 of `scenes/trials/capture_envelope.ron`). Every pair is
-        // recomputed every step instead: `tests/val_contact_normals.rs`.
-        pw.integration_parameters.contact_recycling = false;
-
-        let environment = super::environment::EnvironmentPlugin::new(&scene.environment, dt);
-        let reference = environment.reference();
-
-        let mut roster = Roster::default();
-        let mut contacts = ContactState::default();
-        let mut all_parts: Vec<Vec<PartCollider>> = Vec::new();
-        let mut meshes = Vec::new();
-        for (index, b) in scene.bodies.iter().enumerate() {
-            if matches!(b.initial.frame, InitFrame::Hill) && reference.is_none() {
-                return Err(loaded.error_at(
-                    &format!("bodies.{}.initial.frame", b.name),
-                    "frame `Hill` needs an `Orbit` environment",
-                ));
-            }
-            let state = initial_state(b, reference);
-            let com = Vector3::from(b.com_m);
-            let j = b.inertia_kg_m2.matrix();
-            let (moments, frame) = principal(&j);
-            let mprops = rp::MassProperties::with_principal_inertia_frame(
-                conv::v(&com),
-                b.mass_kg as f32,
-                conv::v(&moments),
-                conv::q(&frame),
-            );
-            let Some(inertia_inv) = j.try_inverse().filter(|m| m.iter().all(|v| v.is_finite()))
-            else {
-                return Err(loaded.error_at(
-                    &format!("bodies.{}.inertia_kg_m2", b.name),
-                    "the inertia tensor cannot be inverted in f64",
-                ));
-            };
-            let colliders = expand_body(b);
-            let has_docking = colliders.iter().any(|c| c.role.is_docking());
-            let has_mesh = colliders
-                .iter()
-                .any(|c| matches!(c.shape, Primitive::Mesh { .. }));
-            let rb = rp::RigidBodyBuilder::dynamic()
-                .pose(conv::pose(&state.body_pose(&com)))
-                .linvel(conv::v(&state.vel_m_s))
-                .angvel(conv::v(&state.omega_rad_s))
-                .can_sleep(false)
-                .gyroscopic_forces_enabled(true)
-                .ccd_enabled(has_docking || has_mesh)
-                .additional_mass_properties(mprops)
-                .build();
-            let handle = pw.insert_body(rb);
-            let body_entity = app
-                .world_mut()
-                .spawn((
-                    SimBody {
-                        index,
-                        name: b.name.clone(),
-                        role: b.role,
-                        handle,
-                        mass_kg: b.mass_kg,
-                        inertia_kg_m2: j,
-                        com_body_m: com,
-                        inertia_inv,
-                    },
-                    state,
-                    Wrench::default(),
-                ))
-                .id();
-            let mut part_entities = Vec::new();
-            for (part_index, pc) in colliders.iter().enumerate() {
-                let Some(shape) = primitive_shape(&pc.shape) else {
-                    return Err(loaded.error_at(
-                        &format!("bodies.{}.parts.{}", b.name, pc.part),
-                        format!("collider `{}` has a degenerate convex hull", pc.name),
-                    ));
-                };
-                // Judged as the mesh; simulated as its convex pieces.
-                let simulated = match &pc.shape {
-                    Primitive::Mesh {
-                        mesh,
-                        decomposition,
-                    } => {
-                        let Some(s) = super::mesh::simulated_shape(mesh, decomposition) else {
-                            return Err(loaded.error_at(
-                                &format!("bodies.{}.parts.{}.shape.decomposition", b.name, pc.part),
-                                format!(
-                                    "collider `{}`: the convex decomposition gave no piece",
-                                    pc.name
-                                ),
-                            ));
-                        };
-                        let d = super::mesh::decomposition(mesh, decomposition);
-                        meshes.push(MeshPartReport {
-                            part: format!("{}/{}", b.name, pc.name),
-                            triangles: mesh.triangles.len(),
-                            convex_pieces: d.hulls.len(),
-                            decomposition_max_deviation_m: d.max_deviation_m,
-                        });
-                        s
-                    }
-                    _ => shape.clone(),
-                };
-                let col = rp::ColliderBuilder::new(simulated)
-                    .position(conv::pose(&pc.pose_body))
-                    .density(0.0)
-                    .friction(b.friction as f32)
-                    .restitution(b.restitution as f32)
-                    .build();
-                let ch = pw.insert_collider(col, Some(handle));
-                contacts.colliders.insert(
-                    ch,
-                    ColliderRef {
-                        body: index,
-                        part: part_index,
-                        full_name: format!("{}/{}", b.name, pc.name),
-                        docking: pc.role.is_docking(),
-                    },
-                );
-                let e = app
-                    .world_mut()
-                    .spawn(Part {
-                        body: body_entity,
-                        body_index: index,
-                        part: pc.part.clone(),
-                        name: pc.name.clone(),
-                        role: pc.role,
-                        collider: ch,
-                        shape,
-                        pose_body: pc.pose_body,
-                        bound_radius_m: pc.shape.bounding_radius_m(),
-                    })
-                    .id();
-                part_entities.push(e);
-            }
-            roster.bodies.push(body_entity);
-            roster.parts.push(part_entities);
-            roster.names.push(b.name.clone());
-            all_parts.push(colliders);
-        }
-        contacts.touching = vec![false; scene.bodies.len()];
-        contacts.body_impulse = vec![Vector3::zeros(); scene.bodies.len()];
-        contacts.body_angular_impulse = vec![Vector3::zeros(); scene.bodies.len()];
-
-        // Parts of different bodies must not overlap at t = 0 unless marked.
-        let probes: Vec<Vec<super::overlap::Probe>> = roster
-            .bodies
-            .iter()
-            .zip(&all_parts)
-            .zip(&roster.parts)
-            .enumerate()
-            .map(|(i, ((be, cols), pes))| {
-                let s = app.world().get::<BodyState>(*be).expect("state");
-                let body_pose = s.body_pose(&Vector3::from(scene.bodies[i].com_m));
-                cols.iter()
-                    .zip(pes)
-                    .map(|(c, pe)| {
-                        let part = app.world().get::<Part>(*pe).expect("part");
-                        super::overlap::Probe {
-                            collider: c,
-                            pose: body_pose * c.pose_body,
-                            shape: part.shape.clone(),
-                            handle: part.collider,
-                            entity: *pe,
-                        }
-                    })
-                    .collect()
-            })
-            .collect();
-        let suppressed = super::overlap::check_initial(loaded, &probes)?;
-        drop(probes);
-
-        let mut guarantees = Guarantees::default();
-        let gctx = crate::guarantee::registry::GuaranteeContext {
-            scene: &scene,
-            parts: &all_parts,
-        };
-        for g in &scene.guarantees {
-            let p = format!("guarantees.{}", g.name());
-            let built = g.build(&gctx).map_err(|e| {
-                let e = e.within(&p);
-                loaded.error_at(&e.field, e.message)
-            })?;
-            guarantees.register(built);
-        }
-
-        app.insert_resource(Physics {
-            world: pw,
-            substeps: scene.physics_substeps,
-        })
-        .insert_resource(Clock::new(dt))
-        .insert_resource(StepBudget(0))
-        .insert_resource(super::multirate::SpanCap::default())
-        .insert_resource(roster)
-        .insert_resource(contacts)
-        .insert_resource(guarantees)
-        .insert_resource(MonitorState {
-            part_names: all_parts
-                .iter()
-                .zip(&scene.bodies)
-                .map(|(ps, b)| {
-                    ps.iter()
-                        .map(|p| format!("{}/{}", b.name, p.name))
-                        .collect()
-                })
-                .collect(),
-            part_docking: all_parts
-                .iter()
-                .map(|ps| ps.iter().map(|p| p.role.is_docking()).collect())
-                .collect(),
-            min_lower_m: f64::INFINITY,
-            ..Default::default()
-        })
-        .insert_resource(EventLog::default())
-        .insert_resource(Diagnostics::default())
-        .insert_resource(Recorder {
-            every: scene.record_every_steps,
-            files: None,
-            events_written: 0,
-            rows: 0,
-            last_row_step: None,
-            error: None,
-            history: Vec::new(),
-            force_row: false,
-            last_row_t_s: None,
-            contact_impulse_at_row: Default::default(),
-            pair_columns: Vec::new(),
-            contact_points: false,
-        });
-        if let Some(m) = super::multirate::MultiRate::from_scene(&scene.stepping, dt) {
-            app.insert_resource(m);
-        }
-        // One plugin per feature, in this order (each doc comment names the sets it runs in).
-        app.add_plugins((
-            super::PipelinePlugin,
-            super::guard::GuardPlugin,
+        let mut pw = physics_world(&scene);
+        let environment =
+            super::environment::EnvironmentPlugin::new(&scene.environment, scene.dt_s);
+        let bodies = spawn_bodies(&mut app, &mut pw, loaded, environment.reference())?;
+        let suppressed = check_initial_overlaps(&app, loaded, &bodies)?;
+        let guarantees = scene_guarantees(loaded, &bodies.all_parts)?;
+        let SpawnedBodies {
+            roster,
+            contacts,
+            all_parts,
+            meshes,
+        } = bodies;
+        insert_core_resources(
+            &mut app, pw, &scene, roster, contacts, guarantees, &all_parts,
+        );
+        add_feature_plugins(
+            &mut app,
+            loaded,
             environment,
-        ));
-        if let Some(p) = super::overlap::OverlapPlugin::new(loaded, suppressed)? {
-            app.add_plugins(p);
-        }
-        if let Some(p) = super::docking::DockingPlugin::new(app.world(), loaded)? {
-            app.add_plugins(p);
-        }
-        super::contact_model::install(&mut app, loaded)?;
-        if let Some(p) = super::airbearing::AirBearingPlugin::new(app.world(), loaded)? {
-            app.add_plugins(p);
-        }
-        // rapier's continuous pass (CCD) sweeps every fast dynamic body (the `ccd_enabled`
-        // flag only widens what it sweeps against); in a scene with a mesh body where no sweep
-        // can have a target ([`ccd_has_targets`]) it is pure cost — the convex pieces' mass
-        // properties recomputed every sweep — and cannot change a result: switch it off there.
-        if !meshes.is_empty() {
-            let mut phys = app.world_mut().resource_mut::<super::Physics>();
-            if !ccd_has_targets(&phys.world) {
-                phys.world.integration_parameters.max_ccd_substeps = 0;
-            }
-        }
-        super::controllers::install(&mut app, loaded)?;
-        super::plume::install_loads(&mut app);
-        app.finish();
-        app.cleanup();
-        // The monitor's geometry, broad phase, and the pairs guarantees name.
-        {
-            let w = app.world_mut();
-            let geo = super::monitor::MonitorGeometry::from_world(w);
-            let n = geo.extent_m.len();
-            let states: Vec<BodyState> = w
-                .resource::<Roster>()
-                .bodies
-                .clone()
-                .iter()
-                .map(|e| w.get::<BodyState>(*e).expect("state").clone())
-                .collect();
-            let motion = super::motion::StepMotion {
-                t0_s: 0.0,
-                dt_s: dt,
-                paths: states
-                    .iter()
-                    .map(|s| super::motion::BodyPath::at_rest(s, dt))
-                    .collect(),
-                extent_m: geo.extent_m.clone(),
-                ..Default::default()
-            };
-            // The physics stage engages rapier for pairs whose collider boxes may come within
-            // RAPIER_ENGAGE_M: boxes reach √3 of a part's bounding radius, so pairs up to
-            // that much beyond the extents must be seen by the broad phase.
-            let physics_reach = super::RAPIER_ENGAGE_M
-                + 2.0
-                    * geo
-                        .aabb_extent_m
-                        .iter()
-                        .zip(&geo.extent_m)
-                        .map(|(a, e)| a - e)
-                        .fold(0.0, f64::max);
-            let mut bp =
-                super::broadphase::BroadPhase::new(n, scene.monitor.horizon_for(n), physics_reach);
-            bp.update(&motion);
-            let mut named: Vec<(usize, usize)> = w
-                .resource::<Guarantees>()
-                .list
-                .iter()
-                .flat_map(|g| match g.reads() {
-                    crate::guarantee::Reads::Pairs(l) => l,
-                    _ => Vec::new(),
-                })
-                .map(|(a, b)| (a.min(b), a.max(b)))
-                .filter(|(a, b)| a != b)
-                .collect();
-            named.sort_unstable();
-            named.dedup();
-            w.insert_resource(geo);
-            w.insert_resource(super::motion::StepMotion {
-                paths: Vec::new(),
-                ready: false,
-                ..motion
-            });
-            w.insert_resource(bp);
-            w.insert_resource(super::NamedPairs(named));
-            w.insert_resource(super::RapierSync {
-                every_step: scene.monitor.rapier_every_step,
-                ..Default::default()
-            });
-        }
-        // The monitor's view of t = 0.
-        {
-            use bevy::ecs::system::RunSystemOnce;
-            let w = app.world_mut();
-            w.run_system_once(super::monitor::distances)
-                .expect("monitor resources exist");
-            w.run_system_once(super::check_guarantees)
-                .expect("monitor resources exist");
-        }
+            suppressed,
+            !meshes.is_empty(),
+        )?;
+        install_monitor(app.world_mut(), &scene);
+        monitor_t0(app.world_mut());
         Ok(Self {
             app,
             scene,
@@ -574,7 +724,8 @@ impl Simulation {
     pub fn reference_state(&self) -> Option<(Vector3<f64>, Vector3<f64>)> {
         self.app
             .world()
-            .get_resource::<OrbitEnv>()
+            .resource::<Env>()
+            .orbit()
             .map(|e| e.reference.state())
     }
 
@@ -583,7 +734,8 @@ impl Simulation {
     pub fn reference_orbit(&self) -> Option<crate::orbit::integrate::ReferenceOrbit> {
         self.app
             .world()
-            .get_resource::<OrbitEnv>()
+            .resource::<Env>()
+            .orbit()
             .map(|e| e.reference.clone())
     }
 
@@ -720,7 +872,7 @@ impl Simulation {
                 t_s: t,
                 bodies: &mon.bodies,
                 pairs: &mon.pairs,
-                reference: w.get_resource::<super::OrbitEnv>().map(|o| {
+                reference: w.resource::<Env>().orbit().map(|o| {
                     let (p, v) = o.reference.state();
                     crate::guarantee::ReferenceView {
                         pos_eci_m: p,

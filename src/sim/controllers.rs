@@ -22,7 +22,7 @@
 //! starts.
 
 use super::output::Diagnostics;
-use super::{BodyState, Clock, EventLog, Guarantees, OrbitEnv, Roster, Wrench};
+use super::{BodyState, Clock, Env, EventLog, Guarantees, Roster, Wrench};
 use crate::actuation::Actuator;
 use crate::actuation::actuator::CommandFrames;
 use crate::control::interface::{
@@ -200,12 +200,12 @@ impl ControllerHost {
     }
 }
 
-/// The environment as controllers see it, from the app's resources (a copy of
-/// [`super::environment::EnvNow`]; force-free space without one).
+/// The environment as controllers see it, from the app's resources (a copy of [`Env::now`];
+/// force-free space without an [`Env`]).
 pub fn env_of_world(world: &World) -> EnvObs {
     world
-        .get_resource::<super::environment::EnvNow>()
-        .map(|e| e.0.clone())
+        .get_resource::<Env>()
+        .map(|e| e.now.clone())
         .unwrap_or_default()
 }
 
@@ -215,15 +215,18 @@ static FREE_SPACE: EnvObs = EnvObs::FreeSpace;
 /// The environment resources a host system reads.
 #[derive(bevy::ecs::system::SystemParam)]
 pub struct EnvRefs<'w> {
-    env: Option<Res<'w, super::environment::EnvNow>>,
-    gravity: Option<Res<'w, super::Gravity>>,
+    env: Option<Res<'w, Env>>,
     docking: Option<Res<'w, super::docking::Docking>>,
 }
 
 impl EnvRefs<'_> {
     /// The environment now.
     fn now(&self) -> &EnvObs {
-        self.env.as_deref().map_or(&FREE_SPACE, |e| &e.0)
+        self.env.as_deref().map_or(&FREE_SPACE, |e| &e.now)
+    }
+    /// The environment, if the app has one (its gravity field).
+    fn env(&self) -> Option<&Env> {
+        self.env.as_deref()
     }
     fn docking(&self) -> Option<DockingObs> {
         self.docking.as_ref().map(|d| DockingObs {
@@ -265,17 +268,18 @@ pub fn body_info(scene: &crate::scene::Scene) -> Vec<BodyInfo> {
         .collect()
 }
 
-/// Refreshes `truth` from the bodies' f64 states (the gravity only if some law reads it).
+/// Refreshes `truth` from the bodies' f64 states (the gravity, from `env`, only if some law
+/// reads it).
 fn refresh_truth(
     truth: &mut Vec<BodyObs>,
     roster: &Roster,
     states: &Query<&BodyState>,
-    gravity: Option<&super::Gravity>,
+    env: Option<&Env>,
 ) {
     truth.clear();
     for e in &roster.bodies {
         let s = states.get(*e).expect("roster body");
-        let g = gravity.map_or_else(Vector3::zeros, |g| g.0.accel_m_s2(&s.pos_m));
+        let g = env.map_or_else(Vector3::zeros, |env| env.accel_m_s2(&s.pos_m));
         truth.push(BodyObs::new(s.pos_m, s.vel_m_s, s.att, s.omega_rad_s, g));
     }
 }
@@ -442,8 +446,8 @@ pub fn host_sense(
         return;
     }
     let host = &mut *host;
-    let gravity = refs.gravity.as_deref().filter(|_| host.gravity);
-    refresh_truth(&mut host.truth, &roster, &states, gravity);
+    let env = refs.env().filter(|_| host.gravity);
+    refresh_truth(&mut host.truth, &roster, &states, env);
     // Taken out of the host while the slots are borrowed, put back below.
     let mut env = std::mem::take(&mut host.env_now);
     env.assign(refs.now());
@@ -814,8 +818,8 @@ pub fn host_post_step(
     mut diag: ResMut<Diagnostics>,
 ) {
     let host = &mut *host;
-    let gravity = refs.gravity.as_deref().filter(|_| host.gravity);
-    refresh_truth(&mut host.truth, &roster, &states, gravity);
+    let env = refs.env().filter(|_| host.gravity);
+    refresh_truth(&mut host.truth, &roster, &states, env);
     // The environment after the physics (an L2 snapshot's `states_rot` is empty here).
     let env = refs.now();
     refresh_derived(host, env);
@@ -894,7 +898,8 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
             let dt = world.resource::<Clock>().dt_s;
             // The reference's state at its own time (the filter's step k is at k·dt).
             let filter = world
-                .get_resource::<OrbitEnv>()
+                .get_resource::<Env>()
+                .and_then(Env::orbit)
                 .and_then(|o| {
                     let (r, v) = o.reference.state();
                     RelKalman::for_reference(f, &r, &v, o.reference.t_s(), dt, s.position_noise_m)
@@ -951,11 +956,11 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
         world.resource_scope(|world, mut host: Mut<ControllerHost>| {
             let clock = world.resource::<Clock>().clone();
             let roster = world.resource::<Roster>().clone();
-            let gravity = world.get_resource::<super::Gravity>();
+            let env = world.get_resource::<Env>();
             let mut truth = Vec::new();
             for e in &roster.bodies {
                 let s = world.get::<BodyState>(*e).expect("roster body");
-                let g = gravity.map_or_else(Vector3::zeros, |g| g.0.accel_m_s2(&s.pos_m));
+                let g = env.map_or_else(Vector3::zeros, |env| env.accel_m_s2(&s.pos_m));
                 truth.push(BodyObs::new(s.pos_m, s.vel_m_s, s.att, s.omega_rad_s, g));
             }
             let env = env_of_world(world);
@@ -1066,13 +1071,13 @@ pub fn install(app: &mut App, loaded: &LoadedScene) -> Result<(), SceneError> {
     let world = app.world_mut();
     let initial: Vec<BodyObs> = {
         let roster = world.resource::<Roster>().clone();
-        let gravity = world.get_resource::<super::Gravity>();
+        let env = world.get_resource::<Env>();
         roster
             .bodies
             .iter()
             .map(|e| {
                 let s = world.get::<BodyState>(*e).expect("roster body");
-                let g = gravity.map_or_else(Vector3::zeros, |g| g.0.accel_m_s2(&s.pos_m));
+                let g = env.map_or_else(Vector3::zeros, |env| env.accel_m_s2(&s.pos_m));
                 BodyObs::new(s.pos_m, s.vel_m_s, s.att, s.omega_rad_s, g)
             })
             .collect()

@@ -178,35 +178,8 @@ pub struct Physics {
     pub substeps: u32,
 }
 
-/// The orbital environment: the reference orbit (f64, with its gravity model: the list of
-/// terms every body's differential gravity also sums) and the torque toggle.
-#[derive(Resource, Debug, Clone)]
-pub struct OrbitEnv {
-    /// Reference orbit (the world frame's origin), ECI, and the gravity model's terms
-    /// ([`crate::orbit::integrate::ReferenceOrbit::gravity`]).
-    pub reference: crate::orbit::integrate::ReferenceOrbit,
-    /// Apply gravity-gradient torques.
-    pub gravity_gradient: bool,
-}
-
 pub use crate::environment::GravityField;
-
-/// The scene's gravity field, if any (orbit scenes: [`OrbitEnv`]'s differential gravity).
-#[derive(Resource)]
-pub struct Gravity(pub Box<dyn GravityField>);
-
-impl GravityField for OrbitEnv {
-    fn accel_m_s2(&self, pos_world_m: &Vector3<f64>) -> Vector3<f64> {
-        crate::orbit::gravity::differential_accel(
-            &self.reference.state().0,
-            pos_world_m,
-            self.reference.gravity(),
-        )
-    }
-    fn advance(&mut self, dt_s: f64) {
-        self.reference.step(dt_s);
-    }
-}
+pub use environment::{Env, OrbitEnv};
 
 /// A spacecraft.
 #[derive(Component, Debug, Clone)]
@@ -475,19 +448,17 @@ fn advance(world: &mut World) {
 }
 
 /// Environment: the gravity field on every body; in orbit, the gravity-gradient torque.
-fn environment_gravity(
-    gravity: Option<Res<Gravity>>,
-    orbit: Option<Res<OrbitEnv>>,
-    mut q: Query<(&SimBody, &BodyState, &mut Wrench)>,
-) {
+fn environment_gravity(env: Res<Env>, mut q: Query<(&SimBody, &BodyState, &mut Wrench)>) {
+    let gravity = env.gravity();
+    let orbit = env.orbit();
     for (b, s, mut w) in &mut q {
-        if let Some(g) = &gravity {
-            w.gravity_n += g.0.accel_m_s2(&s.pos_m) * b.mass_kg;
+        if let Some(g) = gravity {
+            w.gravity_n += g.accel_m_s2(&s.pos_m) * b.mass_kg;
         }
-        if let Some(env) = &orbit
-            && env.gravity_gradient
+        if let Some(o) = orbit
+            && o.gravity_gradient
         {
-            let r = env.reference.state().0 + s.pos_m;
+            let r = o.reference.state().0 + s.pos_m;
             let dcm_body_from_world = s.att.inverse().to_rotation_matrix().into_inner();
             let tb = crate::orbit::gravity::gravity_gradient_torque_body(
                 &r,
@@ -496,14 +467,6 @@ fn environment_gravity(
             );
             w.torque_nm += s.att * tb;
         }
-    }
-}
-
-/// Keeps the reference orbit used for gravity-gradient torques and frames in step with the
-/// gravity field (the field owns its own copy).
-fn advance_orbit(mut orbit: Option<ResMut<OrbitEnv>>, clock: Res<Clock>) {
-    if let Some(env) = orbit.as_mut() {
-        env.reference.step(clock.h_s());
     }
 }
 
@@ -653,128 +616,117 @@ fn step_rapier(phys: &mut Physics, h_s: f64, dt_s: f64) {
     phys.world.integration_parameters.dt = full;
 }
 
-/// Physics: the f64 free flight of every body, a swept test of every pair that could come near
-/// within the step, rapier only where a contact is possible, then the f64 truth committed.
-///
-/// Free flight, in f64: with a_g(x) the differential gravity and a_c the held force per mass,
-/// x₁ = x₀ + v₀·dt + ½(a_g(x₀) + a_c)·dt², v₁ = v₀ + ½(a_g(x₀) + a_g(x₁))·dt + a_c·dt
-/// (velocity Verlet for gravity, exact for the held force: second order), and the rotation by
-/// [`rotate_rk4`]. rapier's own free-flight rotation (f32, implicit gyroscopic step) loses
-/// 1.7 % of the kinetic energy of a tumbling body over 600 s (`tests/val_tumbling.rs` measures
-/// it), so in free flight rapier only detects contacts; its result is overwritten by the f64
-/// state.
-///
-/// Each step, in order:
-/// 1. The f64 free-flight end state of every body, and its path over the step
-///    ([`motion::BodyPath`]); the broad phase's spheres follow ([`broadphase::BroadPhase`]).
-/// 2. For every near pair of bodies in free flight, the swept test: the distance over the step
-///    is at least d(t₀) − S·dt (S the pair's distance-rate bound); where that is not clear of
-///    [`RAPIER_ENGAGE_M`], the exact distance at t₀ and, if rapier would not see the pair at
-///    the start of its step (gap above [`SPLIT_GAP_M`]), conservative advancement and then
-///    bisection along the paths for the first time the gap is at most [`SPLIT_GAP_M`]: a time
-///    of impact inside the step.
-/// 3. rapier: not stepped at all when no pair is within [`RAPIER_ENGAGE_M`], no body touches
-///    and no joint exists (rapier's state is written from the f64 truth only when it steps
-///    next: [`RapierSync`]); split at the earliest time of impact — rapier-driven bodies are
-///    stepped to it, the free bodies placed on their paths at it, and rapier steps the rest,
-///    so the impact happens in rapier, where contacts are resolved and recorded; else one
-///    ordinary step.
-/// 4. Bodies touching another or jointed take rapier's state (and their contact impulse is
-///    measured); the others commit their f64 free-flight end state — the path is the same
-///    whether or not the step was split.
-#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it uses
-fn physics_step(
-    mut phys: ResMut<Physics>,
-    mut clock: ResMut<Clock>,
-    gravity: Option<ResMut<Gravity>>,
-    mut q: Query<(&SimBody, &mut BodyState, &mut Wrench)>,
-    mut contact: ResMut<monitor::ContactState>,
-    mut motion: ResMut<motion::StepMotion>,
-    mut bp: ResMut<broadphase::BroadPhase>,
-    mut sync: ResMut<RapierSync>,
-    mon: Res<MonitorState>,
-    geo: Res<monitor::MonitorGeometry>,
-    roster: Res<Roster>,
-    mut scratch: Local<PhysicsScratch>,
-    mut compliant: Option<ResMut<contact_model::CompliantContact>>,
-) {
-    // The step's length: dt_s, or a multiple of it that `multirate::plan_step` proved free.
-    let dt = clock.h_s();
-    let t0 = clock.t_s();
-    let n = roster.bodies.len();
-    let sc = &mut *scratch;
-    // The gravity field moves to t + dt first: gravity at the new positions needs it.
-    let gravity = gravity.map(|mut g| {
-        g.0.advance(dt);
-        g
-    });
-    if motion.paths.len() != n {
-        motion.paths = Vec::with_capacity(n);
-        motion.extent_m = geo.extent_m.clone();
-        motion.lambda_kg_m2 = roster
+/// What the physics step reads and writes (the system's parameters, one per resource).
+#[derive(bevy::ecs::system::SystemParam)]
+struct PhysicsStep<'w, 's> {
+    phys: ResMut<'w, Physics>,
+    clock: ResMut<'w, Clock>,
+    env: ResMut<'w, Env>,
+    q: Query<
+        'w,
+        's,
+        (
+            &'static SimBody,
+            &'static mut BodyState,
+            &'static mut Wrench,
+        ),
+    >,
+    contact: ResMut<'w, monitor::ContactState>,
+    motion: ResMut<'w, motion::StepMotion>,
+    bp: ResMut<'w, broadphase::BroadPhase>,
+    sync: ResMut<'w, RapierSync>,
+    mon: Res<'w, MonitorState>,
+    geo: Res<'w, monitor::MonitorGeometry>,
+    roster: Res<'w, Roster>,
+    compliant: Option<ResMut<'w, contact_model::CompliantContact>>,
+}
+
+/// A body has a joint in rapier.
+fn jointed(world: &rp::PhysicsWorld, h: rp::RigidBodyHandle) -> bool {
+    world.impulse_joints.attached_joints(h).next().is_some()
+}
+
+/// A body's state at the end of the step under the compliant docking contact, if it
+/// sub-stepped the body (`sub`: [`contact_model::CompliantContact::pre_step`]'s result).
+fn substepped_state(sub: &Option<contact_model::Substepped>, k: usize) -> Option<BodyState> {
+    sub.as_ref()
+        .and_then(|v| v.iter().find(|(i, _)| *i == k).map(|(_, s)| s.clone()))
+}
+
+/// The step's motion bookkeeping before the free flight: the per-body constants on the first
+/// step, the last step's paths kept (as `motion.prev`), this step's emptied; the scratch
+/// emptied.
+fn prepare_motion(p: &mut PhysicsStep, sc: &mut PhysicsScratch) {
+    let n = p.roster.bodies.len();
+    if p.motion.paths.len() != n {
+        p.motion.paths = Vec::with_capacity(n);
+        p.motion.extent_m = p.geo.extent_m.clone();
+        p.motion.lambda_kg_m2 = p
+            .roster
             .bodies
             .iter()
-            .map(|e| motion::principal_moments(&q.get(*e).expect("body").0.inertia_kg_m2))
+            .map(|e| motion::principal_moments(&p.q.get(*e).expect("body").0.inertia_kg_m2))
             .collect();
-        motion.axes_body = roster
+        p.motion.axes_body = p
+            .roster
             .bodies
             .iter()
-            .map(|e| motion::principal_axes(&q.get(*e).expect("body").0.inertia_kg_m2))
+            .map(|e| motion::principal_axes(&p.q.get(*e).expect("body").0.inertia_kg_m2))
             .collect();
-        sync.stale = vec![true; n];
+        p.sync.stale = vec![true; n];
     }
     sc.start.clear();
     sc.free_end.clear();
-    if motion.ready {
-        let paths = std::mem::replace(&mut motion.paths, Vec::with_capacity(n));
-        let free = std::mem::take(&mut motion.free_before);
-        motion.prev = Some(Box::new((paths, free)));
+    if p.motion.ready {
+        let paths = std::mem::replace(&mut p.motion.paths, Vec::with_capacity(n));
+        let free = std::mem::take(&mut p.motion.free_before);
+        p.motion.prev = Some(Box::new((paths, free)));
     }
-    motion.paths.clear();
-    motion.free_before.clear();
-    motion.free_before.resize(n, None);
-    let jointed = |world: &rp::PhysicsWorld, h: rp::RigidBodyHandle| {
-        world.impulse_joints.attached_joints(h).next().is_some()
-    };
-    let world_forces = |world: &mut rp::PhysicsWorld,
-                        q: &Query<(&SimBody, &mut BodyState, &mut Wrench)>| {
-        for (b, _, w) in q.iter() {
-            if let Some(rb) = world.bodies.get_mut(b.handle) {
-                // rapier keeps user forces and torques until cleared, and `reset_forces` clears
-                // only the forces: without `reset_torques` every torque ever commanded would
-                // act again whenever rapier is the truth (contact, latch).
-                rb.reset_forces(false);
-                rb.reset_torques(false);
-                rb.add_force(conv::v(&(w.force_n + w.gravity_n)), true);
-                rb.add_torque(conv::v(&w.torque_nm), true);
-            }
+    p.motion.paths.clear();
+    p.motion.free_before.clear();
+    p.motion.free_before.resize(n, None);
+}
+
+/// Hands every body's wrench to rapier (used if it steps).
+fn apply_wrenches(
+    world: &mut rp::PhysicsWorld,
+    q: &Query<(&SimBody, &mut BodyState, &mut Wrench)>,
+) {
+    for (b, _, w) in q.iter() {
+        if let Some(rb) = world.bodies.get_mut(b.handle) {
+            // rapier keeps user forces and torques until cleared, and `reset_forces` clears
+            // only the forces: without `reset_torques` every torque ever commanded would
+            // act again whenever rapier is the truth (contact, latch).
+            rb.reset_forces(false);
+            rb.reset_torques(false);
+            rb.add_force(conv::v(&(w.force_n + w.gravity_n)), true);
+            rb.add_torque(conv::v(&w.torque_nm), true);
         }
-    };
-    // The wrenches go to rapier first (used if it steps); then the compliant docking contact
-    // sub-steps the docking pair in f64 while it can touch (and adds its mean wrench to
-    // rapier's forces, for a step in which rapier holds one of the bodies).
-    world_forces(&mut phys.world, &q);
-    let substepped = compliant.as_deref_mut().and_then(|c| {
-        c.t_step_s = t0;
-        c.pre_step(&q, &mut phys.world, dt)
-    });
-    let sub_of = |k: usize| {
-        substepped
-            .as_ref()
-            .and_then(|v| v.iter().find(|(i, _)| *i == k).map(|(_, s)| s.clone()))
-    };
-    let mut any_attached = false;
+    }
+}
+
+/// Step 1 of [`physics_step`]: the f64 free flight of every body over `dt` from `t0`, in
+/// scene order (velocity Verlet for gravity, the held force exactly, the rotation by
+/// [`rotate_rk4`]; a body the compliant contact sub-stepped takes its end state), into
+/// `sc.start`, `sc.free_end` and `motion.paths`; the broad phase follows the paths.
+fn free_flight(
+    p: &mut PhysicsStep,
+    sc: &mut PhysicsScratch,
+    substepped: &Option<contact_model::Substepped>,
+    t0: f64,
+    dt: f64,
+) {
+    let gravity = p.env.gravity();
     let mut under_resolved = false;
-    // 1. f64 free flight of every body, in scene order.
-    for e in &roster.bodies {
-        let (b, s, w) = q.get(*e).expect("roster body");
+    for e in &p.roster.bodies {
+        let (b, s, w) = p.q.get(*e).expect("roster body");
         let a_g0 = w.gravity_n / b.mass_kg;
         let a_c = w.force_n / b.mass_kg;
         let v0 = s.vel_m_s;
         let mut end = s.clone();
         end.pos_m += v0 * dt + (a_g0 + a_c) * (0.5 * dt * dt);
-        let a_g1 = match &gravity {
-            Some(g) => g.0.accel_m_s2(&end.pos_m),
+        let a_g1 = match gravity {
+            Some(g) => g.accel_m_s2(&end.pos_m),
             None => Vector3::zeros(),
         };
         end.vel_m_s = v0 + (a_g0 + a_g1) * (0.5 * dt) + a_c * dt;
@@ -791,11 +743,11 @@ fn physics_step(
         let turn = s.att.angle_to(&att);
         if turn > motion::UNDER_RESOLVED_TURN_RAD {
             under_resolved = true;
-            if turn > motion.max_turn_rad.0 {
-                motion.max_turn_rad = (turn, b.index);
+            if turn > p.motion.max_turn_rad.0 {
+                p.motion.max_turn_rad = (turn, b.index);
             }
         }
-        let path = match sub_of(b.index) {
+        let path = match substepped_state(substepped, b.index) {
             // Sub-stepped under the compliant contact: its end state, and (as for a step
             // rapier takes) a straight line plus constant-rate rotation between the ends.
             Some(sub) => {
@@ -807,171 +759,213 @@ fn physics_step(
                 a_g0 + a_c,
                 w.torque_nm,
                 b,
-                motion.lambda_kg_m2[b.index],
+                p.motion.lambda_kg_m2[b.index],
                 (&end.pos_m, &end.att, &end.omega_rad_s),
                 dt,
             ),
         };
-        motion.paths.push(path);
+        p.motion.paths.push(path);
         sc.start.push(s.clone());
         sc.free_end.push(end);
-        let attached = contact.touching.get(b.index).copied().unwrap_or(false)
-            || jointed(&phys.world, b.handle);
-        any_attached |= attached;
     }
-    motion.t0_s = t0;
-    motion.dt_s = dt;
-    motion.ready = true;
-    motion.under_resolved_steps += u64::from(under_resolved);
-    motion.under_resolved = under_resolved;
-    bp.update(&motion);
-    // 2. The swept test over the near pairs of bodies in free flight.
-    let prev_attached: Vec<bool> = roster
-        .bodies
-        .iter()
-        .map(|e| {
-            let b = q.get(*e).expect("body").0;
-            contact.touching.get(b.index).copied().unwrap_or(false)
-                || jointed(&phys.world, b.handle)
-        })
-        .collect();
-    // rapier keeps stepping while its own broad phase still pairs any colliders.
-    let mut engage = sync.every_step
-        || any_attached
-        || phys.world.impulse_joints.iter().next().is_some()
-        || phys.world.narrow_phase.contact_pairs().next().is_some();
-    let mut split: Option<f64> = None;
-    let pairs: Vec<(usize, usize)> = if bp.all_pairs {
+    p.motion.t0_s = t0;
+    p.motion.dt_s = dt;
+    p.motion.ready = true;
+    p.motion.under_resolved_steps += u64::from(under_resolved);
+    p.motion.under_resolved = under_resolved;
+    p.bp.update(&p.motion);
+}
+
+/// What the swept test found for one pair of bodies in free flight.
+struct PairSweep {
+    /// Their collider boxes may come within [`RAPIER_ENGAGE_M`] during the step.
+    engage: bool,
+    /// The first time into the step their gap is at most [`SPLIT_GAP_M`], s.
+    hit_s: Option<f64>,
+}
+
+/// The swept test of one pair (i, j) over the step (see [`physics_step`], step 2): whether
+/// rapier must step, and the time of impact inside the step if there is one.
+fn sweep_pair(
+    p: &PhysicsStep,
+    sc: &mut PhysicsScratch,
+    count: &mut monitor::QueryCount,
+    (i, j): (usize, usize),
+    t0: f64,
+    dt: f64,
+) -> PairSweep {
+    let (geo, motion) = (&*p.geo, &*p.motion);
+    let rate = motion.distance_rate_bound(i, j);
+    let sep0 = (sc.start[i].pos_m - sc.start[j].pos_m).norm();
+    let travel = (motion.speed_bound(i) + motion.speed_bound(j)) * dt;
+    let engage = sep0 - geo.aabb_extent_m[i] - geo.aabb_extent_m[j] - travel <= RAPIER_ENGAGE_M;
+    let none = PairSweep {
+        engage,
+        hit_s: None,
+    };
+    // Lower bound at t₀: the monitor's certified distance if it has one for t₀, else the
+    // bounding spheres about the centres of mass.
+    let lb0 = match p.mon.pair_index.get(&(i, j)).map(|k| &p.mon.pairs[*k]) {
+        Some(pd) if pd.t_s == t0 => pd.lower_m,
+        _ => sep0 - geo.extent_m[i] - geo.extent_m[j],
+    };
+    if lb0 - rate * dt > SPLIT_GAP_M {
+        return none;
+    }
+    let d0 = monitor::pair_at(geo, motion, i, j, 0.0, None, &mut sc.dist, count);
+    if d0.d.value <= RAPIER_SEES_M {
+        return none; // rapier sees it at the start of its step
+    }
+    if d0.d.lower - rate * dt > SPLIT_GAP_M {
+        return none;
+    }
+    let mut warm = Some((d0.a, d0.b));
+    let mut f = |tau: f64| {
+        let h = monitor::pair_at(geo, motion, i, j, tau, warm, &mut sc.dist, count);
+        warm = Some((h.a, h.b));
+        h.d
+    };
+    // Conservative advancement to the split gap, then bisection for the first time at or
+    // below it (CA alone crawls where the rate bound is loose, e.g. a spinning panel).
+    let Some((t_ca, d_ca)) =
+        crate::geometry::bounds::advance_to(dt, d0.d, rate, SPLIT_GAP_M, 0.0, 16, &mut f)
+    else {
+        return none;
+    };
+    let hit_s = if d_ca.value <= SPLIT_GAP_M {
+        Some(t_ca)
+    } else {
+        let d1 = f(dt);
+        let rest = dt - t_ca;
+        match crate::geometry::bounds::first_below(
+            rest,
+            d_ca,
+            d1,
+            rate,
+            SPLIT_GAP_M,
+            dt * 1e-6,
+            64,
+            |u| f(t_ca + u),
+        ) {
+            crate::geometry::bounds::Crossing::Never => None,
+            crate::geometry::bounds::Crossing::At { t_hi, .. } => Some(t_ca + t_hi),
+            crate::geometry::bounds::Crossing::Unresolved { t_lo } => Some(t_ca + t_lo),
+        }
+    };
+    PairSweep { engage, hit_s }
+}
+
+/// Step 2 of [`physics_step`]: the swept test over the near pairs of bodies in free flight
+/// (neither `attached`, not both sub-stepped by the compliant contact): whether some pair
+/// makes rapier step, and the earliest time of impact inside the step.
+fn swept_test(
+    p: &mut PhysicsStep,
+    sc: &mut PhysicsScratch,
+    attached: &[bool],
+    substepped: &Option<contact_model::Substepped>,
+    t0: f64,
+    dt: f64,
+) -> (bool, Option<f64>) {
+    let n = p.roster.bodies.len();
+    let pairs: Vec<(usize, usize)> = if p.bp.all_pairs {
         (0..n)
             .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
             .collect()
     } else {
-        bp.near.iter().copied().collect()
+        p.bp.near.iter().copied().collect()
     };
+    let mut engage = false;
+    let mut split: Option<f64> = None;
     let mut count = monitor::QueryCount::default();
     for (i, j) in pairs {
-        if prev_attached[i] || prev_attached[j] {
+        if attached[i] || attached[j] {
             continue;
         }
         // The compliant contact owns the docking pair's motion this step.
-        if sub_of(i).is_some() && sub_of(j).is_some() {
+        if substepped_state(substepped, i).is_some() && substepped_state(substepped, j).is_some() {
             continue;
         }
-        let rate = motion.distance_rate_bound(i, j);
-        let sep0 = (sc.start[i].pos_m - sc.start[j].pos_m).norm();
-        let travel = (motion.speed_bound(i) + motion.speed_bound(j)) * dt;
-        if sep0 - geo.aabb_extent_m[i] - geo.aabb_extent_m[j] - travel <= RAPIER_ENGAGE_M {
-            engage = true;
-        }
-        // Lower bound at t₀: the monitor's certified distance if it has one for t₀, else the
-        // bounding spheres about the centres of mass.
-        let lb0 = match mon.pair_index.get(&(i, j)).map(|k| &mon.pairs[*k]) {
-            Some(p) if p.t_s == t0 => p.lower_m,
-            _ => sep0 - geo.extent_m[i] - geo.extent_m[j],
-        };
-        if lb0 - rate * dt > SPLIT_GAP_M {
-            continue;
-        }
-        let d0 = monitor::pair_at(&geo, &motion, i, j, 0.0, None, &mut sc.dist, &mut count);
-        if d0.d.value <= RAPIER_SEES_M {
-            continue; // rapier sees it at the start of its step
-        }
-        if d0.d.lower - rate * dt > SPLIT_GAP_M {
-            continue;
-        }
-        let mut warm = Some((d0.a, d0.b));
-        let mut f = |tau: f64| {
-            let h = monitor::pair_at(&geo, &motion, i, j, tau, warm, &mut sc.dist, &mut count);
-            warm = Some((h.a, h.b));
-            h.d
-        };
-        // Conservative advancement to the split gap, then bisection for the first time at or
-        // below it (CA alone crawls where the rate bound is loose, e.g. a spinning panel).
-        let Some((t_ca, d_ca)) =
-            crate::geometry::bounds::advance_to(dt, d0.d, rate, SPLIT_GAP_M, 0.0, 16, &mut f)
-        else {
-            continue;
-        };
-        let t_hit = if d_ca.value <= SPLIT_GAP_M {
-            Some(t_ca)
-        } else {
-            let d1 = f(dt);
-            let rest = dt - t_ca;
-            match crate::geometry::bounds::first_below(
-                rest,
-                d_ca,
-                d1,
-                rate,
-                SPLIT_GAP_M,
-                dt * 1e-6,
-                64,
-                |u| f(t_ca + u),
-            ) {
-                crate::geometry::bounds::Crossing::Never => None,
-                crate::geometry::bounds::Crossing::At { t_hi, .. } => Some(t_ca + t_hi),
-                crate::geometry::bounds::Crossing::Unresolved { t_lo } => Some(t_ca + t_lo),
-            }
-        };
-        if let Some(th) = t_hit {
+        let sweep = sweep_pair(p, sc, &mut count, (i, j), t0, dt);
+        engage |= sweep.engage;
+        if let Some(th) = sweep.hit_s {
             engage = true;
             split = Some(split.map_or(th, |s: f64| s.min(th)));
         }
     }
-    // 3. rapier.
-    let stepped = engage || split.is_some();
-    sync.last_split_s = None;
-    if stepped {
-        // rapier's copy of every body in free flight since its last step.
-        for (k, e) in roster.bodies.iter().enumerate() {
-            if sync.stale[k] {
-                let (b, s, _) = q.get(*e).expect("body");
-                if let Some(rb) = phys.world.bodies.get_mut(b.handle) {
-                    write_rapier(rb, b, s);
-                }
-                sync.stale[k] = false;
+    p.sync.swept_queries += count.exact;
+    (engage, split)
+}
+
+/// Step 3 of [`physics_step`], when rapier steps: rapier's copy of every body in free flight
+/// since its last step written from the f64 truth, then one step of `dt` — or, split at `split`
+/// s into the step, the bodies rapier holds stepped to it, the free bodies placed on their
+/// paths at it, and the rest of the step.
+fn run_rapier(
+    p: &mut PhysicsStep,
+    attached: &[bool],
+    any_attached: bool,
+    split: Option<f64>,
+    t0: f64,
+    dt: f64,
+) {
+    for (k, e) in p.roster.bodies.iter().enumerate() {
+        if p.sync.stale[k] {
+            let (b, s, _) = p.q.get(*e).expect("body");
+            if let Some(rb) = p.phys.world.bodies.get_mut(b.handle) {
+                write_rapier(rb, b, s);
             }
+            p.sync.stale[k] = false;
         }
-        sync.rapier_steps += 1;
-        match split {
-            Some(tc) if tc > 0.0 => {
-                sync.split_steps += 1;
-                sync.last_split_s = Some(t0 + tc);
-                if any_attached || phys.world.impulse_joints.iter().next().is_some() {
-                    step_rapier(&mut phys, tc, clock.dt_s);
-                }
-                for (k, e) in roster.bodies.iter().enumerate() {
-                    if prev_attached[k] {
-                        continue;
-                    }
-                    let b = q.get(*e).expect("body").0;
-                    let s = motion.paths[k].state_at(tc);
-                    if let Some(rb) = phys.world.bodies.get_mut(b.handle) {
-                        write_rapier(rb, b, &s);
-                    }
-                }
-                step_rapier(&mut phys, dt - tc, clock.dt_s);
-            }
-            _ => step_rapier(&mut phys, dt, clock.dt_s),
-        }
-        contact.refresh_touching(&phys.world);
-    } else {
-        sync.skipped_steps += 1;
-        contact.touching.iter_mut().for_each(|t| *t = false);
     }
-    sync.swept_queries += count.exact;
-    sync.stepped = stepped;
-    // 4. Commit.
-    let world = &mut phys.world;
-    for e in &roster.bodies {
-        let (b, mut s, mut w) = q.get_mut(*e).expect("body");
+    p.sync.rapier_steps += 1;
+    let step_dt = p.clock.dt_s;
+    match split {
+        Some(tc) if tc > 0.0 => {
+            p.sync.split_steps += 1;
+            p.sync.last_split_s = Some(t0 + tc);
+            if any_attached || p.phys.world.impulse_joints.iter().next().is_some() {
+                step_rapier(&mut p.phys, tc, step_dt);
+            }
+            for (k, e) in p.roster.bodies.iter().enumerate() {
+                if attached[k] {
+                    continue;
+                }
+                let b = p.q.get(*e).expect("body").0;
+                let s = p.motion.paths[k].state_at(tc);
+                if let Some(rb) = p.phys.world.bodies.get_mut(b.handle) {
+                    write_rapier(rb, b, &s);
+                }
+            }
+            step_rapier(&mut p.phys, dt - tc, step_dt);
+        }
+        _ => step_rapier(&mut p.phys, dt, step_dt),
+    }
+    p.contact.refresh_touching(&p.phys.world);
+}
+
+/// Step 4 of [`physics_step`]: bodies touching another or jointed (when rapier `stepped`) take
+/// rapier's state, their contact impulse measured and their path made straight; the others
+/// commit their f64 free-flight end state. Every wrench is cleared.
+fn commit(
+    p: &mut PhysicsStep,
+    sc: &PhysicsScratch,
+    was_attached: &[bool],
+    substepped: &Option<contact_model::Substepped>,
+    stepped: bool,
+    t0: f64,
+    dt: f64,
+) {
+    let world = &mut p.phys.world;
+    for e in &p.roster.bodies {
+        let (b, mut s, mut w) = p.q.get_mut(*e).expect("body");
         let k = b.index;
         let attached = stepped
-            && (contact.touching.get(k).copied().unwrap_or(false) || jointed(world, b.handle));
+            && (p.contact.touching.get(k).copied().unwrap_or(false) || jointed(world, b.handle));
         if attached {
             let Some(rb) = world.bodies.get(b.handle) else {
                 continue;
             };
-            contact_model::note_rapier_held(compliant.as_deref_mut(), &substepped, k);
+            contact_model::note_rapier_held(p.compliant.as_deref_mut(), substepped, k);
             let pose = rb.position();
             let att = conv::naq(pose.rotation);
             s.att = att;
@@ -979,32 +973,118 @@ fn physics_step(
             let v_new = conv::na(rb.linvel());
             // The contact (and joint) impulse on this body: its momentum change less what the
             // applied forces gave it over the step.
-            contact.body_impulse[k] =
+            p.contact.body_impulse[k] =
                 (v_new - sc.start[k].vel_m_s) * b.mass_kg - (w.force_n + w.gravity_n) * dt;
             s.vel_m_s = v_new;
             s.omega_rad_s = conv::na(rb.angvel());
             // … and its angular impulse about the centre of mass.
             let st = &sc.start[k];
-            contact.body_angular_impulse[k] =
+            p.contact.body_angular_impulse[k] =
                 monitor::angular_momentum(&s.att, &b.inertia_kg_m2, &s.omega_rad_s)
                     - monitor::angular_momentum(&st.att, &b.inertia_kg_m2, &st.omega_rad_s)
                     - w.torque_nm * dt;
-            if !prev_attached[k] {
-                motion.free_before[k] = Some(motion.paths[k].clone());
+            if !was_attached[k] {
+                p.motion.free_before[k] = Some(p.motion.paths[k].clone());
             }
-            match sync.last_split_s {
-                Some(ts) if !prev_attached[k] => motion.paths[k].split_then_straight(ts - t0, &s),
-                _ => motion.paths[k] = motion::BodyPath::straight(&sc.start[k], &s, dt),
+            match p.sync.last_split_s {
+                Some(ts) if !was_attached[k] => p.motion.paths[k].split_then_straight(ts - t0, &s),
+                _ => p.motion.paths[k] = motion::BodyPath::straight(&sc.start[k], &s, dt),
             }
         } else {
-            contact.body_impulse[k] = Vector3::zeros();
-            contact.body_angular_impulse[k] = Vector3::zeros();
+            p.contact.body_impulse[k] = Vector3::zeros();
+            p.contact.body_angular_impulse[k] = Vector3::zeros();
             *s = sc.free_end[k].clone();
-            sync.stale[k] = true;
+            p.sync.stale[k] = true;
         }
         *w = Wrench::default();
     }
-    clock.step += clock.span;
+}
+
+/// Physics: the environment advanced to the step's end, then (see the steps below) the f64
+/// free flight of every body, the swept test for contacts within the step, rapier only where a
+/// contact is possible, then the f64 truth committed.
+///
+/// Free flight, in f64: with a_g(x) the differential gravity and a_c the held force per mass,
+/// x₁ = x₀ + v₀·dt + ½(a_g(x₀) + a_c)·dt², v₁ = v₀ + ½(a_g(x₀) + a_g(x₁))·dt + a_c·dt
+/// (velocity Verlet for gravity, exact for the held force: second order), and the rotation by
+/// [`rotate_rk4`]. rapier's own free-flight rotation (f32, implicit gyroscopic step) loses
+/// 1.7 % of the kinetic energy of a tumbling body over 600 s (`tests/val_tumbling.rs` measures
+/// it), so in free flight rapier only detects contacts; its result is overwritten by the f64
+/// state.
+///
+/// Each step, in order:
+/// 1. The f64 free-flight end state of every body, and its path over the step
+///    ([`motion::BodyPath`]); the broad phase's spheres follow ([`broadphase::BroadPhase`])
+///    ([`free_flight`]).
+/// 2. For every near pair of bodies in free flight, the swept test: the distance over the step
+///    is at least d(t₀) − S·dt (S the pair's distance-rate bound); where that is not clear of
+///    [`RAPIER_ENGAGE_M`], the exact distance at t₀ and, if rapier would not see the pair at
+///    the start of its step (gap above [`SPLIT_GAP_M`]), conservative advancement and then
+///    bisection along the paths for the first time the gap is at most [`SPLIT_GAP_M`]: a time
+///    of impact inside the step ([`swept_test`], [`sweep_pair`]).
+/// 3. rapier: not stepped at all when no pair is within [`RAPIER_ENGAGE_M`], no body touches
+///    and no joint exists (rapier's state is written from the f64 truth only when it steps
+///    next: [`RapierSync`]); split at the earliest time of impact — rapier-driven bodies are
+///    stepped to it, the free bodies placed on their paths at it, and rapier steps the rest,
+///    so the impact happens in rapier, where contacts are resolved and recorded; else one
+///    ordinary step ([`run_rapier`]).
+/// 4. Bodies touching another or jointed take rapier's state (and their contact impulse is
+///    measured); the others commit their f64 free-flight end state — the path is the same
+///    whether or not the step was split ([`commit`]).
+fn physics_step(mut p: PhysicsStep, mut scratch: Local<PhysicsScratch>) {
+    // The step's length: dt_s, or a multiple of it that `multirate::plan_step` proved free.
+    let dt = p.clock.h_s();
+    let t0 = p.clock.t_s();
+    let sc = &mut *scratch;
+    // The environment moves to t + dt first: gravity at the new positions needs it.
+    p.env.advance(dt);
+    prepare_motion(&mut p, sc);
+    // The wrenches go to rapier first (used if it steps); then the compliant docking contact
+    // sub-steps the docking pair in f64 while it can touch (and adds its mean wrench to
+    // rapier's forces, for a step in which rapier holds one of the bodies).
+    apply_wrenches(&mut p.phys.world, &p.q);
+    let PhysicsStep {
+        compliant, q, phys, ..
+    } = &mut p;
+    let substepped = compliant.as_deref_mut().and_then(|c| {
+        c.t_step_s = t0;
+        c.pre_step(q, &mut phys.world, dt)
+    });
+    // 1. f64 free flight of every body, in scene order.
+    free_flight(&mut p, sc, &substepped, t0, dt);
+    // Bodies touching another or jointed when the step starts: rapier holds them.
+    let attached: Vec<bool> = p
+        .roster
+        .bodies
+        .iter()
+        .map(|e| {
+            let b = p.q.get(*e).expect("body").0;
+            p.contact.touching.get(b.index).copied().unwrap_or(false)
+                || jointed(&p.phys.world, b.handle)
+        })
+        .collect();
+    let any_attached = attached.iter().any(|a| *a);
+    // 2. The swept test; rapier keeps stepping while its own broad phase still pairs any
+    // colliders.
+    let (near, split) = swept_test(&mut p, sc, &attached, &substepped, t0, dt);
+    let engage = p.sync.every_step
+        || any_attached
+        || p.phys.world.impulse_joints.iter().next().is_some()
+        || p.phys.world.narrow_phase.contact_pairs().next().is_some()
+        || near;
+    // 3. rapier.
+    let stepped = engage || split.is_some();
+    p.sync.last_split_s = None;
+    if stepped {
+        run_rapier(&mut p, &attached, any_attached, split, t0, dt);
+    } else {
+        p.sync.skipped_steps += 1;
+        p.contact.touching.iter_mut().for_each(|t| *t = false);
+    }
+    p.sync.stepped = stepped;
+    // 4. Commit.
+    commit(&mut p, sc, &attached, &substepped, stepped, t0, dt);
+    p.clock.step += p.clock.span;
 }
 
 /// The monitor's running results.
@@ -1112,6 +1192,422 @@ pub const EVENT_TIME_TOL: f64 = 1.0 / 65_536.0;
 /// Margin evaluations allowed to locate one violation or restoration time.
 const MAX_CROSSING_EVALS: u32 = 256;
 
+/// The first step whose rotation the rate bounds do not cover: said once, as an event, with
+/// the step that would (the count is in summary.json's monitor).
+fn note_under_resolved(
+    t: f64,
+    motion: &motion::StepMotion,
+    mon: &MonitorState,
+    log: &mut EventLog,
+) {
+    if motion.under_resolved && motion.under_resolved_steps == 1 {
+        let (turn, body) = motion.max_turn_rad;
+        let name = mon.bodies.get(body).map_or("", |b| b.name.as_str());
+        log.push(
+            t,
+            "rotation_under_resolved",
+            serde_json::json!({
+                "body": name,
+                "turn_rad": turn,
+                "limit_rad": motion::UNDER_RESOLVED_TURN_RAD,
+                "dt_s_to_resolve": motion.dt_s * motion::UNDER_RESOLVED_TURN_RAD / turn,
+                "consequence": "guarantees whose rate bound rests on the rotation are unresolved over such steps, never held",
+            }),
+        );
+    }
+}
+
+/// The reference orbit `back_s` from its current time (negative: earlier), in orbit scenes.
+fn reference_at(orbit: Option<&OrbitEnv>, back_s: f64) -> Option<crate::guarantee::ReferenceView> {
+    orbit.map(|o| {
+        let mut r = o.reference.clone();
+        r.step(back_s);
+        let (p, v) = r.state();
+        crate::guarantee::ReferenceView {
+            pos_eci_m: p,
+            vel_eci_m_s: v,
+        }
+    })
+}
+
+/// A guarantee without a rate bound, judged at the sample (margin `m` at `view.t_s`): its
+/// verdict, and an event if it changed.
+fn judge_at_sample(
+    inv: &dyn Guarantee,
+    st: &mut GuaranteeStatus,
+    view: &MonitorView,
+    m: f64,
+    log: &mut EventLog,
+) {
+    let t = view.t_s;
+    if let Some(violated) = st.update(t, m) {
+        let kind = if violated {
+            "guarantee_violated"
+        } else {
+            "guarantee_restored"
+        };
+        let mut e = serde_json::json!({"name": st.name, "margin": m, "unit": st.unit});
+        if let Some(d) = inv.detail(view) {
+            e["detail"] = d;
+        }
+        log.push(t, kind, e);
+    }
+}
+
+/// One guarantee with a rate bound, judged over one step.
+struct IntervalCase<'g> {
+    /// The guarantee.
+    inv: &'g dyn Guarantee,
+    /// What its margin reads (the pairs evaluated at τ into the step).
+    reads: crate::guarantee::Reads,
+    /// Its margin at t₀: the last sample's, or re-evaluated under this step's inputs if it
+    /// reads them ([`Guarantee::step_inputs`]).
+    m0: crate::geometry::bounds::Bracket,
+    /// Its margin at the sample t.
+    m1: crate::geometry::bounds::Bracket,
+    /// Its rate bound over the step, margin unit/s.
+    rate: f64,
+    /// The rate bound rests on a rotation the step under-resolves (it cannot be held).
+    rotation_unproven: bool,
+}
+
+/// What the guarantees are judged on over the step [t₀, t] (t₀ = t − dt): the monitor's sample
+/// at t, the bodies' paths over the step, and the buffers and counts of the evaluations inside
+/// it.
+struct StepJudge<'a> {
+    /// The sample at t.
+    view: MonitorView<'a>,
+    /// The monitor's results at t.
+    mon: &'a MonitorState,
+    /// The bodies' paths over the step.
+    motion: &'a motion::StepMotion,
+    /// The monitor's geometry.
+    geo: &'a monitor::MonitorGeometry,
+    /// The orbital environment (orbit scenes): the reference at τ.
+    orbit: Option<&'a OrbitEnv>,
+    /// Bodies at τ into the step (the last evaluation's).
+    bodies_at: Vec<BodyView>,
+    /// The pairs a guarantee reads, at τ into the step.
+    pairs_at: Vec<PairDistance>,
+    /// Distance buffers of the evaluations at τ.
+    scratch: &'a mut monitor::DistanceScratch,
+    /// Distance buffers of the per-part searches.
+    part_scratch: &'a mut monitor::DistanceScratch,
+    /// Exact queries of the evaluations at τ.
+    count: monitor::QueryCount,
+    /// Exact queries of the per-part searches.
+    part_count: monitor::QueryCount,
+}
+
+impl StepJudge<'_> {
+    /// The step's start t₀, s.
+    fn t0(&self) -> f64 {
+        self.view.t_s - self.motion.dt_s
+    }
+
+    /// The bodies, and the pairs `reads` names, at τ into the step (their queries counted only
+    /// if `counted`: an event's detail is not part of the judgement's cost).
+    fn fill(&mut self, reads: &crate::guarantee::Reads, tau: f64, counted: bool) {
+        use crate::guarantee::Reads;
+        let t0 = self.t0();
+        let (mon, motion, geo) = (self.mon, self.motion, self.geo);
+        let mut uncounted = monitor::QueryCount::default();
+        let count = if counted {
+            &mut self.count
+        } else {
+            &mut uncounted
+        };
+        if self.bodies_at.len() != mon.bodies.len() {
+            self.bodies_at = mon.bodies.clone();
+        }
+        for (v, p) in self.bodies_at.iter_mut().zip(&motion.paths) {
+            let s = p.state_at(tau);
+            v.pos_m = s.pos_m;
+            v.vel_m_s = s.vel_m_s;
+            v.att = s.att;
+            v.omega_rad_s = s.omega_rad_s;
+        }
+        self.pairs_at.clear();
+        let list: Vec<(usize, usize)> = match reads {
+            Reads::Bodies => Vec::new(),
+            Reads::Pairs(l) => l.clone(),
+            Reads::Everything => mon.pairs.iter().map(|p| (p.a, p.b)).collect(),
+        };
+        for (i, j) in list {
+            let warm = mon.pair_index.get(&(i, j)).map(|k| {
+                let p = &mon.pairs[*k];
+                (p.part_a, p.part_b)
+            });
+            let h = monitor::pair_at(geo, motion, i, j, tau, warm, self.scratch, count);
+            self.pairs_at.push(PairDistance {
+                a: i,
+                b: j,
+                distance_m: h.d.value,
+                part_a: h.a,
+                part_b: h.b,
+                clearance_m: h.d.value,
+                lower_m: h.d.lower,
+                t_s: t0 + tau,
+            });
+        }
+    }
+
+    /// The view at τ into the step (after [`StepJudge::fill`]).
+    fn view_at(&self, tau: f64) -> MonitorView<'_> {
+        MonitorView {
+            t_s: self.t0() + tau,
+            bodies: &self.bodies_at,
+            pairs: &self.pairs_at,
+            reference: reference_at(self.orbit, tau - self.motion.dt_s),
+            jets: self.view.jets,
+        }
+    }
+
+    /// A guarantee's margin at τ into the step.
+    fn margin_at(
+        &mut self,
+        inv: &dyn Guarantee,
+        reads: &crate::guarantee::Reads,
+        tau: f64,
+    ) -> crate::geometry::bounds::Bracket {
+        self.fill(reads, tau, true);
+        inv.margin_bracket(&self.view_at(tau))
+    }
+
+    /// The case of guarantee `inv` over the step: its margin at t₀ (`last`, the last sample's,
+    /// or re-evaluated under this step's inputs) and at t (`m1`), its rate bound.
+    fn case<'g>(
+        &mut self,
+        inv: &'g dyn Guarantee,
+        last: crate::geometry::bounds::Bracket,
+        m1: crate::geometry::bounds::Bracket,
+        rate: f64,
+        rotation_unproven: bool,
+    ) -> IntervalCase<'g> {
+        let reads = inv.reads();
+        let m0 = if inv.step_inputs() {
+            self.margin_at(inv, &reads, 0.0)
+        } else {
+            last
+        };
+        IntervalCase {
+            inv,
+            reads,
+            m0,
+            m1,
+            rate,
+            rotation_unproven,
+        }
+    }
+
+    /// The search inside the step for the smallest margin, to the threshold `thr` (see
+    /// [`check_guarantees`]): over the per-part-pair bounds for a distance margin with a body
+    /// turning fast ([`monitor::search_parts`]), else by bisection on the margin's rate bound;
+    /// on an under-resolved step, first only a look for a margin below zero (or below the worst
+    /// so far `w`, once violated).
+    fn search(
+        &mut self,
+        c: &IntervalCase,
+        thr: &dyn Fn(f64) -> f64,
+        w: f64,
+    ) -> crate::geometry::bounds::MinSearch {
+        let (t, dt) = (self.view.t_s, self.motion.dt_s);
+        // A margin that is a distance less a constant, with a body turning fast: the
+        // per-part-pair bounds (`monitor::search_parts`).
+        let per_part = c.inv.distance_margin().and_then(|(a, b, offset)| {
+            let (i, j) = (a.min(b), a.max(b));
+            let p = &self.mon.pairs[*self.mon.pair_index.get(&(i, j))?];
+            if p.t_s != t {
+                return None;
+            }
+            let (pair_rate, body_rate) = monitor::pair_rate_gain(
+                self.geo,
+                self.motion,
+                i,
+                j,
+                (p.part_a, p.part_b),
+                self.part_scratch,
+            );
+            (body_rate >= monitor::PER_PART_MIN_GAIN * pair_rate).then_some((
+                i,
+                j,
+                offset,
+                (p.part_a, p.part_b),
+            ))
+        });
+        let mut search = |thr: &dyn Fn(f64) -> f64, budget: u32| match per_part {
+            Some((i, j, offset, warm)) => {
+                monitor::search_parts(
+                    self.geo,
+                    self.motion,
+                    i,
+                    j,
+                    (c.m0, c.m1),
+                    offset,
+                    thr,
+                    budget,
+                    Some(warm),
+                    self.part_scratch,
+                    &mut self.part_count,
+                )
+                .0
+            }
+            None => crate::geometry::bounds::minimize(
+                dt,
+                c.m0,
+                c.m1,
+                c.rate,
+                thr,
+                budget,
+                dt * 1e-9,
+                |tau| self.margin_at(c.inv, &c.reads, tau),
+            ),
+        };
+        if c.rotation_unproven {
+            // Nothing this search finds can make the step held (its rate bound is not
+            // proven): it only looks, on a small budget, for a margin below zero (or below
+            // the worst so far, once violated) — a real margin at a real pose. Only when it
+            // finds one is the worst margin refined as on any other step.
+            let below = w.min(0.0);
+            let look = |b: f64| {
+                if b < below {
+                    f64::NEG_INFINITY
+                } else {
+                    thr(b).min(0.0)
+                }
+            };
+            let r = search(&look, UNRESOLVED_LOOK_EVALS);
+            if r.value < below {
+                let mut full = search(thr, MAX_GUARANTEE_EVALS);
+                full.evals += r.evals;
+                full
+            } else {
+                r
+            }
+        } else {
+            search(thr, MAX_GUARANTEE_EVALS)
+        }
+    }
+
+    /// The judgement of a case over the step (see [`check_guarantees`]): the smallest margin
+    /// and its certified lower bound, refined where the verdict needs it (the worst margin so
+    /// far is `w`), then the first violation and the restoration located. `was_ok`: the last
+    /// sample held.
+    fn finding(
+        &mut self,
+        c: &IntervalCase,
+        w: f64,
+        was_ok: bool,
+    ) -> crate::guarantee::IntervalFinding {
+        use crate::geometry::bounds::{Crossing, first_below, interval_lower_bound};
+        let (t, dt) = (self.view.t_s, self.motion.dt_s);
+        let t0 = t - dt;
+        let (m0, m1, rate) = (c.m0, c.m1, c.rate);
+        let abs_tol = c.inv.tolerance();
+        let floor = c.inv.margin_floor();
+        let thr = |b: f64| {
+            let x = w.min(b);
+            let t = if x >= 0.0 {
+                (x - abs_tol.max(POSITIVE_MARGIN_REL_TOL * x)).max(0.0)
+            } else {
+                x - abs_tol.max(NEGATIVE_MARGIN_REL_TOL * x.abs())
+            };
+            // The margin never goes below its floor: every sub-interval clears a threshold at
+            // or under it, whatever its rate bound says.
+            if t <= floor { f64::NEG_INFINITY } else { t }
+        };
+        let mut finding = crate::guarantee::IntervalFinding {
+            min_value: m1.value,
+            min_t_s: t,
+            inside: false,
+            lower: interval_lower_bound(m0.lower, m1.lower, rate, dt).max(floor),
+            first_violation_s: None,
+            restored_s: None,
+            unresolved: false,
+            evals: 0,
+        };
+        if c.inv.step_inputs() && m0.value < finding.min_value {
+            // Only a margin re-evaluated at t₀ under this step's inputs can be below both the
+            // sample at t₁ and what the search finds: it holds just after t₀.
+            finding.min_value = m0.value;
+            finding.min_t_s = t0;
+            finding.inside = true;
+        }
+        // A floor the step's inputs give (see `Guarantee::step_floor`).
+        let floor = floor.max(c.inv.step_floor(&self.view).unwrap_or(f64::NEG_INFINITY));
+        finding.lower = finding.lower.max(floor);
+        if finding.lower < thr(m1.value) {
+            let r = self.search(c, &thr, w);
+            if r.value < finding.min_value && r.t > 0.0 && r.t < dt {
+                finding.min_value = r.value;
+                finding.min_t_s = t0 + r.t;
+                finding.inside = true;
+            }
+            finding.lower = r.lower.max(floor);
+            finding.evals += r.evals;
+        }
+        let t_tol = dt * EVENT_TIME_TOL;
+        let went_negative = finding.min_value < 0.0 || m1.value < 0.0;
+        if was_ok && m0.value < 0.0 {
+            // Violated from the step's start (the step's inputs changed there).
+            finding.first_violation_s = Some((t0, t0));
+        }
+        let mut eval = |tau: f64| self.margin_at(c.inv, &c.reads, tau);
+        if m0.value >= 0.0 && went_negative {
+            let cr = first_below(dt, m0, m1, rate, 0.0, t_tol, MAX_CROSSING_EVALS, &mut eval);
+            finding.first_violation_s = match cr {
+                Crossing::At { t_lo, t_hi } => Some((t0 + t_lo, t0 + t_hi)),
+                Crossing::Unresolved { t_lo } => Some((t0 + t_lo, t)),
+                Crossing::Never => None,
+            };
+        }
+        if m1.value >= 0.0 && (m0.value < 0.0 || finding.min_value < 0.0) {
+            // The last time it was below zero: the first, going backwards from t₁.
+            let cr = first_below(dt, m1, m0, rate, 0.0, t_tol, MAX_CROSSING_EVALS, |u| {
+                eval(dt - u)
+            });
+            finding.restored_s = match cr {
+                Crossing::At { t_lo, t_hi } => Some((t - t_hi, t - t_lo)),
+                Crossing::Unresolved { t_lo } => Some((t0, t - t_lo)),
+                Crossing::Never => None,
+            };
+        }
+        finding.unresolved = !went_negative && (finding.lower < 0.0 || c.rotation_unproven);
+        finding
+    }
+
+    /// The verdict of a case from its finding, and an event for every change (with the
+    /// guarantee's detail where the new state is known to hold).
+    fn report(
+        &mut self,
+        c: &IntervalCase,
+        st: &mut GuaranteeStatus,
+        finding: &crate::guarantee::IntervalFinding,
+        log: &mut EventLog,
+    ) {
+        let (t, dt) = (self.view.t_s, self.motion.dt_s);
+        let t0 = t - dt;
+        for ch in st.update_interval(t, c.m1.value, finding, dt) {
+            let kind = if ch.violated {
+                "guarantee_violated"
+            } else {
+                "guarantee_restored"
+            };
+            let mut e = serde_json::json!({"name": st.name, "margin": ch.margin, "unit": st.unit,
+                "found": if ch.inside { "interval" } else { "sample" },
+                "t_tol_s": ch.t_tol_s, "t_step_s": t});
+            // The detail where the new state is known to hold: the end of the time bracket.
+            // (Its queries are not counted: the counts report the judgement's cost.)
+            let tau = (ch.t_s + ch.t_tol_s - t0).clamp(0.0, dt);
+            self.fill(&c.reads, tau, false);
+            if let Some(d) = c.inv.detail(&self.view_at(tau)) {
+                e["detail"] = d;
+            }
+            log.push(ch.t_s, kind, e);
+        }
+    }
+}
+
 /// Evaluates guarantees: at the step's sample and, for a guarantee with a rate bound, on the
 /// whole interval since the last one.
 ///
@@ -1127,6 +1623,10 @@ const MAX_CROSSING_EVALS: u32 = 256;
 /// the samples only. On a step whose rotation is under-resolved, a guarantee whose rate bound
 /// reads the rotation cannot be held: its search only looks for a violation (threshold 0, at
 /// most [`UNRESOLVED_LOOK_EVALS`] evaluations) and refines as above only once it finds one.
+///
+/// In order, per guarantee: its margin at the sample and its rate bound; without one,
+/// [`judge_at_sample`]; with one, its [`IntervalCase`], then [`StepJudge::finding`] (the
+/// search, [`StepJudge::search`], and the crossings) and [`StepJudge::report`].
 #[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource
 fn check_guarantees(
     clock: Res<Clock>,
@@ -1137,48 +1637,32 @@ fn check_guarantees(
     geo: Res<monitor::MonitorGeometry>,
     mut scratch: Local<monitor::DistanceScratch>,
     mut part_scratch: Local<monitor::DistanceScratch>,
-    orbit: Option<Res<OrbitEnv>>,
+    env: Res<Env>,
     host: Option<Res<controllers::ControllerHost>>,
 ) {
-    use crate::geometry::bounds::{Bracket, Crossing, first_below, interval_lower_bound, minimize};
-    use crate::guarantee::{IntervalFinding, Reads, ReferenceView};
+    use crate::geometry::bounds::Bracket;
     let t = clock.t_s();
-    if motion.under_resolved && motion.under_resolved_steps == 1 {
-        // The first step whose rotation the rate bounds do not cover: say so once, with the
-        // step that would (the count is in summary.json's monitor).
-        let (turn, body) = motion.max_turn_rad;
-        let name = mon.bodies.get(body).map_or("", |b| b.name.as_str());
-        log.push(
-            t,
-            "rotation_under_resolved",
-            serde_json::json!({
-                "body": name,
-                "turn_rad": turn,
-                "limit_rad": motion::UNDER_RESOLVED_TURN_RAD,
-                "dt_s_to_resolve": motion.dt_s * motion::UNDER_RESOLVED_TURN_RAD / turn,
-                "consequence": "guarantees whose rate bound rests on the rotation are unresolved over such steps, never held",
-            }),
-        );
-    }
+    note_under_resolved(t, &motion, &mon, &mut log);
     let jets = jets_view(host.as_deref());
-    let orbit = orbit.as_deref();
-    let reference_at = |back_s: f64| {
-        orbit.map(|o| {
-            let mut r = o.reference.clone();
-            r.step(back_s);
-            let (p, v) = r.state();
-            ReferenceView {
-                pos_eci_m: p,
-                vel_eci_m_s: v,
-            }
-        })
-    };
-    let view = MonitorView {
-        t_s: t,
-        bodies: &mon.bodies,
-        pairs: &mon.pairs,
-        reference: reference_at(0.0),
-        jets: &jets,
+    let orbit = env.orbit();
+    let mut judge = StepJudge {
+        view: MonitorView {
+            t_s: t,
+            bodies: &mon.bodies,
+            pairs: &mon.pairs,
+            reference: reference_at(orbit, 0.0),
+            jets: &jets,
+        },
+        mon: &mon,
+        motion: &motion,
+        geo: &geo,
+        orbit,
+        bodies_at: Vec::new(),
+        pairs_at: Vec::new(),
+        scratch: &mut scratch,
+        part_scratch: &mut part_scratch,
+        count: monitor::QueryCount::default(),
+        part_count: monitor::QueryCount::default(),
     };
     let frame_motion = FrameMotion {
         motion: &motion,
@@ -1191,14 +1675,9 @@ fn check_guarantees(
     let g = &mut *g;
     g.last.resize(g.list.len(), Bracket::exact(f64::INFINITY));
     g.last_rate.resize(g.list.len(), None);
-    let mut bodies_at: Vec<BodyView> = Vec::new();
-    let mut pairs_at: Vec<PairDistance> = Vec::new();
-    let mut count = monitor::QueryCount::default();
-    // The per-part searches' queries (counted with the others at the end).
-    let mut part_count = monitor::QueryCount::default();
     for k in 0..g.list.len() {
-        let inv = &g.list[k];
-        let m1 = inv.margin_bracket(&view);
+        let inv = &*g.list[k];
+        let m1 = inv.margin_bracket(&judge.view);
         frame_motion.rotation_read.set(false);
         let rate = if motion.ready {
             inv.rate_bound(&frame_motion)
@@ -1210,249 +1689,18 @@ fn check_guarantees(
         let rotation_unproven = motion.under_resolved && frame_motion.rotation_read.get();
         g.last_rate[k] = rate;
         let st = &mut g.status[k];
-        let Some(rate) = rate else {
-            let m = m1.value;
-            if let Some(violated) = st.update(t, m) {
-                let kind = if violated {
-                    "guarantee_violated"
-                } else {
-                    "guarantee_restored"
-                };
-                let mut e = serde_json::json!({"name": st.name, "margin": m, "unit": st.unit});
-                if let Some(d) = inv.detail(&view) {
-                    e["detail"] = d;
-                }
-                log.push(t, kind, e);
+        match rate {
+            None => judge_at_sample(inv, st, &judge.view, m1.value, &mut log),
+            Some(rate) => {
+                let was_ok = g.last[k].value >= 0.0;
+                let case = judge.case(inv, g.last[k], m1, rate, rotation_unproven);
+                let finding = judge.finding(&case, st.worst_margin, was_ok);
+                judge.report(&case, st, &finding, &mut log);
             }
-            g.last[k] = m1;
-            continue;
-        };
-        let dt = motion.dt_s;
-        let t0 = t - dt;
-        let m0 = g.last[k];
-        let reads = inv.reads();
-        // The bodies (and the pairs the guarantee reads) at τ into the step.
-        let mut fill = |tau: f64,
-                        bodies_at: &mut Vec<BodyView>,
-                        pairs_at: &mut Vec<PairDistance>,
-                        count: &mut monitor::QueryCount| {
-            if bodies_at.len() != mon.bodies.len() {
-                *bodies_at = mon.bodies.clone();
-            }
-            for (v, p) in bodies_at.iter_mut().zip(&motion.paths) {
-                let s = p.state_at(tau);
-                v.pos_m = s.pos_m;
-                v.vel_m_s = s.vel_m_s;
-                v.att = s.att;
-                v.omega_rad_s = s.omega_rad_s;
-            }
-            pairs_at.clear();
-            let list: Vec<(usize, usize)> = match &reads {
-                Reads::Bodies => Vec::new(),
-                Reads::Pairs(l) => l.clone(),
-                Reads::Everything => mon.pairs.iter().map(|p| (p.a, p.b)).collect(),
-            };
-            for (i, j) in list {
-                let warm = mon.pair_index.get(&(i, j)).map(|k| {
-                    let p = &mon.pairs[*k];
-                    (p.part_a, p.part_b)
-                });
-                let h = monitor::pair_at(&geo, &motion, i, j, tau, warm, &mut scratch, count);
-                pairs_at.push(PairDistance {
-                    a: i,
-                    b: j,
-                    distance_m: h.d.value,
-                    part_a: h.a,
-                    part_b: h.b,
-                    clearance_m: h.d.value,
-                    lower_m: h.d.lower,
-                    t_s: t0 + tau,
-                });
-            }
-        };
-        let mut eval = |tau: f64| -> Bracket {
-            fill(tau, &mut bodies_at, &mut pairs_at, &mut count);
-            let v = MonitorView {
-                t_s: t0 + tau,
-                bodies: &bodies_at,
-                pairs: &pairs_at,
-                reference: reference_at(tau - dt),
-                jets: &jets,
-            };
-            inv.margin_bracket(&v)
-        };
-        // A margin reading step inputs starts the step from its value under this step's
-        // inputs (the sample at t₀ was taken under the previous step's).
-        let was_ok = g.last[k].value >= 0.0;
-        let m0 = if inv.step_inputs() { eval(0.0) } else { m0 };
-        let w = st.worst_margin;
-        let abs_tol = inv.tolerance();
-        let floor = inv.margin_floor();
-        let thr = |b: f64| {
-            let x = w.min(b);
-            let t = if x >= 0.0 {
-                (x - abs_tol.max(POSITIVE_MARGIN_REL_TOL * x)).max(0.0)
-            } else {
-                x - abs_tol.max(NEGATIVE_MARGIN_REL_TOL * x.abs())
-            };
-            // The margin never goes below its floor: every sub-interval clears a threshold at
-            // or under it, whatever its rate bound says.
-            if t <= floor { f64::NEG_INFINITY } else { t }
-        };
-        let mut finding = IntervalFinding {
-            min_value: m1.value,
-            min_t_s: t,
-            inside: false,
-            lower: interval_lower_bound(m0.lower, m1.lower, rate, dt).max(floor),
-            first_violation_s: None,
-            restored_s: None,
-            unresolved: false,
-            evals: 0,
-        };
-        if inv.step_inputs() && m0.value < finding.min_value {
-            // Only a margin re-evaluated at t₀ under this step's inputs can be below both the
-            // sample at t₁ and what the search finds: it holds just after t₀.
-            finding.min_value = m0.value;
-            finding.min_t_s = t0;
-            finding.inside = true;
-        }
-        // A floor the step's inputs give (see `Guarantee::step_floor`).
-        let floor = floor.max(inv.step_floor(&view).unwrap_or(f64::NEG_INFINITY));
-        finding.lower = finding.lower.max(floor);
-        if finding.lower < thr(m1.value) {
-            // A margin that is a distance less a constant, with a body turning fast: the
-            // per-part-pair bounds (`monitor::search_parts`).
-            let per_part = inv.distance_margin().and_then(|(a, b, offset)| {
-                let (i, j) = (a.min(b), a.max(b));
-                let p = &mon.pairs[*mon.pair_index.get(&(i, j))?];
-                if p.t_s != t {
-                    return None;
-                }
-                let (pair_rate, body_rate) = monitor::pair_rate_gain(
-                    &geo,
-                    &motion,
-                    i,
-                    j,
-                    (p.part_a, p.part_b),
-                    &mut part_scratch,
-                );
-                (body_rate >= monitor::PER_PART_MIN_GAIN * pair_rate).then_some((
-                    i,
-                    j,
-                    offset,
-                    (p.part_a, p.part_b),
-                ))
-            });
-            let mut search = |thr: &dyn Fn(f64) -> f64, budget: u32| match per_part {
-                Some((i, j, offset, warm)) => {
-                    monitor::search_parts(
-                        &geo,
-                        &motion,
-                        i,
-                        j,
-                        (m0, m1),
-                        offset,
-                        thr,
-                        budget,
-                        Some(warm),
-                        &mut part_scratch,
-                        &mut part_count,
-                    )
-                    .0
-                }
-                None => minimize(dt, m0, m1, rate, thr, budget, dt * 1e-9, &mut eval),
-            };
-            let r = if rotation_unproven {
-                // Nothing this search finds can make the step held (its rate bound is not
-                // proven): it only looks, on a small budget, for a margin below zero (or below
-                // the worst so far, once violated) — a real margin at a real pose. Only when it
-                // finds one is the worst margin refined as on any other step.
-                let below = w.min(0.0);
-                let look = |b: f64| {
-                    if b < below {
-                        f64::NEG_INFINITY
-                    } else {
-                        thr(b).min(0.0)
-                    }
-                };
-                let r = search(&look, UNRESOLVED_LOOK_EVALS);
-                if r.value < below {
-                    let mut full = search(&thr, MAX_GUARANTEE_EVALS);
-                    full.evals += r.evals;
-                    full
-                } else {
-                    r
-                }
-            } else {
-                search(&thr, MAX_GUARANTEE_EVALS)
-            };
-            if r.value < finding.min_value && r.t > 0.0 && r.t < dt {
-                finding.min_value = r.value;
-                finding.min_t_s = t0 + r.t;
-                finding.inside = true;
-            }
-            finding.lower = r.lower.max(floor);
-            finding.evals += r.evals;
-        }
-        let t_tol = dt * EVENT_TIME_TOL;
-        let went_negative = finding.min_value < 0.0 || m1.value < 0.0;
-        if was_ok && m0.value < 0.0 {
-            // Violated from the step's start (the step's inputs changed there).
-            finding.first_violation_s = Some((t0, t0));
-        }
-        if m0.value >= 0.0 && went_negative {
-            let c = first_below(dt, m0, m1, rate, 0.0, t_tol, MAX_CROSSING_EVALS, &mut eval);
-            finding.first_violation_s = match c {
-                Crossing::At { t_lo, t_hi } => Some((t0 + t_lo, t0 + t_hi)),
-                Crossing::Unresolved { t_lo } => Some((t0 + t_lo, t)),
-                Crossing::Never => None,
-            };
-        }
-        if m1.value >= 0.0 && (m0.value < 0.0 || finding.min_value < 0.0) {
-            // The last time it was below zero: the first, going backwards from t₁.
-            let c = first_below(dt, m1, m0, rate, 0.0, t_tol, MAX_CROSSING_EVALS, |u| {
-                eval(dt - u)
-            });
-            finding.restored_s = match c {
-                Crossing::At { t_lo, t_hi } => Some((t - t_hi, t - t_lo)),
-                Crossing::Unresolved { t_lo } => Some((t0, t - t_lo)),
-                Crossing::Never => None,
-            };
-        }
-        finding.unresolved = !went_negative && (finding.lower < 0.0 || rotation_unproven);
-        for c in st.update_interval(t, m1.value, &finding, dt) {
-            let kind = if c.violated {
-                "guarantee_violated"
-            } else {
-                "guarantee_restored"
-            };
-            let mut e = serde_json::json!({"name": st.name, "margin": c.margin, "unit": st.unit,
-                "found": if c.inside { "interval" } else { "sample" },
-                "t_tol_s": c.t_tol_s, "t_step_s": t});
-            // The detail where the new state is known to hold: the end of the time bracket.
-            // (Its queries are not counted: the counts report the judgement's cost.)
-            let tau = (c.t_s + c.t_tol_s - t0).clamp(0.0, dt);
-            fill(
-                tau,
-                &mut bodies_at,
-                &mut pairs_at,
-                &mut monitor::QueryCount::default(),
-            );
-            let v = MonitorView {
-                t_s: t0 + tau,
-                bodies: &bodies_at,
-                pairs: &pairs_at,
-                reference: reference_at(tau - dt),
-                jets: &jets,
-            };
-            if let Some(d) = inv.detail(&v) {
-                e["detail"] = d;
-            }
-            log.push(c.t_s, kind, e);
         }
         g.last[k] = m1;
     }
-    g.interval_queries += count.exact + part_count.exact;
+    g.interval_queries += judge.count.exact + judge.part_count.exact;
 }
 
 /// Every `Rcs` actuator's jets and their firing flags over the current step, for
@@ -1483,11 +1731,12 @@ pub(crate) fn jets_view(
 /// systems in these sets), the core's systems and the `Update` system that steps the schedule.
 ///
 /// Systems, by set: [`multirate::plan_step`] in [`Order::Plan`]; `environment_gravity` in
-/// [`Order::Gravity`]; [`plume::plume_forces`] in [`Order::PlumeForces`]; `physics_step` then
-/// `advance_orbit` in [`Stage::Physics`]; [`monitor::distances`] then [`monitor::contacts`] in
-/// [`Order::Geometry`]; `check_guarantees` in [`Order::Guarantees`]; [`output::record`] in
-/// [`Stage::Record`]; `advance` in `Update`. It replaces any `SimStep` schedule, so it is added
-/// before every other plugin that puts systems there.
+/// [`Order::Gravity`]; [`plume::plume_forces`] in [`Order::PlumeForces`]; `physics_step` (which
+/// advances the environment) in [`Stage::Physics`]; [`monitor::distances`] then
+/// [`monitor::contacts`] in [`Order::Geometry`]; `check_guarantees` in [`Order::Guarantees`];
+/// [`output::record`] in [`Stage::Record`]; `advance` in `Update`. Several read the scene's
+/// [`Env`], which [`environment::EnvironmentPlugin`] inserts. It replaces any `SimStep`
+/// schedule, so it is added before every other plugin that puts systems there.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct PipelinePlugin;
 
@@ -1531,7 +1780,7 @@ impl Plugin for PipelinePlugin {
             multirate::plan_step.in_set(Order::Plan),
             environment_gravity.in_set(Order::Gravity),
             plume::plume_forces.in_set(Order::PlumeForces),
-            (physics_step, advance_orbit).chain().in_set(Stage::Physics),
+            physics_step.in_set(Stage::Physics),
             (monitor::distances, monitor::contacts)
                 .chain()
                 .in_set(Order::Geometry),

@@ -61,8 +61,7 @@ use super::monitor::{ContactState, MonitorGeometry};
 use super::motion::{RK4_INFLATION, StepMotion, UNDER_RESOLVED_TURN_RAD};
 use super::output::Recorder;
 use super::{
-    BodyState, Clock, Gravity, Guarantees, MonitorState, OrbitEnv, Physics, RapierSync, Roster,
-    SimBody,
+    BodyState, Clock, Env, Guarantees, MonitorState, Physics, RapierSync, Roster, SimBody,
 };
 use crate::actuation::actuator::ActuatorSpec;
 use crate::control::interface::Command;
@@ -178,8 +177,7 @@ pub struct PlanInputs<'w, 's> {
     bodies: Query<'w, 's, (&'static SimBody, &'static BodyState)>,
     geo: Res<'w, MonitorGeometry>,
     motion: Res<'w, StepMotion>,
-    gravity: Option<Res<'w, Gravity>>,
-    orbit: Option<Res<'w, OrbitEnv>>,
+    env: Res<'w, Env>,
     contact: Res<'w, ContactState>,
     sync: Res<'w, RapierSync>,
     phys: Res<'w, Physics>,
@@ -188,7 +186,6 @@ pub struct PlanInputs<'w, 's> {
     guarantees: Res<'w, Guarantees>,
     mon: Res<'w, MonitorState>,
     table: Option<Res<'w, super::airbearing::AirBearing>>,
-    l2: Option<Res<'w, super::environment::L2Frame>>,
 }
 
 /// The norms of a held command's force and torque after the actuator, N and N·m, when the
@@ -282,7 +279,7 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
     if p.table.is_some() {
         return Err("air-bearing table");
     }
-    if p.l2.is_some() {
+    if p.env.l2_centre().is_some() {
         return Err("L2 frame");
     }
     let n = p.roster.bodies.len();
@@ -349,7 +346,7 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
         return Err("guarantee judged at samples only");
     }
     // Per-body bounds at t₀.
-    let (g_grad, ref_speed_m_s, ref_r_m) = match p.orbit.as_deref() {
+    let (g_grad, ref_speed_m_s, ref_r_m) = match p.env.orbit() {
         Some(o) => {
             let (r, v) = o.reference.state();
             let mu = MU_EARTH_M3_S2;
@@ -361,9 +358,9 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
     for (k, e) in p.roster.bodies.iter().enumerate() {
         let (b, s) = p.bodies.get(*e).map_err(|_| "first step")?;
         let a_g = p
-            .gravity
-            .as_deref()
-            .map_or(0.0, |g| g.0.accel_m_s2(&s.pos_m).norm());
+            .env
+            .gravity()
+            .map_or(0.0, |g| g.accel_m_s2(&s.pos_m).norm());
         let lam = p.motion.lambda_kg_m2.get(k).copied().unwrap_or([0.0; 3]);
         let lmin = lam.iter().copied().fold(f64::INFINITY, f64::min);
         let lmax = lam.iter().copied().fold(0.0, f64::max);

@@ -630,7 +630,7 @@ pub fn record(
     mut log: ResMut<EventLog>,
     mut rec: ResMut<Recorder>,
     cs: Res<ContactState>,
-    orbit: Option<Res<super::OrbitEnv>>,
+    env: Res<super::Env>,
 ) {
     let rec = &mut *rec;
     let due = clock.step.is_multiple_of(u64::from(rec.every)) || rec.force_row;
@@ -661,7 +661,7 @@ pub fn record(
         &diag,
         &mut log,
         &cs,
-        orbit.as_deref(),
+        env.orbit(),
     );
 }
 
@@ -677,7 +677,7 @@ pub fn write_header(world: &mut World) {
         &cols,
         world.resource::<Guarantees>(),
         world.resource::<Diagnostics>(),
-        world.contains_resource::<super::OrbitEnv>(),
+        world.resource::<super::Env>().orbit().is_some(),
     );
     let mut rec = world.resource_mut::<Recorder>();
     rec.pair_columns = cols;
