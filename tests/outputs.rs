@@ -26,6 +26,21 @@ fn rpod() -> Command {
     Command::new(env!("CARGO_BIN_EXE_rpod"))
 }
 
+/// `rpod run scenes/examples/free_drift.ron --duration 1 --out OUT`, waited for.
+fn free_drift_1s(out: impl AsRef<std::ffi::OsStr>) -> std::process::Output {
+    rpod()
+        .args([
+            "run",
+            "scenes/examples/free_drift.ron",
+            "--duration",
+            "1",
+            "--out",
+        ])
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
 fn names(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
         .unwrap()
@@ -52,17 +67,7 @@ fn regress_second_writer_refused_and_kill_9_leaves_nothing_that_looks_whole() {
     let d = tmp("lock");
     let out = d.to_str().unwrap();
     // A complete run first.
-    let r = rpod()
-        .args([
-            "run",
-            "scenes/examples/free_drift.ron",
-            "--duration",
-            "1",
-            "--out",
-            out,
-        ])
-        .output()
-        .unwrap();
+    let r = free_drift_1s(out);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     assert!(d.join("summary.json").exists());
     // A long run into the same folder; while it runs, a second writer is refused.
@@ -89,17 +94,7 @@ fn regress_second_writer_refused_and_kill_9_leaves_nothing_that_looks_whole() {
     ] {
         assert!(!d.join(f).exists(), "stale {f} beside a running run");
     }
-    let r = rpod()
-        .args([
-            "run",
-            "scenes/examples/free_drift.ron",
-            "--duration",
-            "1",
-            "--out",
-            out,
-        ])
-        .output()
-        .unwrap();
+    let r = free_drift_1s(out);
     assert_eq!(r.status.code(), Some(4));
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(
@@ -131,17 +126,7 @@ fn regress_second_writer_refused_and_kill_9_leaves_nothing_that_looks_whole() {
     );
     // The kernel released the lock with the process: a new run proceeds, and clears the
     // partial files of the killed one.
-    let r = rpod()
-        .args([
-            "run",
-            "scenes/examples/free_drift.ron",
-            "--duration",
-            "1",
-            "--out",
-            out,
-        ])
-        .output()
-        .unwrap();
+    let r = free_drift_1s(out);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     assert_eq!(
         names(&d),
@@ -165,17 +150,7 @@ fn regress_planted_symlink_in_the_output_folder_is_not_followed() {
     for n in ["trajectory.csv.partial", "summary.json"] {
         std::os::unix::fs::symlink(&victim, d.join(n)).unwrap();
     }
-    let r = rpod()
-        .args([
-            "run",
-            "scenes/examples/free_drift.ron",
-            "--duration",
-            "1",
-            "--out",
-        ])
-        .arg(&d)
-        .output()
-        .unwrap();
+    let r = free_drift_1s(&d);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious\n");
     assert!(!d.join("summary.json").is_symlink());
@@ -190,34 +165,14 @@ fn regress_links_planted_at_the_lock_runs_and_plots_are_refused() {
     let victim = d.with_extension("victim2");
     std::fs::write(&victim, "precious\n").unwrap();
     std::os::unix::fs::symlink(&victim, d.join(".rpod.lock")).unwrap();
-    let r = rpod()
-        .args([
-            "run",
-            "scenes/examples/free_drift.ron",
-            "--duration",
-            "1",
-            "--out",
-        ])
-        .arg(&d)
-        .output()
-        .unwrap();
+    let r = free_drift_1s(&d);
     assert!(!r.status.success());
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(err.contains("symbolic link"), "{err}");
     assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious\n");
     // A run, then RUN/plots as a link to a folder outside: `rpod plot` refuses it.
     std::fs::remove_file(d.join(".rpod.lock")).unwrap();
-    let r = rpod()
-        .args([
-            "run",
-            "scenes/examples/free_drift.ron",
-            "--duration",
-            "1",
-            "--out",
-        ])
-        .arg(&d)
-        .output()
-        .unwrap();
+    let r = free_drift_1s(&d);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let outside = d.with_extension("outside");
     std::fs::create_dir_all(&outside).unwrap();
@@ -286,7 +241,7 @@ fn regress_fifo_scene_and_path_as_paper_name_are_refused_without_waiting() {
 #[test]
 fn invariant_no_nan_or_infinity_in_any_output() {
     for scene in [
-        "docking_aligned",
+        "examples/docking_aligned",
         "papers/xu2019/xu2019_simulation",
         "papers/zhang2018/zhang2018_pair",
         "papers/geng2015/geng2015_m1_linear",

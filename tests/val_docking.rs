@@ -17,7 +17,7 @@ use rpod::sim::docking::{DockState, Docking};
 
 fn sim(name: &str, set: &[&str]) -> Simulation {
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    let loaded = load_scene_file(format!("scenes/{name}.ron").as_ref(), &set).unwrap();
+    let loaded = load_scene_file(format!("scenes/examples/{name}.ron").as_ref(), &set).unwrap();
     Simulation::new(&loaded).unwrap()
 }
 

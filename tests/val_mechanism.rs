@@ -16,7 +16,7 @@ use rpod::sim::docking::{DockState, Docking, PortGeometry, capture_rate_violatio
 use std::process::Command;
 
 fn sim(name: &str, set: &[String]) -> Simulation {
-    let loaded = load_scene_file(format!("scenes/{name}.ron").as_ref(), set).unwrap();
+    let loaded = load_scene_file(format!("scenes/examples/{name}.ron").as_ref(), set).unwrap();
     Simulation::new(&loaded).unwrap()
 }
 

@@ -31,7 +31,7 @@ ATTITUDE = (
 
 
 def main():
-    sim = rpod.Simulation(ROOT / "scenes" / "orbit_approach_latch.ron",
+    sim = rpod.Simulation(ROOT / "scenes" / "examples" / "orbit_approach_latch.ron",
                           set={"controllers.1": ATTITUDE}, record=False)
     sim.add_controller(
         PortApproach(), body="chaser", target="target", period_s=0.1,

@@ -24,7 +24,7 @@ sys.path.insert(0, os.fspath(ROOT / "python" / "tests"))
 from laws import HillPd  # noqa: E402
 from test_simulation import SATURATED_5N, TARGET_ATTITUDE  # noqa: E402
 
-FLAGSHIP = ROOT / "scenes" / "orbit_approach_latch.ron"
+FLAGSHIP = ROOT / "scenes" / "examples" / "orbit_approach_latch.ron"
 
 
 def rust_entry(period):
