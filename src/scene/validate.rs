@@ -203,8 +203,42 @@ fn finite3(path: &str, v: &V3) -> Check {
     Ok(())
 }
 
-/// Checks a scene; on failure returns `(field path, message)`.
+/// Checks a scene; on failure returns `(field path, message)`: the scene's own fields, its
+/// stepping, the counts, the environment, the bodies, the docking mechanism, the monitor and the
+/// guarantees, in that order (the first failure is the one reported).
 pub fn validate(s: &Scene) -> Check {
+    validate_header(s)?;
+    validate_stepping(s)?;
+    validate_counts(s)?;
+    validate_environment(s)?;
+    validate_bodies(s)?;
+    if let Some(d) = &s.docking {
+        validate_docking(s, d)?;
+    }
+    if let Some(h) = s.monitor.horizon_m {
+        positive("monitor.horizon_m", h, "metres")?;
+    }
+    for (i, g) in s.guarantees.iter().enumerate() {
+        check_name(format!("guarantees.{i}.name"), g.name())?;
+        if s.guarantees[..i].iter().any(|o| o.name() == g.name()) {
+            return fail(
+                format!("guarantees.{i}.name"),
+                format!("duplicate guarantee name `{}`", g.name()),
+            );
+        }
+    }
+    for g in &s.guarantees {
+        let p = format!("guarantees.{}", g.name());
+        g.check(s).map_err(|e| {
+            let e = e.within(&p);
+            (e.field, e.message)
+        })?;
+    }
+    Ok(())
+}
+
+/// The scene's name, step, duration, physics sub-steps and recording interval.
+fn validate_header(s: &Scene) -> Check {
     if s.name.trim().is_empty() {
         return fail("name", "must not be empty");
     }
@@ -242,6 +276,11 @@ pub fn validate(s: &Scene) -> Check {
     if s.record_every_steps == 0 {
         return fail("record_every_steps", "must be at least 1");
     }
+    Ok(())
+}
+
+/// `stepping: MultiRate(...)`: the longest step and the tolerances.
+fn validate_stepping(s: &Scene) -> Check {
     if let crate::scene::Stepping::MultiRate {
         max_step_s,
         tol_m,
@@ -277,6 +316,12 @@ pub fn validate(s: &Scene) -> Check {
             }
         }
     }
+    Ok(())
+}
+
+/// At most [`MAX_BODIES`] bodies, [`MAX_GUARANTEES`] guarantees, [`MAX_CONTROLLERS`]
+/// controllers.
+fn validate_counts(s: &Scene) -> Check {
     if s.bodies.len() > MAX_BODIES {
         return fail(
             "bodies",
@@ -301,6 +346,12 @@ pub fn validate(s: &Scene) -> Check {
             ),
         );
     }
+    Ok(())
+}
+
+/// The environment: an orbit above the Earth and below the radius limit, a table's size, tilt,
+/// friction and anchored bodies, the L2 model's own checks.
+fn validate_environment(s: &Scene) -> Check {
     match &s.environment {
         Environment::Orbit { reference, .. } => match reference {
             OrbitSpec::Elements { a_m, e, .. } => {
@@ -390,6 +441,12 @@ pub fn validate(s: &Scene) -> Check {
             .validate()
             .map_err(|(f, m)| (format!("environment.0.{f}"), m))?,
     }
+    Ok(())
+}
+
+/// At least one body; each body's name (unique), its own fields, its initial spin against the
+/// step (unless under-resolved spins are allowed), and the scene's collider count.
+fn validate_bodies(s: &Scene) -> Check {
     if s.bodies.is_empty() {
         return fail("bodies", "a scene needs at least one body");
     }
@@ -434,28 +491,6 @@ pub fn validate(s: &Scene) -> Check {
                 ),
             );
         }
-    }
-    if let Some(d) = &s.docking {
-        validate_docking(s, d)?;
-    }
-    if let Some(h) = s.monitor.horizon_m {
-        positive("monitor.horizon_m", h, "metres")?;
-    }
-    for (i, g) in s.guarantees.iter().enumerate() {
-        check_name(format!("guarantees.{i}.name"), g.name())?;
-        if s.guarantees[..i].iter().any(|o| o.name() == g.name()) {
-            return fail(
-                format!("guarantees.{i}.name"),
-                format!("duplicate guarantee name `{}`", g.name()),
-            );
-        }
-    }
-    for g in &s.guarantees {
-        let p = format!("guarantees.{}", g.name());
-        g.check(s).map_err(|e| {
-            let e = e.within(&p);
-            (e.field, e.message)
-        })?;
     }
     Ok(())
 }
