@@ -13,6 +13,7 @@
 //!   [`zhang2018`]): the law in `mod.rs`, its scene binding (entry, controller, disturbances)
 //!   in `scene.rs`, its unit tests in `tests.rs`.
 
+pub mod builtin;
 pub mod generic;
 pub mod geng2015;
 pub mod guo2016;

@@ -26,8 +26,8 @@
 //!
 //! The types a law implements and is given (the extension points) are in
 //! [`spec`](crate::control::spec); they are re-exported here so their `registry::` paths keep
-//! working. This module holds only the list of built-in laws, the name table and the lookup
-//! (the by-name deserialization of a scene's `controllers` entries).
+//! working. This module holds the name table and the lookup (the by-name deserialization of a scene's
+//! `controllers` entries); the list of built-in laws is [`builtin`](crate::control::builtin).
 
 use crate::actuation::ActuatorSpec;
 use crate::control::sensor::SensorSpec;
@@ -47,19 +47,23 @@ type SpecFn =
 type ParamsFn =
     fn(&mut dyn erased_serde::Deserializer) -> Result<Box<dyn LawParams>, erased_serde::Error>;
 
+/// How a registered name reads its scene entry: a law's own spec, or the common entry with
+/// `params`.
 #[derive(Clone, Copy)]
-enum Entry {
+pub(crate) enum Entry {
     Spec(SpecFn),
     Law(ParamsFn),
 }
 
-fn de_spec<S: LawSpec + for<'de> Deserialize<'de> + 'static>(
+/// Reads a spec `S` (an [`Entry::Spec`]).
+pub(crate) fn de_spec<S: LawSpec + for<'de> Deserialize<'de> + 'static>(
     d: &mut dyn erased_serde::Deserializer,
 ) -> Result<Box<dyn LawSpec>, erased_serde::Error> {
     Ok(Box::new(erased_serde::deserialize::<S>(d)?))
 }
 
-fn de_params<P: LawParams + for<'de> Deserialize<'de> + 'static>(
+/// Reads parameters `P` (an [`Entry::Law`]).
+pub(crate) fn de_params<P: LawParams + for<'de> Deserialize<'de> + 'static>(
     d: &mut dyn erased_serde::Deserializer,
 ) -> Result<Box<dyn LawParams>, erased_serde::Error> {
     Ok(Box::new(erased_serde::deserialize::<P>(d)?))
@@ -67,42 +71,11 @@ fn de_params<P: LawParams + for<'de> Deserialize<'de> + 'static>(
 
 static REGISTRY: LazyLock<RwLock<BTreeMap<String, Entry>>> = LazyLock::new(|| {
     let mut m = BTreeMap::new();
-    for (name, e) in builtin() {
+    for (name, e) in crate::control::builtin::laws() {
         m.insert(name.to_string(), e);
     }
     RwLock::new(m)
 });
-
-/// The laws this crate registers: one line per law.
-fn builtin() -> Vec<(&'static str, Entry)> {
-    use crate::control::{generic, geng2015, guo2016, xu2015, xu2019, zhang2018};
-    vec![
-        ("Guo2016", Entry::Spec(de_spec::<guo2016::Guo2016Spec>)),
-        ("Geng2015", Entry::Spec(de_spec::<geng2015::Geng2015Spec>)),
-        ("Xu2015", Entry::Spec(de_spec::<xu2015::Xu2015Spec>)),
-        (
-            "Zhang2018",
-            Entry::Spec(de_spec::<zhang2018::Zhang2018Spec>),
-        ),
-        ("Xu2019", Entry::Spec(de_spec::<xu2019::Xu2019Spec>)),
-        (
-            "HillPd",
-            Entry::Law(de_params::<generic::hill::HillPdParams>),
-        ),
-        (
-            "Glideslope",
-            Entry::Law(de_params::<generic::glideslope::GlideslopeParams>),
-        ),
-        (
-            "Attitude",
-            Entry::Law(de_params::<generic::attitude::AttitudeParams>),
-        ),
-        (
-            "Sequencer",
-            Entry::Law(de_params::<generic::sequencer::SequencerParams>),
-        ),
-    ]
-}
 
 /// Why a registration was refused.
 #[derive(Debug, Clone, PartialEq)]
