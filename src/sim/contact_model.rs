@@ -918,8 +918,8 @@ impl CompliantContact {
     /// both bodies over `dt`, which the physics step then uses instead of the free-flight update
     /// (or, if rapier holds one of the bodies this step, discards: the model's mean wrench has
     /// then been added to rapier's forces). Called after the wrenches were handed to rapier and
-    /// before its step. The phases of the module's "One step": [`Self::window`],
-    /// [`Self::substep_count`], [`Self::integrate`], then the step's results.
+    /// before its step. The phases of the module's "One step": `window`, `substep_count`,
+    /// `integrate`, then the step's results.
     pub fn pre_step(
         &mut self,
         q: &Query<(&SimBody, &mut BodyState, &mut Wrench)>,
