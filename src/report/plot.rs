@@ -787,33 +787,36 @@ impl Plot {
         }
     }
 
+    /// Draws the plot into the cell (x, y, w, h) in px: the grid, the data clipped to the
+    /// axes (outcome maps, polygons, lines and scatters, marker lines, in that order from the
+    /// bottom), the frame with its ticks, the labels and title, and the legend.
     fn draw(&self, svg: &mut Svg, cell: (f64, f64, f64, f64)) {
         let f = self.frame(cell);
         let xt = linear_ticks(f.xr.0, f.xr.1, ((f.w / 90.0) as usize).clamp(3, 10));
         let yt = self.y_ticks(f.yr, f.h);
-
-        // Grid.
-        for t in &xt {
-            let px = f.px(t.value).round() + 0.5;
-            svg.line(px, f.y, px, f.y + f.h, Color::LIGHT_GRAY, 1.0, Dash::Solid);
-        }
-        for t in &yt {
-            let py = f.py(t.value).round() + 0.5;
-            let c = if t.major {
-                Color::LIGHT_GRAY
-            } else {
-                Color::rgb(0xf0, 0xf0, 0xf0)
-            };
-            svg.line(f.x, py, f.x + f.w, py, c, 1.0, Dash::Solid);
-        }
+        draw_grid(svg, &f, &xt, &yt);
 
         // Data, clipped to the axes.
         svg.begin_clip(f.x, f.y, f.w, f.h);
         let mut drawn: Vec<(f64, f64)> = Vec::new();
+        self.draw_outcomes(svg, &f, &mut drawn);
+        self.draw_polygons(svg, &f, &mut drawn);
+        self.draw_lines(svg, &f, &mut drawn);
+        self.draw_markers(svg, &f);
+        svg.end_group();
+
+        draw_axes(svg, &f, &xt, &yt);
+        self.draw_labels(svg, &f, cell);
+        self.draw_legend(svg, &f, &drawn);
+    }
+
+    /// The outcome maps: a cell per point where it is at least 3 px wide and high (and the y
+    /// axis is linear), else a dot; their px centres into `drawn`.
+    fn draw_outcomes(&self, svg: &mut Svg, f: &Frame, drawn: &mut Vec<(f64, f64)>) {
         for it in &self.items {
             if let Item::Outcomes { pts, cats, .. } = it {
                 let (dx, dy) = Self::cell_size(pts);
-                let (wpx, hpx) = (dx * f.sx(), self.cell_h_px(&f, dy));
+                let (wpx, hpx) = (dx * f.sx(), self.cell_h_px(f, dy));
                 for &(x, y, k) in pts {
                     let (px, py) = (f.px(x), f.py(y));
                     if wpx >= 3.0 && hpx >= 3.0 && !self.log_y {
@@ -833,6 +836,10 @@ impl Plot {
                 }
             }
         }
+    }
+
+    /// The polygons and open polylines; their px vertices into `drawn`.
+    fn draw_polygons(&self, svg: &mut Svg, f: &Frame, drawn: &mut Vec<(f64, f64)>) {
         for it in &self.items {
             if let Item::Polygon { pts, style, .. } = it {
                 let p: Vec<(f64, f64)> = pts
@@ -849,6 +856,10 @@ impl Plot {
                 drawn.extend(p);
             }
         }
+    }
+
+    /// The lines ([`Self::segments`]) and scatters; their px points into `drawn`.
+    fn draw_lines(&self, svg: &mut Svg, f: &Frame, drawn: &mut Vec<(f64, f64)>) {
         for it in &self.items {
             match it {
                 Item::Line {
@@ -858,7 +869,7 @@ impl Plot {
                     dash,
                     ..
                 } => {
-                    for seg in self.segments(&f, pts) {
+                    for seg in self.segments(f, pts) {
                         svg.polyline(&seg, *color, *width, *dash);
                         drawn.extend(seg);
                     }
@@ -875,6 +886,10 @@ impl Plot {
                 _ => {}
             }
         }
+    }
+
+    /// The horizontal reference lines and the labelled vertical markers.
+    fn draw_markers(&self, svg: &mut Svg, f: &Frame) {
         for it in &self.items {
             match it {
                 Item::HLine {
@@ -903,54 +918,11 @@ impl Plot {
                 _ => {}
             }
         }
-        svg.end_group();
+    }
 
-        // Frame, ticks, labels.
-        svg.rect(
-            f.x + 0.5,
-            f.y + 0.5,
-            f.w - 1.0,
-            f.h - 1.0,
-            None,
-            Some((Color::DARK_GRAY, 1.0)),
-            false,
-        );
-        let bottom = f.y + f.h;
-        for t in &xt {
-            let px = f.px(t.value).round() + 0.5;
-            svg.line(
-                px,
-                bottom,
-                px,
-                bottom + TICK_LEN,
-                Color::DARK_GRAY,
-                1.0,
-                Dash::Solid,
-            );
-            svg.text(
-                px,
-                bottom + TICK_LEN + 3.0 + TICK_PX * 0.8,
-                &t.label,
-                TICK_PX,
-                Anchor::Middle,
-                Color::DARK_GRAY,
-                0.0,
-            );
-        }
-        for t in &yt {
-            let py = f.py(t.value).round() + 0.5;
-            let len = if t.major { TICK_LEN } else { TICK_LEN * 0.6 };
-            svg.line(f.x - len, py, f.x, py, Color::DARK_GRAY, 1.0, Dash::Solid);
-            svg.text(
-                f.x - TICK_LEN - 3.0,
-                py + TICK_PX * 0.35,
-                &t.label,
-                TICK_PX,
-                Anchor::End,
-                Color::DARK_GRAY,
-                0.0,
-            );
-        }
+    /// The x label under the axes, the y label left of them and the panel title above, in the
+    /// cell (x, y, w, h) in px.
+    fn draw_labels(&self, svg: &mut Svg, f: &Frame, cell: (f64, f64, f64, f64)) {
         let (cx, _, _, ch) = cell;
         if !self.x_label.is_empty() {
             svg.text(
@@ -985,7 +957,6 @@ impl Plot {
                 0.0,
             );
         }
-        self.draw_legend(svg, &f, &drawn);
     }
 
     fn cell_h_px(&self, f: &Frame, dy: f64) -> f64 {
@@ -1028,14 +999,11 @@ impl Plot {
         out
     }
 
-    fn draw_legend(&self, svg: &mut Svg, f: &Frame, drawn: &[(f64, f64)]) {
-        if self.legend == Legend::Off || !self.has_legend_entries() {
-            return;
-        }
-        let entries = self.legend_entries();
-        let row = LEGEND_ROW;
-        let sw = LEGEND_SWATCH;
-        let (bw, bh) = self.legend_size(&entries);
+    /// The top-left corner (px) of a legend box `size` (w, h px): right of the axes when the
+    /// legend is outside, the corner asked for, or for [`Legend::Best`] the corner whose box
+    /// covers the fewest of the `drawn` points (ties: top right, top left, bottom right, bottom
+    /// left); 8 px in from the frame.
+    fn legend_position(&self, f: &Frame, drawn: &[(f64, f64)], (bw, bh): (f64, f64)) -> (f64, f64) {
         let m = 8.0;
         let corner = |l: Legend| -> (f64, f64) {
             let xl = f.x + m;
@@ -1049,7 +1017,7 @@ impl Plot {
                 _ => (xr, yt),
             }
         };
-        let pos = match self.legend {
+        match self.legend {
             _ if self.legend_outside() => (f.x + f.w + 10.0, f.y),
             Legend::Best => {
                 let order = [
@@ -1077,8 +1045,20 @@ impl Plot {
                 corner(best)
             }
             l => corner(l),
-        };
-        let (x, y) = pos;
+        }
+    }
+
+    /// The legend (unless off or empty): a box at [`Self::legend_position`] with a swatch and a
+    /// label per entry.
+    fn draw_legend(&self, svg: &mut Svg, f: &Frame, drawn: &[(f64, f64)]) {
+        if self.legend == Legend::Off || !self.has_legend_entries() {
+            return;
+        }
+        let entries = self.legend_entries();
+        let row = LEGEND_ROW;
+        let sw = LEGEND_SWATCH;
+        let (bw, bh) = self.legend_size(&entries);
+        let (x, y) = self.legend_position(f, drawn, (bw, bh));
         svg.rect(
             x,
             y,
@@ -1122,6 +1102,73 @@ enum Swatch {
     Line(Color, f64, Dash),
     Dot(Color),
     Patch(Option<(Color, f64)>, Option<Color>),
+}
+
+/// The grid: a light line at every x tick and every y tick (fainter at a minor y tick).
+fn draw_grid(svg: &mut Svg, f: &Frame, xt: &[Tick], yt: &[Tick]) {
+    for t in xt {
+        let px = f.px(t.value).round() + 0.5;
+        svg.line(px, f.y, px, f.y + f.h, Color::LIGHT_GRAY, 1.0, Dash::Solid);
+    }
+    for t in yt {
+        let py = f.py(t.value).round() + 0.5;
+        let c = if t.major {
+            Color::LIGHT_GRAY
+        } else {
+            Color::rgb(0xf0, 0xf0, 0xf0)
+        };
+        svg.line(f.x, py, f.x + f.w, py, c, 1.0, Dash::Solid);
+    }
+}
+
+/// The axes' frame, and the ticks and their labels under it (x) and left of it (y; a minor y
+/// tick is shorter).
+fn draw_axes(svg: &mut Svg, f: &Frame, xt: &[Tick], yt: &[Tick]) {
+    svg.rect(
+        f.x + 0.5,
+        f.y + 0.5,
+        f.w - 1.0,
+        f.h - 1.0,
+        None,
+        Some((Color::DARK_GRAY, 1.0)),
+        false,
+    );
+    let bottom = f.y + f.h;
+    for t in xt {
+        let px = f.px(t.value).round() + 0.5;
+        svg.line(
+            px,
+            bottom,
+            px,
+            bottom + TICK_LEN,
+            Color::DARK_GRAY,
+            1.0,
+            Dash::Solid,
+        );
+        svg.text(
+            px,
+            bottom + TICK_LEN + 3.0 + TICK_PX * 0.8,
+            &t.label,
+            TICK_PX,
+            Anchor::Middle,
+            Color::DARK_GRAY,
+            0.0,
+        );
+    }
+    for t in yt {
+        let py = f.py(t.value).round() + 0.5;
+        let len = if t.major { TICK_LEN } else { TICK_LEN * 0.6 };
+        svg.line(f.x - len, py, f.x, py, Color::DARK_GRAY, 1.0, Dash::Solid);
+        svg.text(
+            f.x - TICK_LEN - 3.0,
+            py + TICK_PX * 0.35,
+            &t.label,
+            TICK_PX,
+            Anchor::End,
+            Color::DARK_GRAY,
+            0.0,
+        );
+    }
 }
 
 /// The axes rectangle in px and the data ranges it shows.

@@ -805,12 +805,121 @@ fn kick_both(
     );
 }
 
+/// The two docking bodies at the start of a step: their integration data, states, poses, held
+/// wrenches, and the relative speed and acceleration the window and the sub-step size bound.
+struct StepStart<'a> {
+    /// Integration data of a and b.
+    d: (Dyn, Dyn),
+    /// States of a and b at the start of the step.
+    s: (&'a BodyState, &'a BodyState),
+    /// Body poses of a and b then, world.
+    pose: (Isometry3<f64>, Isometry3<f64>),
+    /// The wrenches held over the step.
+    held: Held,
+    /// |v_b − v_a|, m/s.
+    v_rel: f64,
+    /// |a_b − a_a| from the held forces, m/s².
+    acc_rel: f64,
+}
+
+impl<'a> StepStart<'a> {
+    /// The bodies a and b (body, state, wrench) as rapier's `world` holds them.
+    fn new(
+        world: &rp::PhysicsWorld,
+        (ba, sa0, wa): (&SimBody, &'a BodyState, &Wrench),
+        (bb, sb0, wb): (&SimBody, &'a BodyState, &Wrench),
+    ) -> Self {
+        let da = Dyn::new(ba, world.bodies.get(ba.handle));
+        let db = Dyn::new(bb, world.bodies.get(bb.handle));
+        let pose = (sa0.body_pose(&da.com), sb0.body_pose(&db.com));
+        let held: Held = (
+            (wa.force_n + wa.gravity_n).component_mul(&da.lin_mask),
+            wa.torque_nm,
+            (wb.force_n + wb.gravity_n).component_mul(&db.lin_mask),
+            wb.torque_nm,
+        );
+        let v_rel = (sb0.vel_m_s - sa0.vel_m_s).norm();
+        let acc_rel = (held.2 * db.inv_m - held.0 * da.inv_m).norm();
+        StepStart {
+            d: (da, db),
+            s: (sa0, sb0),
+            pose,
+            held,
+            v_rel,
+            acc_rel,
+        }
+    }
+
+    /// (chaser, target), each (integration data, state at the start of the step).
+    fn chaser_target(&self, chaser_is_b: bool) -> ((&Dyn, &BodyState), (&Dyn, &BodyState)) {
+        if chaser_is_b {
+            ((&self.d.1, self.s.1), (&self.d.0, self.s.0))
+        } else {
+            ((&self.d.0, self.s.0), (&self.d.1, self.s.1))
+        }
+    }
+}
+
+/// Per-pair sums over one step (indexed as [`CompliantContact::pairs`]).
+struct PairTally {
+    /// Impulse on part b, world, N·s.
+    impulse: Vec<Vector3<f64>>,
+    /// Largest contact force on b, N.
+    peak: Vec<f64>,
+    /// The pair touched in the step.
+    touched: Vec<bool>,
+}
+
+impl PairTally {
+    /// Adds each candidate pair's impulse over a sub-step of `h` (s), the trapezoidal rule on
+    /// the forces at its start and end `f`.
+    fn add_impulses(&mut self, candidates: &[usize], f: (&Forces, &Forces), h: f64) {
+        for k in candidates {
+            let j = (f.0.per_pair[*k].0 + f.1.per_pair[*k].0) * (0.5 * h);
+            self.impulse[*k] += j;
+            self.touched[*k] |= j.norm() > 0.0;
+        }
+    }
+}
+
+/// What the kick–drift–kick loop leaves for the end of the step.
+struct Integrated {
+    /// States of a and b at the end of the step.
+    s: (BodyState, BodyState),
+    /// Per-pair sums.
+    tally: PairTally,
+    /// Angular impulses of the contact and link forces about the centres of mass of a and b,
+    /// world, N·m·s.
+    ang: (Vector3<f64>, Vector3<f64>),
+    /// The link's impulse on b, world, N·s.
+    link_imp_b: Vector3<f64>,
+}
+
+/// The end of one sub-step, for the contact bookkeeping ([`track_contacts`]).
+struct SubstepEnd<'a> {
+    /// Simulated time at the start of the step, s.
+    t_step: f64,
+    /// End of the sub-step, s from the start of the step.
+    t_end: f64,
+    /// The sub-step, s.
+    h: f64,
+    /// Contact geometry per pair then.
+    geo: &'a [Option<Geometry>],
+    /// The forces then.
+    f: &'a Forces,
+    /// States of a and b then.
+    s: (&'a BodyState, &'a BodyState),
+    /// The law's floor on the approach speed of a listed impact, m/s.
+    min_impact: f64,
+}
+
 impl CompliantContact {
     /// The window check and, when a pair can touch within the step, the sub-stepped motion of
     /// both bodies over `dt`, which the physics step then uses instead of the free-flight update
     /// (or, if rapier holds one of the bodies this step, discards: the model's mean wrench has
     /// then been added to rapier's forces). Called after the wrenches were handed to rapier and
-    /// before its step.
+    /// before its step. The phases of the module's "One step": `window`, `substep_count`,
+    /// `integrate`, then the step's results.
     pub fn pre_step(
         &mut self,
         q: &Query<(&SimBody, &mut BodyState, &mut Wrench)>,
@@ -830,19 +939,42 @@ impl CompliantContact {
         if !self.enabled && !link_on {
             return None;
         }
-        let [(ba, sa0, wa), (bb, sb0, wb)] = q.get_many([self.bodies.0, self.bodies.1]).ok()?;
-        let da = Dyn::new(ba, world.bodies.get(ba.handle));
-        let db = Dyn::new(bb, world.bodies.get(bb.handle));
-        let (pose_a, pose_b) = (sa0.body_pose(&da.com), sb0.body_pose(&db.com));
-        let held: Held = (
-            (wa.force_n + wa.gravity_n).component_mul(&da.lin_mask),
-            wa.torque_nm,
-            (wb.force_n + wb.gravity_n).component_mul(&db.lin_mask),
-            wb.torque_nm,
-        );
+        let [a, b] = q.get_many([self.bodies.0, self.bodies.1]).ok()?;
+        let handles = (a.0.handle, b.0.handle);
+        let start = StepStart::new(world, a, b);
         // 1. Window.
-        let v_rel = (sb0.vel_m_s - sa0.vel_m_s).norm();
-        let acc_rel = (held.2 * db.inv_m - held.0 * da.inv_m).norm();
+        let (candidates, r_max) = self.window(&start, dt);
+        if candidates.is_empty() && !link_on {
+            return None;
+        }
+        // 2. Sub-step size.
+        let (n, v_bound) = self.substep_count(&start, &candidates, r_max, dt);
+        let h = dt / f64::from(n);
+        // 3. Kick–drift–kick.
+        let run = self.integrate(&start, &candidates, (n, h), v_bound);
+        let (sa, sb) = run.s;
+        // Per-pair results, and the mean wrench for rapier's step (used only if rapier holds a
+        // docking body this step).
+        let mut mean_f = self.record_pairs(&run.tally, dt);
+        self.end_platform(&start, (&sa, &sb), dt);
+        if link_on {
+            mean_f += run.link_imp_b / dt;
+            self.end_separation(&start, (&sa, &sb));
+        }
+        if mean_f.norm() > 0.0 {
+            add_mean_wrench(world, handles, mean_f, run.ang, dt);
+        }
+        Some(vec![(self.indices.0, sa), (self.indices.1, sb)])
+    }
+
+    /// Phase 1, the window: the pairs that can touch within the step of `dt` (s) — in contact, or whose
+    /// bounding spheres' gap and then parry's exact distance are within
+    /// 3·(|v_rel| + |ω_a|·R_a + |ω_b|·R_b)·dt + |a_rel|·dt² + 1 mm — and the largest lever arms
+    /// (R_a, R_b) of those pairs, m. Every other pair's last depth is reset to −∞.
+    fn window(&mut self, start: &StepStart, dt: f64) -> (Vec<usize>, (f64, f64)) {
+        let (sa0, sb0) = start.s;
+        let (pose_a, pose_b) = start.pose;
+        let (v_rel, acc_rel) = (start.v_rel, start.acc_rel);
         let mut candidates: Vec<usize> = Vec::new();
         let mut r_max: (f64, f64) = (0.0, 0.0);
         for (k, p) in self.pairs.iter().enumerate().filter(|_| self.enabled) {
@@ -869,10 +1001,25 @@ impl CompliantContact {
                 p.last_depth_m = f64::NEG_INFINITY;
             }
         }
-        if candidates.is_empty() && !link_on {
-            return None;
-        }
-        // 2. Sub-step size.
+        (candidates, r_max)
+    }
+
+    /// Phase 2, the sub-step count N = ⌈dt/h_max⌉ of a step of `dt` (s), at most [`MAX_SUBSTEPS`] (a
+    /// capped step is counted), with the run statistics: h_max is the shortest of dt, the
+    /// latch's, the platform's and the separation springs' limits and the contact's period at
+    /// the stiffest the step can reach over `substeps_per_period`. Returns N and the bound on
+    /// the speed of the candidate pairs' points relative to each other, m/s.
+    fn substep_count(
+        &mut self,
+        start: &StepStart,
+        candidates: &[usize],
+        r_max: (f64, f64),
+        dt: f64,
+    ) -> (u32, f64) {
+        let (da, db) = (&start.d.0, &start.d.1);
+        let (sa0, sb0) = start.s;
+        let (pose_a, pose_b) = start.pose;
+        let (v_rel, acc_rel) = (start.v_rel, start.acc_rel);
         let w_red = da.inv_m + db.inv_m;
         let m_red = if w_red > 0.0 { 1.0 / w_red } else { 1e30 };
         let m_min = 1.0
@@ -894,72 +1041,10 @@ impl CompliantContact {
         let mut h_max = dt;
         let k_loc = self.law.local_stiffness_n_m(depth_bound);
         if let Some(l) = &self.link.latch {
-            // The latch's periods: translation at the port (the smallest effective mass there),
-            // rotation (the smallest inertia); explicit damping within a fifth of its time
-            // constant.
-            let r = |d: &Dyn, s: &BodyState, port: &Vector3<f64>| {
-                (s.body_pose(&d.com).transform_point(&(*port).into()).coords - s.pos_m).norm()
-            };
-            let (dc, sc, dtg, stg) = if self.link.chaser_is_b {
-                (&db, sb0, &da, sa0)
-            } else {
-                (&da, sa0, &db, sb0)
-            };
-            let rc = r(dc, sc, &l.port_c_body_m);
-            let port_t = l.caught.transform_point(&l.port_c_body_m.into()).coords;
-            let rt = r(dtg, stg, &port_t);
-            let m_port = 1.0
-                / (w_red + rc * rc * dc.inv_inertia_bound() + rt * rt * dtg.inv_inertia_bound())
-                    .max(1e-30);
-            let i_min = 1.0 / (da.inv_inertia_bound() + db.inv_inertia_bound()).max(1e-30);
-            let j = &l.spec;
-            let tau = std::f64::consts::TAU;
-            h_max = h_max
-                .min(tau * (m_port / j.stiffness_n_m).sqrt() / f64::from(self.substeps_per_period))
-                .min(
-                    tau * (i_min / j.rot_stiffness_nm_rad).sqrt()
-                        / f64::from(self.substeps_per_period),
-                )
-                .min(0.2 * m_port / j.damping_n_s_m)
-                .min(0.2 * i_min / j.rot_damping_nm_s_rad);
+            h_max = self.latch_h_max(h_max, l, start, w_red);
         }
         if let Some(pl) = &self.link.platform {
-            // The platform's stiffest mode (every leg and its stop together, K = n·(k + k_stop))
-            // at the smallest effective mass of the pair at any attach point (lever arms from
-            // the centres of mass to the port and ring origins plus the attach radii), and a
-            // fifth of the fastest damping time constant (the damping is explicit).
-            let (dc, sc, dtg, stg) = if self.link.chaser_is_b {
-                (&db, sb0, &da, sa0)
-            } else {
-                (&da, sa0, &db, sb0)
-            };
-            let (base, ring) = pl.base_and_ring((&dc.com, sc), (&dtg.com, stg));
-            let rho_b = pl
-                .platform
-                .legs
-                .iter()
-                .map(|l| l.base_p_m.norm())
-                .fold(0.0_f64, f64::max);
-            let rho_r = pl
-                .platform
-                .legs
-                .iter()
-                .map(|l| l.ring_r_m.norm())
-                .fold(0.0_f64, f64::max);
-            let rc = (base.pose.translation.vector - sc.pos_m).norm() + rho_b;
-            let rt = (ring.pos_m - stg.pos_m).norm() + rho_r;
-            let m_leg = 1.0
-                / (w_red + rc * rc * dc.inv_inertia_bound() + rt * rt * dtg.inv_inertia_bound())
-                    .max(1e-30);
-            let sp = &pl.platform.spec;
-            let n_legs = pl.platform.legs.len() as f64;
-            let k_max = n_legs * (sp.stiffness_n_m + sp.stop_stiffness_n_m);
-            h_max = h_max
-                .min(
-                    std::f64::consts::TAU * (m_leg / k_max).sqrt()
-                        / f64::from(sp.substeps_per_period),
-                )
-                .min(0.2 * m_leg / (n_legs * sp.damping_n_s_m));
+            h_max = self.platform_h_max(h_max, pl, start, w_red);
         }
         if let Some(sp) = &self.link.separation {
             // The spring's force ends with a step at the end of its stroke: sub-steps short
@@ -977,17 +1062,89 @@ impl CompliantContact {
             self.stats.capped_steps += 1;
         }
         let n = n as u32;
-        let h = dt / f64::from(n);
         self.stats.steps_substepped += 1;
         self.stats.substeps += u64::from(n);
         self.stats.max_substeps_per_step = self.stats.max_substeps_per_step.max(n);
+        (n, v_bound)
+    }
 
-        // 3. Kick–drift–kick.
-        let (mut sa, mut sb) = (sa0.clone(), sb0.clone());
+    /// `h_max` (s) within the latch's periods: translation at the port (the smallest effective
+    /// mass there, `w_red` the pair's summed inverse masses, 1/kg), rotation (the smallest
+    /// inertia); explicit damping within a fifth of its time constant.
+    fn latch_h_max(&self, h_max: f64, l: &LatchSpring, start: &StepStart, w_red: f64) -> f64 {
+        let (da, db) = (&start.d.0, &start.d.1);
+        let r = |d: &Dyn, s: &BodyState, port: &Vector3<f64>| {
+            (s.body_pose(&d.com).transform_point(&(*port).into()).coords - s.pos_m).norm()
+        };
+        let ((dc, sc), (dtg, stg)) = start.chaser_target(self.link.chaser_is_b);
+        let rc = r(dc, sc, &l.port_c_body_m);
+        let port_t = l.caught.transform_point(&l.port_c_body_m.into()).coords;
+        let rt = r(dtg, stg, &port_t);
+        let m_port = 1.0
+            / (w_red + rc * rc * dc.inv_inertia_bound() + rt * rt * dtg.inv_inertia_bound())
+                .max(1e-30);
+        let i_min = 1.0 / (da.inv_inertia_bound() + db.inv_inertia_bound()).max(1e-30);
+        let j = &l.spec;
+        let tau = std::f64::consts::TAU;
+        h_max
+            .min(tau * (m_port / j.stiffness_n_m).sqrt() / f64::from(self.substeps_per_period))
+            .min(
+                tau * (i_min / j.rot_stiffness_nm_rad).sqrt() / f64::from(self.substeps_per_period),
+            )
+            .min(0.2 * m_port / j.damping_n_s_m)
+            .min(0.2 * i_min / j.rot_damping_nm_s_rad)
+    }
+
+    /// `h_max` (s) within the platform's stiffest mode (every leg and its stop together,
+    /// K = n·(k + k_stop)) at the smallest effective mass of the pair at any attach point
+    /// (lever arms from the centres of mass to the port and ring origins plus the attach
+    /// radii; `w_red` the pair's summed inverse masses, 1/kg), and a fifth of the fastest
+    /// damping time constant (the damping is explicit).
+    fn platform_h_max(&self, h_max: f64, pl: &PlatformLink, start: &StepStart, w_red: f64) -> f64 {
+        let ((dc, sc), (dtg, stg)) = start.chaser_target(self.link.chaser_is_b);
+        let (base, ring) = pl.base_and_ring((&dc.com, sc), (&dtg.com, stg));
+        let rho_b = pl
+            .platform
+            .legs
+            .iter()
+            .map(|l| l.base_p_m.norm())
+            .fold(0.0_f64, f64::max);
+        let rho_r = pl
+            .platform
+            .legs
+            .iter()
+            .map(|l| l.ring_r_m.norm())
+            .fold(0.0_f64, f64::max);
+        let rc = (base.pose.translation.vector - sc.pos_m).norm() + rho_b;
+        let rt = (ring.pos_m - stg.pos_m).norm() + rho_r;
+        let m_leg = 1.0
+            / (w_red + rc * rc * dc.inv_inertia_bound() + rt * rt * dtg.inv_inertia_bound())
+                .max(1e-30);
+        let sp = &pl.platform.spec;
+        let n_legs = pl.platform.legs.len() as f64;
+        let k_max = n_legs * (sp.stiffness_n_m + sp.stop_stiffness_n_m);
+        h_max
+            .min(std::f64::consts::TAU * (m_leg / k_max).sqrt() / f64::from(sp.substeps_per_period))
+            .min(0.2 * m_leg / (n_legs * sp.damping_n_s_m))
+    }
+
+    /// Phase 3, kick–drift–kick over `n` sub-steps of `h` (s), from the start of the step: the link's
+    /// and the platform's loads, each pair's impulse and contact bookkeeping, and this step's
+    /// samples, impacts and contact time. `v_bound` (m/s) sets the prediction distance.
+    fn integrate(
+        &mut self,
+        start: &StepStart,
+        candidates: &[usize],
+        (n, h): (u32, f64),
+        v_bound: f64,
+    ) -> Integrated {
+        let (mut sa, mut sb) = (start.s.0.clone(), start.s.1.clone());
         let npairs = self.pairs.len();
-        let mut impulse = vec![Vector3::zeros(); npairs];
-        let mut peak = vec![0.0f64; npairs];
-        let mut touched = vec![false; npairs];
+        let mut tally = PairTally {
+            impulse: vec![Vector3::zeros(); npairs],
+            peak: vec![0.0f64; npairs],
+            touched: vec![false; npairs],
+        };
         let (mut ang_a, mut ang_b) = (Vector3::zeros(), Vector3::zeros());
         let t_step = self.t_step_s;
         let (law, mu) = (self.law, self.mu);
@@ -996,8 +1153,8 @@ impl CompliantContact {
             law: &law,
             mu,
             pairs: &mut self.pairs,
-            candidates: &candidates,
-            d: (&da, &db),
+            candidates,
+            d: (&start.d.0, &start.d.1),
             half_h: 0.5 * h,
             // Enough to see each contact coming one sub-step ahead (its start and end are
             // interpolated from the depths on either side).
@@ -1010,199 +1167,287 @@ impl CompliantContact {
         // velocities with its damping implicit over the second half-kick, which makes it the
         // force at the end of the sub-step and the next sub-step's first kick. For the damping
         // this is the trapezoidal rule (second order, A-stable).
-        let platform_on = st.link.platform.is_some();
-        let mut geo = st.geometry(&sa, &sb);
+        let geo = st.geometry(&sa, &sb);
         let mut f0 = st.forces(&geo, &sa, &sb);
         if let Some(l) = &f0.legs {
             // The legs at the start of the step too (the first step after the capture starts
             // with the dampers' largest force).
-            let ps = &mut self.platform_step;
-            for leg in &l.legs {
-                ps.peak_leg_force_n = ps.peak_leg_force_n.max(leg.force_n.abs());
-                ps.peak_leg_stroke_m = ps.peak_leg_stroke_m.max(leg.stroke_m.abs());
-            }
+            note_legs(&mut self.platform_step, l);
         }
         let mut link_imp_b = Vector3::zeros();
         for i in 0..n {
-            kick_both((&da, &db), (&mut sa, &mut sb), &held, &f0, 0.5 * h);
-            drift(&da, &mut sa, h);
-            drift(&db, &mut sb, h);
-            geo = st.geometry(&sa, &sb);
-            st.tau_s = f64::from(i + 1) * h;
-            let mut f1 = st.forces(&geo, &sa, &sb);
-            if platform_on {
-                // The platform's dampers need the end-of-sub-step velocities: one fixed-point
-                // iteration of the implicit half-kick (a trial half-kick with the force at the
-                // half-step velocities, then the force at the trial velocities), as
-                // `Platform::advance` does, keeps the damping second order. (The docking
-                // contact is off while the platform carries the chaser, so only the link's
-                // forces are evaluated twice.)
-                let (ta, tb) = (sa.clone(), sb.clone());
-                kick_both((&da, &db), (&mut sa, &mut sb), &held, &f1, 0.5 * h);
-                f1 = st.forces(&geo, &sa, &sb);
-                (sa, sb) = (ta, tb);
-            }
-            kick_both((&da, &db), (&mut sa, &mut sb), &held, &f1, 0.5 * h);
+            let (geo, f1) = substep_motion(&mut st, (&mut sa, &mut sb), &start.held, &f0, (i, h));
             ang_a += (f0.torque.0 + f1.torque.0) * (0.5 * h);
             ang_b += (f0.torque.1 + f1.torque.1) * (0.5 * h);
             link_imp_b += (f0.link_on_b + f1.link_on_b) * (0.5 * h);
-            {
-                let ls = &mut self.link_step;
-                ls.peak_force_n = ls.peak_force_n.max(f1.link.0.norm());
-                ls.peak_moment_nm = ls.peak_moment_nm.max(f1.link.1.norm());
-                ls.force_end_n = f1.link.0;
-                ls.moment_end_nm = f1.link.1;
-            }
+            note_link(&mut self.link_step, &f1);
             if let Some(l) = &f1.legs {
-                let ps = &mut self.platform_step;
-                for leg in &l.legs {
-                    ps.peak_leg_force_n = ps.peak_leg_force_n.max(leg.force_n.abs());
-                    ps.peak_leg_stroke_m = ps.peak_leg_stroke_m.max(leg.stroke_m.abs());
-                }
-                ps.end = Some(l.clone());
+                note_legs(&mut self.platform_step, l);
+                self.platform_step.end = Some(l.clone());
             }
-            for k in &candidates {
-                let j = (f0.per_pair[*k].0 + f1.per_pair[*k].0) * (0.5 * h);
-                impulse[*k] += j;
-                touched[*k] |= j.norm() > 0.0;
-            }
+            tally.add_impulses(candidates, (&f0, &f1), h);
             f0 = f1;
-            let t_end = f64::from(i + 1) * h;
-            let mut total = Vector3::zeros();
-            let mut any = false;
-            for k in &candidates {
-                let k = *k;
-                let pair = &mut st.pairs[k];
-                let was = pair.in_contact;
-                let d_now = geo[k].as_ref().map_or(f64::NEG_INFINITY, |g| g.depth);
-                let (fv, fnorm, f_raw) = f0.per_pair[k];
-                // In contact: penetrating and pushing (a dashpot's force vanishes before the
-                // depth does: the surfaces separate there).
-                let is_now = d_now > 0.0 && f_raw > 0.0;
-                // Where the contact measure crossed zero within this sub-step (fraction of h):
-                // the unclamped force while both ends penetrate, else the depth.
-                let crossing = |a0: f64, a1: f64| {
-                    if a0.is_finite() && a1.is_finite() && a0 != a1 {
-                        (a0 / (a0 - a1)).clamp(0.0, 1.0)
-                    } else {
-                        0.0
-                    }
-                };
-                let frac = if d_now > 0.0 && pair.last_depth_m > 0.0 {
-                    crossing(pair.last_force_n, f_raw)
-                } else {
-                    crossing(pair.last_depth_m, d_now)
-                };
-                if is_now {
-                    let g = geo[k].as_ref().expect("depth from a geometry");
-                    if !was {
-                        pair.start_s = t_step + t_end - h + frac * h;
-                    }
-                    any = true;
-                    touched[k] = true;
-                    total += fv;
-                    peak[k] = peak[k].max(fv.norm());
-                    pair.contact_peak_n = pair.contact_peak_n.max(fnorm);
-                    pair.in_contact = true;
-                    pair.last_contact = Some((g.point, g.normal));
-                    self.samples.push(ForceSample {
-                        t_in_step_s: t_end,
-                        pair: k,
-                        point_m: g.point,
-                        normal_on_b: g.normal,
-                        depth_m: g.depth,
-                        normal_force_n: fnorm,
-                        force_on_b_n: fv,
-                        h_s: h,
-                    });
-                } else if was {
-                    // Separation: the normal speed at the last point of contact.
-                    let t_sep = t_step + t_end - h + frac * h;
-                    let sep = pair
-                        .last_contact
-                        .map(|(p, n)| (point_vel(&sb, &p) - point_vel(&sa, &p)).dot(&n));
-                    let approach = pair.impact_speed_m_s;
-                    // An impact: a contact that began closing at least at the damping's floor
-                    // speed (slower touches of a resting or sliding contact are not listed).
-                    if let Some(sep) = sep.filter(|_| approach >= min_impact) {
-                        self.impacts.push(ImpactRecord {
-                            t_start_s: pair.start_s,
-                            t_end_s: t_sep,
-                            duration_s: t_sep - pair.start_s,
-                            a: pair.names.0.clone(),
-                            b: pair.names.1.clone(),
-                            approach_m_s: approach,
-                            separation_m_s: sep,
-                            restitution: if approach > 0.0 { sep / approach } else { 0.0 },
-                            peak_normal_force_n: pair.contact_peak_n,
-                        });
-                    }
-                    pair.contact_peak_n = 0.0;
-                    pair.in_contact = false;
-                }
-                pair.last_depth_m = d_now;
-                pair.last_force_n = f_raw;
-            }
-            if any {
+            let end = SubstepEnd {
+                t_step,
+                t_end: f64::from(i + 1) * h,
+                h,
+                geo: &geo,
+                f: &f0,
+                s: (&sa, &sb),
+                min_impact,
+            };
+            if let Some(total) = track_contacts(
+                st.pairs,
+                candidates,
+                &end,
+                &mut tally,
+                &mut self.samples,
+                &mut self.impacts,
+            ) {
                 self.step_contact_s += h;
                 self.b_force_history.push((h, total));
             }
         }
-        // Per-pair results, and the mean wrench for rapier's step (used only if rapier holds a
-        // docking body this step).
+        Integrated {
+            s: (sa, sb),
+            tally,
+            ang: (ang_a, ang_b),
+            link_imp_b,
+        }
+    }
+
+    /// The pairs that touched in the step, in [`Self::step`]; returns the mean contact force on
+    /// b over the step of `dt` (s), world, N.
+    fn record_pairs(&mut self, tally: &PairTally, dt: f64) -> Vector3<f64> {
         let mut mean_f = Vector3::zeros();
-        for k in 0..npairs {
-            if touched[k] {
+        for k in 0..self.pairs.len() {
+            if tally.touched[k] {
                 self.step.push(PairStep {
                     pair: k,
-                    impulse_on_b_ns: impulse[k],
-                    peak_force_n: peak[k],
+                    impulse_on_b_ns: tally.impulse[k],
+                    peak_force_n: tally.peak[k],
                     in_contact_at_end: self.pairs[k].in_contact,
                 });
-                mean_f += impulse[k] / dt;
+                mean_f += tally.impulse[k] / dt;
             }
         }
+        mean_f
+    }
+
+    /// The platform at the end of the step of `dt` (s), with the end states of a and b: the
+    /// ring's pose in P, and the retraction advanced.
+    fn end_platform(&mut self, start: &StepStart, (sa, sb): (&BodyState, &BodyState), dt: f64) {
+        let (da, db) = (&start.d.0, &start.d.1);
         if let Some(pl) = self.link.platform.as_mut() {
             let (c, t) = if self.link.chaser_is_b {
-                ((&db.com, &sb), (&da.com, &sa))
+                ((&db.com, sb), (&da.com, sa))
             } else {
-                ((&da.com, &sa), (&db.com, &sb))
+                ((&da.com, sa), (&db.com, sb))
             };
             let (base, ring) = pl.base_and_ring(c, t);
             self.platform_step.ring_in_base = Some(pl.platform.ring_pose_in_base(&base, &ring));
             pl.retraction_m = pl.retraction_at(dt);
         }
-        if link_on {
-            mean_f += link_imp_b / dt;
-            // Separation springs at the end of their stroke rest on their stops from now on.
-            if let Some(sp) = &self.link.separation {
-                let (sc, stg, dc, dtg) = if self.link.chaser_is_b {
-                    (&sb, &sa, &db, &da)
-                } else {
-                    (&sa, &sb, &da, &db)
-                };
-                let (pc_b, pt_b, at_b) = sp.ports_body_m;
-                let p = sc.body_pose(&dc.com).transform_point(&pc_b.into()).coords;
-                let pose_t = stg.body_pose(&dtg.com);
-                let pt = pose_t.transform_point(&pt_b.into()).coords;
-                if (p - pt).dot(&(pose_t.rotation * at_b)) - sp.x0_m >= sp.stroke_m {
-                    self.link.separation = None;
-                    self.link_step.separation_ended = true;
-                }
-            }
-        }
-        if mean_f.norm() > 0.0 {
-            if let Some(rb) = world.bodies.get_mut(ba.handle) {
-                rb.add_force(conv::v(&(-mean_f)), true);
-                rb.add_torque(conv::v(&(ang_a / dt)), true);
-            }
-            if let Some(rb) = world.bodies.get_mut(bb.handle) {
-                rb.add_force(conv::v(&mean_f), true);
-                rb.add_torque(conv::v(&(ang_b / dt)), true);
-            }
-        }
-        Some(vec![(self.indices.0, sa), (self.indices.1, sb)])
     }
+
+    /// Separation springs at the end of their stroke (with the end states of a and b) rest on
+    /// their stops from now on.
+    fn end_separation(&mut self, start: &StepStart, (sa, sb): (&BodyState, &BodyState)) {
+        let (da, db) = (&start.d.0, &start.d.1);
+        if let Some(sp) = &self.link.separation {
+            let (sc, stg, dc, dtg) = if self.link.chaser_is_b {
+                (sb, sa, db, da)
+            } else {
+                (sa, sb, da, db)
+            };
+            let (pc_b, pt_b, at_b) = sp.ports_body_m;
+            let p = sc.body_pose(&dc.com).transform_point(&pc_b.into()).coords;
+            let pose_t = stg.body_pose(&dtg.com);
+            let pt = pose_t.transform_point(&pt_b.into()).coords;
+            if (p - pt).dot(&(pose_t.rotation * at_b)) - sp.x0_m >= sp.stroke_m {
+                self.link.separation = None;
+                self.link_step.separation_ended = true;
+            }
+        }
+    }
+}
+
+/// The model's mean wrench over the step of `dt` (s) added to rapier's forces on the bodies
+/// `handles` (a, b): `mean_f` on b and its opposite on a (N, world), the angular impulses `ang`
+/// (N·m·s) over dt as torques. It matters only if rapier holds a docking body this step.
+fn add_mean_wrench(
+    world: &mut rp::PhysicsWorld,
+    handles: (rp::RigidBodyHandle, rp::RigidBodyHandle),
+    mean_f: Vector3<f64>,
+    (ang_a, ang_b): (Vector3<f64>, Vector3<f64>),
+    dt: f64,
+) {
+    if let Some(rb) = world.bodies.get_mut(handles.0) {
+        rb.add_force(conv::v(&(-mean_f)), true);
+        rb.add_torque(conv::v(&(ang_a / dt)), true);
+    }
+    if let Some(rb) = world.bodies.get_mut(handles.1) {
+        rb.add_force(conv::v(&mean_f), true);
+        rb.add_torque(conv::v(&(ang_b / dt)), true);
+    }
+}
+
+/// The link's peaks (force N, moment N·m on the chaser at its port) and end values updated with
+/// the forces `f1` at the end of a sub-step.
+fn note_link(ls: &mut LinkStep, f1: &Forces) {
+    ls.peak_force_n = ls.peak_force_n.max(f1.link.0.norm());
+    ls.peak_moment_nm = ls.peak_moment_nm.max(f1.link.1.norm());
+    ls.force_end_n = f1.link.0;
+    ls.moment_end_nm = f1.link.1;
+}
+
+/// The platform's leg peaks (|force| N, |stroke| m) updated with the legs `l`.
+fn note_legs(ps: &mut PlatformStep, l: &crate::contact::platform::PlatformLoads) {
+    for leg in &l.legs {
+        ps.peak_leg_force_n = ps.peak_leg_force_n.max(leg.force_n.abs());
+        ps.peak_leg_stroke_m = ps.peak_leg_stroke_m.max(leg.stroke_m.abs());
+    }
+}
+
+/// One sub-step `i` of `h` (s): half-kick both bodies with the held wrenches and the forces
+/// `f0`, drift, the contact geometry and forces at the new poses, and the second half-kick with
+/// those. Returns that geometry and those forces (the end of the sub-step's).
+fn substep_motion(
+    st: &mut Stepper,
+    (sa, sb): (&mut BodyState, &mut BodyState),
+    held: &Held,
+    f0: &Forces,
+    (i, h): (u32, f64),
+) -> (Vec<Option<Geometry>>, Forces) {
+    let (da, db) = st.d;
+    kick_both((da, db), (&mut *sa, &mut *sb), held, f0, 0.5 * h);
+    drift(da, sa, h);
+    drift(db, sb, h);
+    let geo = st.geometry(sa, sb);
+    st.tau_s = f64::from(i + 1) * h;
+    let mut f1 = st.forces(&geo, sa, sb);
+    if st.link.platform.is_some() {
+        // The platform's dampers need the end-of-sub-step velocities: one fixed-point
+        // iteration of the implicit half-kick (a trial half-kick with the force at the
+        // half-step velocities, then the force at the trial velocities), as
+        // `Platform::advance` does, keeps the damping second order. (The docking
+        // contact is off while the platform carries the chaser, so only the link's
+        // forces are evaluated twice.)
+        let (ta, tb) = (sa.clone(), sb.clone());
+        kick_both((da, db), (&mut *sa, &mut *sb), held, &f1, 0.5 * h);
+        f1 = st.forces(&geo, sa, sb);
+        (*sa, *sb) = (ta, tb);
+    }
+    kick_both((da, db), (sa, sb), held, &f1, 0.5 * h);
+    (geo, f1)
+}
+
+/// The contact bookkeeping of the candidate pairs at the end of a sub-step `e`: a pair in
+/// contact (penetrating and pushing) adds to the tally and the samples, its first touch
+/// noting when the contact began; a pair that stopped touching ends its contact, listed as an
+/// impact if it began fast enough ([`impact_record`]). Returns the total contact force on b
+/// (N, world) if any pair touched.
+fn track_contacts(
+    pairs: &mut [CompliantPair],
+    candidates: &[usize],
+    e: &SubstepEnd,
+    tally: &mut PairTally,
+    samples: &mut Vec<ForceSample>,
+    impacts: &mut Vec<ImpactRecord>,
+) -> Option<Vector3<f64>> {
+    let (t_step, t_end, h) = (e.t_step, e.t_end, e.h);
+    let mut total = Vector3::zeros();
+    let mut any = false;
+    for k in candidates {
+        let k = *k;
+        let pair = &mut pairs[k];
+        let was = pair.in_contact;
+        let d_now = e.geo[k].as_ref().map_or(f64::NEG_INFINITY, |g| g.depth);
+        let (fv, fnorm, f_raw) = e.f.per_pair[k];
+        // In contact: penetrating and pushing (a dashpot's force vanishes before the
+        // depth does: the surfaces separate there).
+        let is_now = d_now > 0.0 && f_raw > 0.0;
+        let frac = crossing_fraction(pair, d_now, f_raw);
+        if is_now {
+            let g = e.geo[k].as_ref().expect("depth from a geometry");
+            if !was {
+                pair.start_s = t_step + t_end - h + frac * h;
+            }
+            any = true;
+            tally.touched[k] = true;
+            total += fv;
+            tally.peak[k] = tally.peak[k].max(fv.norm());
+            pair.contact_peak_n = pair.contact_peak_n.max(fnorm);
+            pair.in_contact = true;
+            pair.last_contact = Some((g.point, g.normal));
+            samples.push(ForceSample {
+                t_in_step_s: t_end,
+                pair: k,
+                point_m: g.point,
+                normal_on_b: g.normal,
+                depth_m: g.depth,
+                normal_force_n: fnorm,
+                force_on_b_n: fv,
+                h_s: h,
+            });
+        } else if was {
+            let t_sep = t_step + t_end - h + frac * h;
+            if let Some(imp) = impact_record(pair, t_sep, e.s, e.min_impact) {
+                impacts.push(imp);
+            }
+            pair.contact_peak_n = 0.0;
+            pair.in_contact = false;
+        }
+        pair.last_depth_m = d_now;
+        pair.last_force_n = f_raw;
+    }
+    any.then_some(total)
+}
+
+/// Where the contact measure of `pair` crossed zero within this sub-step (fraction of h), from
+/// its last values to the depth `d_now` (m) and unclamped force `f_raw` (N) now: the unclamped
+/// force while both ends penetrate, else the depth.
+fn crossing_fraction(pair: &CompliantPair, d_now: f64, f_raw: f64) -> f64 {
+    let crossing = |a0: f64, a1: f64| {
+        if a0.is_finite() && a1.is_finite() && a0 != a1 {
+            (a0 / (a0 - a1)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    };
+    if d_now > 0.0 && pair.last_depth_m > 0.0 {
+        crossing(pair.last_force_n, f_raw)
+    } else {
+        crossing(pair.last_depth_m, d_now)
+    }
+}
+
+/// The impact of a contact of `pair` that ended at `t_sep` (s), with the states of a and b
+/// then: the separation speed is the normal speed at the last point of contact. `None` unless
+/// the contact began closing at least at the damping's floor speed `min_impact` (m/s): slower
+/// touches of a resting or sliding contact are not listed.
+fn impact_record(
+    pair: &CompliantPair,
+    t_sep: f64,
+    (sa, sb): (&BodyState, &BodyState),
+    min_impact: f64,
+) -> Option<ImpactRecord> {
+    let sep = pair
+        .last_contact
+        .map(|(p, n)| (point_vel(sb, &p) - point_vel(sa, &p)).dot(&n));
+    let approach = pair.impact_speed_m_s;
+    let sep = sep.filter(|_| approach >= min_impact)?;
+    Some(ImpactRecord {
+        t_start_s: pair.start_s,
+        t_end_s: t_sep,
+        duration_s: t_sep - pair.start_s,
+        a: pair.names.0.clone(),
+        b: pair.names.1.clone(),
+        approach_m_s: approach,
+        separation_m_s: sep,
+        restitution: if approach > 0.0 { sep / approach } else { 0.0 },
+        peak_normal_force_n: pair.contact_peak_n,
+    })
 }
 
 /// Counts a step in which rapier held a body the model had sub-stepped (its result discarded).

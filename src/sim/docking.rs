@@ -640,7 +640,10 @@ fn docking_actuate(
     }
 }
 
-/// Monitor: the state machine, the latch joint and its break force.
+/// Monitor: the state machine, the latch joint and its break force. One step, in order: the
+/// loads on the mechanism up to the latch ([`record_approach_loads`]), what the step saw of the
+/// approach ([`observe`]), the state machine ([`decide`]), the state change and its event
+/// ([`commit_change`]), and the `dock.*` columns ([`write_columns`]).
 #[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it uses
 fn docking_monitor(
     mut dock: ResMut<Docking>,
@@ -652,70 +655,158 @@ fn docking_monitor(
     mut diag: ResMut<Diagnostics>,
     mut compliant: Option<ResMut<CompliantContact>>,
 ) {
-    let t = clock.t_s();
-    let dt = clock.h_s();
+    let dock = &mut *dock;
     let (ce, te) = dock.bodies;
     let [(cb, cs), (tb, ts)] = q.get_many([ce, te]).expect("docking bodies");
     let (g, _, at) = geometry(&dock.spec, (cs, cb), (ts, tb), &dock.ports);
-    // Loads on the mechanism up to the latch: the compliant model's sub-step history, or the
-    // rigid contacts' impulse / dt.
-    let mut joint_now = (0.0, 0.0);
+    let spec = dock.spec.clone();
+    let s = MonitorStep {
+        t: clock.t_s(),
+        dt: clock.h_s(),
+        chaser: (cs, cb),
+        target: (ts, tb),
+        g: &g,
+        at,
+        spec: &spec,
+    };
     if !dock.state.docked() {
-        let chaser = cb.index;
-        let loads = &mut dock.loads;
-        let mut j_step = Vector3::zeros();
-        match compliant
-            .as_deref_mut()
-            .filter(|c| c.enabled || !c.step.is_empty())
-        {
-            Some(c) => {
-                let sign = if c.indices.1 == chaser { 1.0 } else { -1.0 };
-                let mut tt = t - dt;
-                for (h, f) in &c.b_force_history {
-                    tt += h;
-                    loads.sample(tt, &(f * sign), &at);
-                }
-                loads.contact_duration_s += c.step_contact_s;
-                for st in &c.step {
-                    j_step += st.impulse_on_b_ns * sign;
-                }
-                for imp in c.impacts.drain(..) {
-                    log.push(
-                        imp.t_end_s,
-                        "impact",
-                        serde_json::to_value(&imp).unwrap_or_default(),
-                    );
-                    loads.impact_count += 1;
-                    if loads.impacts.len() < MAX_IMPACTS_LISTED {
-                        loads.impacts.push(imp);
-                    }
-                }
+        record_approach_loads(
+            &s,
+            &mut dock.loads,
+            compliant.as_deref_mut(),
+            &contacts,
+            &mut log,
+        );
+    }
+    let seen = observe(dock, &s, &contacts);
+    let (joint_now, change) = decide(
+        dock,
+        &s,
+        &seen,
+        &mut phys,
+        &contacts,
+        compliant.as_deref_mut(),
+        &mut log,
+    );
+    commit_change(dock, s.t, change, &mut log);
+    write_columns(dock, &s, joint_now, compliant.as_deref(), &mut diag);
+    dock.geometry = g;
+}
+
+/// What every phase of one [`docking_monitor`] step reads: the time, the pair and their port
+/// geometry at the end of the step.
+struct MonitorStep<'a> {
+    /// End of the step, s.
+    t: f64,
+    /// The step, s.
+    dt: f64,
+    /// The chaser's state and body.
+    chaser: (&'a BodyState, &'a SimBody),
+    /// The target's state and body.
+    target: (&'a BodyState, &'a SimBody),
+    /// Port geometry at the end of the step (world frame).
+    g: &'a PortGeometry,
+    /// The target port's unit axis, world frame.
+    at: Vector3<f64>,
+    /// The scene's specification (a copy of [`Docking::spec`]).
+    spec: &'a DockingSpec,
+}
+
+/// What one step saw of the approach, for the state machine ([`observe`]).
+struct Seen {
+    /// In docking contact: a docking part pair touches now, or touched within
+    /// [`CONTACT_HOLD_S`].
+    docking_contact: bool,
+    /// The approach judgements apply ([`Docking::armed`]).
+    armed: bool,
+    /// The chaser port is within the latch's axial, lateral and angle tolerances of the seat.
+    seated: bool,
+    /// The chaser port was in front of the seat plane (axial error ≥ 0 m) at the previous step.
+    crossed_from_front: bool,
+    /// A pair of the two vehicles' parts other than the docking parts touching (`"A and B"`),
+    /// the first found.
+    collision: Option<String>,
+}
+
+/// A state change: the state entered and why.
+type Change = (DockState, String);
+
+/// The soft-capture mechanism's specification, `None` for the cone and slot.
+fn soft_spec(spec: &DockingSpec) -> Option<&crate::scene::SoftCaptureSpec> {
+    match &spec.mechanism {
+        crate::scene::Mechanism::SoftCapture(sc) => Some(sc),
+        crate::scene::Mechanism::ConeSlot => None,
+    }
+}
+
+/// Loads on the mechanism up to the latch: the compliant model's sub-step history (its impacts
+/// become `impact` events), or the rigid contacts' impulse / dt.
+fn record_approach_loads(
+    s: &MonitorStep,
+    loads: &mut DockingLoads,
+    mut compliant: Option<&mut CompliantContact>,
+    contacts: &ContactState,
+    log: &mut EventLog,
+) {
+    let (t, dt, at) = (s.t, s.dt, &s.at);
+    let chaser = s.chaser.1.index;
+    let mut j_step = Vector3::zeros();
+    match compliant
+        .as_deref_mut()
+        .filter(|c| c.enabled || !c.step.is_empty())
+    {
+        Some(c) => {
+            let sign = if c.indices.1 == chaser { 1.0 } else { -1.0 };
+            let mut tt = t - dt;
+            for (h, f) in &c.b_force_history {
+                tt += h;
+                loads.sample(tt, &(f * sign), at);
             }
-            None => {
-                let mut any = false;
-                for sp in contacts.step_pairs.iter().filter(|p| p.docking) {
-                    if sp.bodies.1 == chaser {
-                        j_step += sp.impulse_on_b_ns;
-                    } else if sp.bodies.0 == chaser {
-                        j_step -= sp.impulse_on_b_ns;
-                    } else {
-                        continue;
-                    }
-                    any = true;
-                }
-                if any {
-                    loads.contact_duration_s += dt;
-                    loads.sample(t, &(j_step / dt), &at);
+            loads.contact_duration_s += c.step_contact_s;
+            for st in &c.step {
+                j_step += st.impulse_on_b_ns * sign;
+            }
+            for imp in c.impacts.drain(..) {
+                log.push(
+                    imp.t_end_s,
+                    "impact",
+                    serde_json::to_value(&imp).unwrap_or_default(),
+                );
+                loads.impact_count += 1;
+                if loads.impacts.len() < MAX_IMPACTS_LISTED {
+                    loads.impacts.push(imp);
                 }
             }
         }
-        loads.impulse_ns += j_step.norm();
-        loads.substepping = compliant.as_deref().map(|c| c.stats);
-        for (n, v) in loads.net_impulse_on_chaser_ns.iter_mut().zip(j_step.iter()) {
-            *n += v;
+        None => {
+            let mut any = false;
+            for sp in contacts.step_pairs.iter().filter(|p| p.docking) {
+                if sp.bodies.1 == chaser {
+                    j_step += sp.impulse_on_b_ns;
+                } else if sp.bodies.0 == chaser {
+                    j_step -= sp.impulse_on_b_ns;
+                } else {
+                    continue;
+                }
+                any = true;
+            }
+            if any {
+                loads.contact_duration_s += dt;
+                loads.sample(t, &(j_step / dt), at);
+            }
         }
     }
-    let prefix = (format!("{}/", cb.name), format!("{}/", tb.name));
+    loads.impulse_ns += j_step.norm();
+    loads.substepping = compliant.as_deref().map(|c| c.stats);
+    for (n, v) in loads.net_impulse_on_chaser_ns.iter_mut().zip(j_step.iter()) {
+        *n += v;
+    }
+}
+
+/// The touching pairs between the chaser's and the target's parts (names `BODY/part`): whether
+/// a docking pair touches, and the first other pair (`"A and B"`), a collision.
+fn scan_contacts(contacts: &ContactState, chaser: &str, target: &str) -> (bool, Option<String>) {
+    let prefix = (format!("{chaser}/"), format!("{target}/"));
     let between = |a: &str, b: &str| {
         (a.starts_with(&prefix.0) && b.starts_with(&prefix.1))
             || (a.starts_with(&prefix.1) && b.starts_with(&prefix.0))
@@ -731,6 +822,15 @@ fn docking_monitor(
             }
         }
     }
+    (touching_now, collision)
+}
+
+/// What the step saw of the approach, with its bookkeeping: the last docking contact, arming,
+/// the first contact and the largest misalignment in contact, the previous axial error, and a
+/// soft-capture visit of the capture zone ending when the chaser leaves the seat tolerances.
+fn observe(dock: &mut Docking, s: &MonitorStep, contacts: &ContactState) -> Seen {
+    let (t, g, spec) = (s.t, s.g, s.spec);
+    let (touching_now, collision) = scan_contacts(contacts, &s.chaser.1.name, &s.target.1.name);
     // A cone sliding in a funnel touches and leaves the walls from step to step; contact counts
     // as ongoing until it has been absent for CONTACT_HOLD_S.
     if touching_now {
@@ -739,11 +839,9 @@ fn docking_monitor(
     let docking_contact = dock
         .last_docking_contact_s
         .is_some_and(|tc| t - tc <= CONTACT_HOLD_S + 1e-9);
-    let spec = dock.spec.clone();
     if !dock.armed && spec.miss.arm_gap_m.is_none_or(|d| g.gap_m <= d) {
         dock.armed = true;
     }
-    let armed = dock.armed;
     let seated = g.axial_error_m.abs() <= spec.latch.axial_tolerance_m
         && g.lateral_m <= spec.latch.lateral_tolerance_m
         && g.misalignment_deg <= spec.latch.angle_tolerance_deg;
@@ -755,465 +853,683 @@ fn docking_monitor(
     // is (or starts) behind the target's port plane while it manoeuvres.
     let crossed_from_front = dock.prev_axial_error_m.is_some_and(|p| p >= 0.0);
     dock.prev_axial_error_m = Some(g.axial_error_m);
-    let old = dock.state;
-    let mut new = old;
-    let mut reason = String::new();
-    let soft_spec = match &spec.mechanism {
-        crate::scene::Mechanism::SoftCapture(sc) => Some(sc.clone()),
-        crate::scene::Mechanism::ConeSlot => None,
-    };
     if !seated && let Some(r) = dock.soft.as_mut() {
         r.attempted = false;
     }
-    use DockState::*;
-    match old {
-        Missed => {}
-        SoftCaptured | Retracted | HardDocked => {
-            let sc = soft_spec
-                .as_ref()
-                .expect("soft-capture states need the mechanism");
-            let ports = dock.ports;
-            let (ls, ps) = compliant
-                .as_deref()
-                .map(|c| (c.link_step, c.platform_step.clone()))
-                .unwrap_or_default();
-            joint_now = (ls.peak_force_n, ls.peak_moment_nm);
-            let r = dock.soft.as_mut().expect("soft-capture results");
-            let peak = |v: f64, p: &mut f64, pt: &mut Option<f64>| {
-                if v > *p {
-                    *p = v;
-                    *pt = Some(t);
-                }
-            };
-            peak(
-                ps.peak_leg_stroke_m,
-                &mut r.peak_leg_stroke_m,
-                &mut r.peak_leg_stroke_t_s,
-            );
-            peak(
-                ps.peak_leg_force_n,
-                &mut r.peak_leg_force_n,
-                &mut r.peak_leg_force_t_s,
-            );
-            peak(
-                ls.peak_force_n,
-                &mut r.peak_interface_force_n,
-                &mut r.peak_interface_force_t_s,
-            );
-            peak(
-                ls.peak_moment_nm,
-                &mut r.peak_interface_moment_nm,
-                &mut r.peak_interface_moment_t_s,
-            );
-            let retraction = compliant
-                .as_deref()
-                .and_then(|c| c.link.platform.as_ref())
-                .map_or(0.0, |p| p.retraction_m);
-            r.retraction_m = retraction;
-            let t_cap = r.t_soft_captured_s.unwrap_or(t);
-            if old != HardDocked && ls.peak_force_n > spec.latch.break_force_n {
-                // The capture latches let go: the ring returns to the chaser's platform.
-                if let Some(c) = compliant.as_deref_mut() {
-                    c.link.platform = None;
-                    c.enabled = true;
-                }
-                new = Free;
-                // The legs past a stroke limit at the end of the step (on their stops, which
-                // is what drives the interface force up): leg I as in `dock.legI_stroke_m`.
-                let (lo, hi) = (sc.platform.stroke_min_m, sc.platform.stroke_max_m);
-                let past: Vec<String> = ps
-                    .end
-                    .as_ref()
-                    .map(|e| {
-                        e.legs
-                            .iter()
-                            .enumerate()
-                            .filter_map(|(i, l)| {
-                                let s_mm = l.stroke_m * 1e3;
-                                if l.stroke_m > hi {
-                                    Some(format!(
-                                        "leg {i} at {s_mm:.1} mm, past its {:.1} mm extension limit",
-                                        hi * 1e3
-                                    ))
-                                } else if l.stroke_m < lo {
-                                    Some(format!(
-                                        "leg {i} at {s_mm:.1} mm, past its {:.1} mm compression limit",
-                                        lo * 1e3
-                                    ))
-                                } else {
-                                    None
-                                }
-                            })
-                            .collect()
-                    })
-                    .unwrap_or_default();
-                let legs = if past.is_empty() {
-                    String::new()
-                } else {
-                    format!(" ({})", past.join("; "))
-                };
-                reason = format!(
-                    "capture latches let go: interface force {:.1} N > break force {:.1} N{legs}",
-                    ls.peak_force_n, spec.latch.break_force_n
-                );
-                dock.let_go = Some(format!(
-                    "{}{legs}",
-                    let_go_text(
-                        "the capture latches let go",
-                        "interface",
-                        t,
-                        ls.peak_force_n,
-                        spec.latch.break_force_n,
-                    )
-                ));
-            } else if old == SoftCaptured
-                && r.t_retraction_start_s.is_none()
-                && t - t_cap >= sc.attenuation_s - 1e-9
-            {
-                // Attenuation over: the platform retracts from the next step on.
-                r.t_retraction_start_s = Some(t);
-                if let Some(p) = compliant
-                    .as_deref_mut()
-                    .and_then(|c| c.link.platform.as_mut())
-                {
-                    p.retraction_rate_m_s = sc.retraction_speed_m_s;
-                }
-                log.push(
-                    t,
-                    "retraction_start",
-                    serde_json::json!({"speed_m_s": sc.retraction_speed_m_s,
-                        "stroke_m": sc.retracted_stroke_m}),
-                );
-            } else if old == SoftCaptured
-                && r.t_retraction_start_s.is_some()
-                && retraction >= sc.retracted_stroke_m
-            {
-                r.t_retracted_s = Some(t);
-                if let Some(p) = compliant
-                    .as_deref_mut()
-                    .and_then(|c| c.link.platform.as_mut())
-                {
-                    p.retraction_rate_m_s = 0.0;
-                }
-                new = Retracted;
-                reason = format!(
-                    "retracted {:.4} m at {} m/s",
-                    retraction, sc.retraction_speed_m_s
-                );
-            } else if old == Retracted
-                && g.lateral_m <= sc.hook_lateral_tolerance_m
-                && g.misalignment_deg <= sc.hook_angle_tolerance_deg
-            {
-                r.t_hard_docked_s = Some(t);
-                if let Some(c) = compliant.as_deref_mut() {
-                    let pt: Isometry3<f64> = ts.body_pose(&tb.com_body_m);
-                    let pc: Isometry3<f64> = cs.body_pose(&cb.com_body_m);
-                    c.link.latch = Some(LatchSpring {
-                        spec: sc.hooks.clone(),
-                        port_c_body_m: ports.0.0,
-                        caught: pt.inv_mul(&pc),
-                    });
-                }
-                new = HardDocked;
-                reason = format!(
-                    "hooks closed: lateral {:.4} m, misalignment {:.3}° (axial {:.4} m)",
-                    g.lateral_m, g.misalignment_deg, g.axial_error_m
-                );
-            }
-        }
-        Released => {
-            if let Some(c) = compliant.as_deref()
-                && c.link_step.separation_ended
-            {
-                let (pc, _) = port_world(cs, &cb.com_body_m, &dock.ports.0);
-                let v = point_velocity(cs, &pc) - point_velocity(ts, &pc);
-                dock.separation_end = Some((v.into(), t));
-                log.push(
-                    t,
-                    "separation_complete",
-                    serde_json::json!({"relative_velocity_m_s": [v.x, v.y, v.z],
-                        "axial_rate_m_s": v.dot(&at)}),
-                );
-            }
-        }
-        Latched if dock.interface.is_some() => {
-            let ls = compliant
-                .as_deref()
-                .map(|c| c.link_step)
-                .unwrap_or_default();
-            joint_now = (ls.peak_force_n, ls.peak_moment_nm);
-            let il = dock.interface.get_or_insert_with(Default::default);
-            if ls.peak_force_n > il.peak_force_n {
-                il.peak_force_n = ls.peak_force_n;
-                il.peak_force_t_s = Some(t);
-            }
-            if ls.peak_moment_nm > il.peak_moment_nm {
-                il.peak_moment_nm = ls.peak_moment_nm;
-                il.peak_moment_t_s = Some(t);
-            }
-            il.last_force_n = ls.force_end_n.into();
-            il.last_moment_nm = ls.moment_end_nm.into();
-            dock.peak_joint_force_n = dock.peak_joint_force_n.max(ls.peak_force_n);
-            dock.loads.peak_joint_force_n = dock.peak_joint_force_n;
-            dock.loads.peak_joint_torque_nm =
-                dock.loads.peak_joint_torque_nm.max(ls.peak_moment_nm);
-            if ls.peak_force_n > spec.latch.break_force_n {
-                if let Some(c) = compliant.as_deref_mut() {
-                    c.link.latch = None;
-                    c.enabled = true;
-                }
-                new = Free;
-                reason = format!(
-                    "latch broke: joint force {:.1} N > break force {:.1} N",
-                    ls.peak_force_n, spec.latch.break_force_n
-                );
-                dock.let_go = Some(let_go_text(
-                    "the latch broke",
-                    "joint",
-                    t,
-                    ls.peak_force_n,
-                    spec.latch.break_force_n,
-                ));
-            }
-        }
-        Latched => {
-            if let Some(h) = dock.joint
-                && let Some(j) = phys.world.impulse_joints.get(h)
-            {
-                // The joint's load on the chaser: its momentum change less the applied forces
-                // (exact for the step rapier took, whatever its solver passes wrote back),
-                // when no contact shares it; the moment about the chaser's port. Otherwise
-                // rapier's last-pass joint impulses.
-                let ci = cb.index;
-                let shared = contacts
-                    .step_pairs
-                    .iter()
-                    .any(|p| p.bodies.0 == ci || p.bodies.1 == ci);
-                let (f, tq) = match (
-                    contacts.body_impulse.get(ci),
-                    contacts.body_angular_impulse.get(ci),
-                ) {
-                    (Some(jl), Some(ja)) if !shared => {
-                        let (pc, _) = port_world(cs, &cb.com_body_m, &dock.ports.0);
-                        let m_port = ja - (pc - cs.pos_m).cross(jl);
-                        (jl.norm() / dt, m_port.norm() / dt)
-                    }
-                    _ => (
-                        Vector3::new(j.impulses[0], j.impulses[1], j.impulses[2])
-                            .map(f64::from)
-                            .norm()
-                            / dt,
-                        Vector3::new(j.impulses[3], j.impulses[4], j.impulses[5])
-                            .map(f64::from)
-                            .norm()
-                            / dt,
-                    ),
-                };
-                if dock.loads.latch_impulse_ns.is_none() {
-                    dock.loads.latch_impulse_ns = Some(f * dt);
-                }
-                joint_now = (f, tq);
-                dock.peak_joint_force_n = dock.peak_joint_force_n.max(f);
-                dock.loads.peak_joint_force_n = dock.peak_joint_force_n;
-                dock.loads.peak_joint_torque_nm = dock.loads.peak_joint_torque_nm.max(tq);
-                if f > spec.latch.break_force_n {
-                    phys.world.impulse_joints.remove(h, true);
-                    dock.joint = None;
-                    if let Some(c) = compliant.as_deref_mut() {
-                        c.enabled = true;
-                    }
-                    new = Free;
-                    reason = format!(
-                        "latch broke: joint force {f:.1} N > break force {:.1} N",
-                        spec.latch.break_force_n
-                    );
-                    dock.let_go = Some(let_go_text(
-                        "the latch broke",
-                        "joint",
-                        t,
-                        f,
-                        spec.latch.break_force_n,
-                    ));
-                }
-            }
-        }
-        _ => {
-            if let Some(pair) = collision {
-                new = Missed;
-                reason = match dock.let_go.as_deref() {
-                    Some(why) => format!("collision between {pair} after {why}"),
-                    None => format!("collision between {pair} before the latch engaged"),
-                };
-            } else if armed
-                && g.axial_error_m < 0.0
-                && crossed_from_front
-                && g.lateral_m > spec.mouth_radius_m
-            {
-                new = Missed;
-                reason = format!(
-                    "the chaser port passed beside the slot: lateral offset {:.3} m > mouth radius {:.3} m",
-                    g.lateral_m, spec.mouth_radius_m
-                );
-            } else if armed
-                && !docking_contact
-                && matches!(old, Free | Attracting)
-                && g.axial_rate_m_s > spec.miss.rebound_speed_m_s
-                && g.lateral_m > spec.mouth_radius_m
-            {
-                new = Missed;
-                reason = format!(
-                    "the approach turned away outside the mouth: lateral offset {:.3} m > {:.3} m, separating at {:.3e} m/s",
-                    g.lateral_m, spec.mouth_radius_m, g.axial_rate_m_s
-                );
-            } else if let Some(sc) = soft_spec.as_ref()
-                && seated
-                && !dock.soft.as_ref().is_some_and(|r| r.attempted)
-            {
-                // The capture latches get one try per visit of the capture zone.
-                if let Some(r) = dock.soft.as_mut() {
-                    r.attempted = true;
-                }
-                if let Some((payload, why)) = capture_rate_violation(&spec.latch.capture_rates, &g)
-                {
-                    dock.refusals += 1;
-                    let mut payload = payload;
-                    payload["reason"] = why.replace("latch refused", "capture refused").into();
-                    log.push(t, "capture_refused", payload);
-                    dock.reason = why.replace("latch refused", "capture refused");
-                } else {
-                    dock.latch_rates = Some([
-                        g.axial_rate_m_s.abs(),
-                        g.lateral_rate_m_s,
-                        g.angular_rate_deg_s,
-                    ]);
-                    new = SoftCaptured;
-                    reason = format!(
-                        "capture latches engaged: axial {:.4} m, lateral {:.4} m, misalignment {:.2}°, closing at {:.4} m/s",
-                        g.axial_error_m, g.lateral_m, g.misalignment_deg, -g.axial_rate_m_s
-                    );
-                    if let Some(c) = compliant.as_deref_mut() {
-                        engage_platform(&dock, sc, (cs, cb), (ts, tb), c);
-                    }
-                    if let Some(r) = dock.soft.as_mut() {
-                        r.t_soft_captured_s = Some(t);
-                    }
-                }
-            } else if soft_spec.is_none() && seated && (docking_contact || old == SoftCapture) {
-                if old != SoftCapture {
-                    new = SoftCapture;
-                    dock.seated_since = Some(t);
-                    reason = format!(
-                        "seated: axial {:.4} m, lateral {:.4} m, misalignment {:.2}°",
-                        g.axial_error_m, g.lateral_m, g.misalignment_deg
-                    );
-                } else if t - dock.seated_since.unwrap_or(t) >= spec.latch.dwell_s - 1e-9
-                    && let Some((payload, why)) =
-                        capture_rate_violation(&spec.latch.capture_rates, &g)
-                {
-                    let rate = payload["rate"].as_str().unwrap_or_default().to_string();
-                    if dock.refusing.as_deref() != Some(rate.as_str()) {
-                        dock.refusals += 1;
-                        let mut payload = payload;
-                        payload["reason"] = why.clone().into();
-                        log.push(t, "capture_refused", payload);
-                        dock.refusing = Some(rate);
-                    }
-                    dock.reason = why;
-                } else if t - dock.seated_since.unwrap_or(t) >= spec.latch.dwell_s - 1e-9 {
-                    dock.refusing = None;
-                    dock.latch_rates = Some([
-                        g.axial_rate_m_s.abs(),
-                        g.lateral_rate_m_s,
-                        g.angular_rate_deg_s,
-                    ]);
-                    new = Latched;
-                    reason = format!(
-                        "latched after {:.2} s seated (axial {:.4} m, lateral {:.4} m, misalignment {:.2}°)",
-                        spec.latch.dwell_s, g.axial_error_m, g.lateral_m, g.misalignment_deg
-                    );
-                    engage_latch(
-                        &mut dock,
-                        (cs, cb),
-                        (ts, tb),
-                        &mut phys,
-                        compliant.as_deref_mut(),
-                    );
-                    dock.t_latch_s = Some(t);
-                }
-            } else if docking_contact {
-                if old != Contact && old != Jammed {
-                    new = Contact;
-                    reason = "cone touches the slot".into();
-                    dock.jam_since = None;
-                }
-                if g.rel_speed_m_s < spec.miss.jam_speed_m_s {
-                    let since = *dock.jam_since.get_or_insert(t);
-                    if old != Jammed && t - since >= spec.miss.jam_time_s {
-                        new = Jammed;
-                        reason = format!(
-                            "in contact, not seated, relative speed < {} m/s for {} s (axial {:.4} m, lateral {:.4} m, misalignment {:.2}°)",
-                            spec.miss.jam_speed_m_s,
-                            spec.miss.jam_time_s,
-                            g.axial_error_m,
-                            g.lateral_m,
-                            g.misalignment_deg
-                        );
-                    }
-                } else {
-                    dock.jam_since = None;
-                    if old == Jammed {
-                        new = Contact;
-                        reason = "moving again".into();
-                    }
-                }
-            } else if matches!(old, Contact | SoftCapture | Jammed) {
-                if g.axial_rate_m_s > spec.miss.rebound_speed_m_s {
-                    new = Rebound;
-                    reason = format!(
-                        "the cone left the slot separating at {:.3e} m/s",
-                        g.axial_rate_m_s
-                    );
-                } else {
-                    new = if dock.magnet_on { Attracting } else { Free };
-                    reason = "contact ended".into();
-                }
-            } else if matches!(old, Free | Attracting)
-                && dock.t_first_contact_s.is_some()
-                && g.axial_rate_m_s > spec.miss.rebound_speed_m_s
-            {
-                new = Rebound;
-                reason = format!(
-                    "deflected: after touching the slot the cone moves away at {:.3e} m/s",
-                    g.axial_rate_m_s
-                );
-            } else if old == Free && dock.magnet_on {
-                new = Attracting;
-                reason = format!("magnet on at gap {:.3} m", g.gap_m);
-            }
-        }
+    Seen {
+        docking_contact,
+        armed: dock.armed,
+        seated,
+        crossed_from_front,
+        collision,
     }
-    if new != old
-        && matches!(new, Missed | Rebound)
+}
+
+/// The state machine, one function per family of states: the change this step makes (`None`:
+/// none) and the load on the chaser of what holds it (`dock.joint_force_n`, N, and
+/// `dock.joint_torque_nm`, N·m; zero unless a latch or the capture latches hold it).
+fn decide(
+    dock: &mut Docking,
+    s: &MonitorStep,
+    seen: &Seen,
+    phys: &mut Physics,
+    contacts: &ContactState,
+    compliant: Option<&mut CompliantContact>,
+    log: &mut EventLog,
+) -> ((f64, f64), Option<Change>) {
+    use DockState::*;
+    let unloaded = (0.0, 0.0);
+    match dock.state {
+        Missed => (unloaded, None),
+        SoftCaptured | Retracted | HardDocked => soft_captured_step(dock, s, compliant, log),
+        Released => {
+            separation_step(dock, s, compliant.as_deref(), log);
+            (unloaded, None)
+        }
+        Latched if dock.interface.is_some() => compliant_latch_step(dock, s, compliant),
+        Latched => rigid_latch_step(dock, s, phys, contacts, compliant),
+        _ => (unloaded, approach_step(dock, s, seen, phys, compliant, log)),
+    }
+}
+
+/// Enters the state `change` names if it differs from the present one: a MISSED or REBOUND
+/// after the mechanism let go of the chaser says so, a docked state forgets the let-go, and the
+/// change is a `docking_state` event.
+fn commit_change(dock: &mut Docking, t: f64, change: Option<Change>, log: &mut EventLog) {
+    let old = dock.state;
+    let Some((new, mut reason)) = change.filter(|(new, _)| *new != old) else {
+        return;
+    };
+    if matches!(new, DockState::Missed | DockState::Rebound)
         && let Some(why) = dock.let_go.as_deref()
         && !reason.contains(why)
     {
         // The cause began when the mechanism let go of the chaser: say so.
         reason = format!("{reason}, after {why}");
     }
-    if new != old {
-        if new.docked() {
-            // Held again: a later let-go is a new one.
-            dock.let_go = None;
-        }
-        dock.refusing = None;
-        dock.state = new;
-        dock.reason = reason.clone();
+    if new.docked() {
+        // Held again: a later let-go is a new one.
+        dock.let_go = None;
+    }
+    dock.refusing = None;
+    dock.state = new;
+    dock.reason = reason.clone();
+    log.push(
+        t,
+        "docking_state",
+        serde_json::json!({"from": old.name(), "to": new.name(), "reason": reason}),
+    );
+}
+
+/// SOFT_CAPTURED, RETRACTED, HARD_DOCKED: the platform's and the interface's peaks, then the
+/// capture latches letting go above the break force, the end of the attenuation (the
+/// retraction starts), the end of the retraction, or the hooks closing once the interface is
+/// aligned. Returns the interface load on the chaser this step (N, N·m) and the change.
+fn soft_captured_step(
+    dock: &mut Docking,
+    s: &MonitorStep,
+    compliant: Option<&mut CompliantContact>,
+    log: &mut EventLog,
+) -> ((f64, f64), Option<Change>) {
+    use DockState::*;
+    let (t, g, spec) = (s.t, s.g, s.spec);
+    let old = dock.state;
+    let sc = soft_spec(spec).expect("soft-capture states need the mechanism");
+    let ports = dock.ports;
+    let (ls, ps) = compliant
+        .as_deref()
+        .map(|c| (c.link_step, c.platform_step.clone()))
+        .unwrap_or_default();
+    let joint_now = (ls.peak_force_n, ls.peak_moment_nm);
+    let r = dock.soft.as_mut().expect("soft-capture results");
+    record_soft_peaks(r, t, &ls, &ps);
+    let retraction = compliant
+        .as_deref()
+        .and_then(|c| c.link.platform.as_ref())
+        .map_or(0.0, |p| p.retraction_m);
+    r.retraction_m = retraction;
+    let t_cap = r.t_soft_captured_s.unwrap_or(t);
+    let change = if old != HardDocked && ls.peak_force_n > spec.latch.break_force_n {
+        Some(capture_latches_let_go(
+            &mut dock.let_go,
+            s,
+            sc,
+            (ls.peak_force_n, &ps),
+            compliant,
+        ))
+    } else if old == SoftCaptured
+        && r.t_retraction_start_s.is_none()
+        && t - t_cap >= sc.attenuation_s - 1e-9
+    {
+        // Attenuation over: the platform retracts from the next step on.
+        r.t_retraction_start_s = Some(t);
+        set_retraction_rate(compliant, sc.retraction_speed_m_s);
         log.push(
             t,
-            "docking_state",
-            serde_json::json!({"from": old.name(), "to": new.name(), "reason": reason}),
+            "retraction_start",
+            serde_json::json!({"speed_m_s": sc.retraction_speed_m_s,
+                "stroke_m": sc.retracted_stroke_m}),
+        );
+        None
+    } else if old == SoftCaptured
+        && r.t_retraction_start_s.is_some()
+        && retraction >= sc.retracted_stroke_m
+    {
+        r.t_retracted_s = Some(t);
+        set_retraction_rate(compliant, 0.0);
+        let reason = format!(
+            "retracted {:.4} m at {} m/s",
+            retraction, sc.retraction_speed_m_s
+        );
+        Some((Retracted, reason))
+    } else if old == Retracted
+        && g.lateral_m <= sc.hook_lateral_tolerance_m
+        && g.misalignment_deg <= sc.hook_angle_tolerance_deg
+    {
+        r.t_hard_docked_s = Some(t);
+        if let Some(c) = compliant {
+            close_hooks(s, sc, &ports, c);
+        }
+        let reason = format!(
+            "hooks closed: lateral {:.4} m, misalignment {:.3}° (axial {:.4} m)",
+            g.lateral_m, g.misalignment_deg, g.axial_error_m
+        );
+        Some((HardDocked, reason))
+    } else {
+        None
+    };
+    (joint_now, change)
+}
+
+/// Sets the platform's retraction rate (m/s), if the compliant model has a platform carrying
+/// the chaser.
+fn set_retraction_rate(compliant: Option<&mut CompliantContact>, rate_m_s: f64) {
+    if let Some(p) = compliant.and_then(|c| c.link.platform.as_mut()) {
+        p.retraction_rate_m_s = rate_m_s;
+    }
+}
+
+/// The structural hooks close: a stiff compliant joint (`sc.hooks`) holding the chaser where it
+/// is relative to the target.
+fn close_hooks(
+    s: &MonitorStep,
+    sc: &crate::scene::SoftCaptureSpec,
+    ports: &(PortFrame, PortFrame),
+    c: &mut CompliantContact,
+) {
+    let ((cs, cb), (ts, tb)) = (s.chaser, s.target);
+    let pt: Isometry3<f64> = ts.body_pose(&tb.com_body_m);
+    let pc: Isometry3<f64> = cs.body_pose(&cb.com_body_m);
+    c.link.latch = Some(LatchSpring {
+        spec: sc.hooks.clone(),
+        port_c_body_m: ports.0.0,
+        caught: pt.inv_mul(&pc),
+    });
+}
+
+/// A soft-capture platform's peaks (leg stroke and force, interface force and moment) updated
+/// with this step's, each with its time `t` (s).
+fn record_soft_peaks(
+    r: &mut SoftCaptureResults,
+    t: f64,
+    ls: &super::contact_model::LinkStep,
+    ps: &super::contact_model::PlatformStep,
+) {
+    let peak = |v: f64, p: &mut f64, pt: &mut Option<f64>| {
+        if v > *p {
+            *p = v;
+            *pt = Some(t);
+        }
+    };
+    peak(
+        ps.peak_leg_stroke_m,
+        &mut r.peak_leg_stroke_m,
+        &mut r.peak_leg_stroke_t_s,
+    );
+    peak(
+        ps.peak_leg_force_n,
+        &mut r.peak_leg_force_n,
+        &mut r.peak_leg_force_t_s,
+    );
+    peak(
+        ls.peak_force_n,
+        &mut r.peak_interface_force_n,
+        &mut r.peak_interface_force_t_s,
+    );
+    peak(
+        ls.peak_moment_nm,
+        &mut r.peak_interface_moment_nm,
+        &mut r.peak_interface_moment_t_s,
+    );
+}
+
+/// The capture latches let go (the interface force `force_n`, N, of the step `ps` above the
+/// break force): the ring returns to the chaser's platform, `let_go` says what let go, and the
+/// change to FREE names the legs past a stroke limit.
+fn capture_latches_let_go(
+    let_go: &mut Option<String>,
+    s: &MonitorStep,
+    sc: &crate::scene::SoftCaptureSpec,
+    (force_n, ps): (f64, &super::contact_model::PlatformStep),
+    compliant: Option<&mut CompliantContact>,
+) -> Change {
+    let break_force_n = s.spec.latch.break_force_n;
+    if let Some(c) = compliant {
+        c.link.platform = None;
+        c.enabled = true;
+    }
+    let legs = legs_past_limits(ps, &sc.platform);
+    let reason = format!(
+        "capture latches let go: interface force {:.1} N > break force {:.1} N{legs}",
+        force_n, break_force_n
+    );
+    *let_go = Some(format!(
+        "{}{legs}",
+        let_go_text(
+            "the capture latches let go",
+            "interface",
+            s.t,
+            force_n,
+            break_force_n,
+        )
+    ));
+    (DockState::Free, reason)
+}
+
+/// The legs past a stroke limit at the end of the step `ps` (on their stops, which is what
+/// drives the interface force up), leg I as in `dock.legI_stroke_m`: ` (leg 2 at 61.0 mm, past
+/// its 60.0 mm extension limit; …)`, or an empty string.
+fn legs_past_limits(
+    ps: &super::contact_model::PlatformStep,
+    platform: &crate::contact::platform::PlatformSpec,
+) -> String {
+    let (lo, hi) = (platform.stroke_min_m, platform.stroke_max_m);
+    let past: Vec<String> = ps
+        .end
+        .as_ref()
+        .map(|e| {
+            e.legs
+                .iter()
+                .enumerate()
+                .filter_map(|(i, l)| {
+                    let s_mm = l.stroke_m * 1e3;
+                    if l.stroke_m > hi {
+                        Some(format!(
+                            "leg {i} at {s_mm:.1} mm, past its {:.1} mm extension limit",
+                            hi * 1e3
+                        ))
+                    } else if l.stroke_m < lo {
+                        Some(format!(
+                            "leg {i} at {s_mm:.1} mm, past its {:.1} mm compression limit",
+                            lo * 1e3
+                        ))
+                    } else {
+                        None
+                    }
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    if past.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", past.join("; "))
+    }
+}
+
+/// RELEASED: when the separation springs reach the end of their stroke, the chaser port's
+/// velocity relative to the target's material point there is kept and is a
+/// `separation_complete` event.
+fn separation_step(
+    dock: &mut Docking,
+    s: &MonitorStep,
+    compliant: Option<&CompliantContact>,
+    log: &mut EventLog,
+) {
+    let ((cs, cb), (ts, _)) = (s.chaser, s.target);
+    let t = s.t;
+    if let Some(c) = compliant
+        && c.link_step.separation_ended
+    {
+        let (pc, _) = port_world(cs, &cb.com_body_m, &dock.ports.0);
+        let v = point_velocity(cs, &pc) - point_velocity(ts, &pc);
+        dock.separation_end = Some((v.into(), t));
+        log.push(
+            t,
+            "separation_complete",
+            serde_json::json!({"relative_velocity_m_s": [v.x, v.y, v.z],
+                "axial_rate_m_s": v.dot(&s.at)}),
         );
     }
+}
+
+/// LATCHED with a compliant latch: the interface loads and their peaks, and the latch breaking
+/// above the break force. Returns the interface load on the chaser this step (N, N·m) and the
+/// change.
+fn compliant_latch_step(
+    dock: &mut Docking,
+    s: &MonitorStep,
+    compliant: Option<&mut CompliantContact>,
+) -> ((f64, f64), Option<Change>) {
+    let (t, spec) = (s.t, s.spec);
+    let ls = compliant
+        .as_deref()
+        .map(|c| c.link_step)
+        .unwrap_or_default();
+    let joint_now = (ls.peak_force_n, ls.peak_moment_nm);
+    let il = dock.interface.get_or_insert_with(Default::default);
+    if ls.peak_force_n > il.peak_force_n {
+        il.peak_force_n = ls.peak_force_n;
+        il.peak_force_t_s = Some(t);
+    }
+    if ls.peak_moment_nm > il.peak_moment_nm {
+        il.peak_moment_nm = ls.peak_moment_nm;
+        il.peak_moment_t_s = Some(t);
+    }
+    il.last_force_n = ls.force_end_n.into();
+    il.last_moment_nm = ls.moment_end_nm.into();
+    dock.peak_joint_force_n = dock.peak_joint_force_n.max(ls.peak_force_n);
+    dock.loads.peak_joint_force_n = dock.peak_joint_force_n;
+    dock.loads.peak_joint_torque_nm = dock.loads.peak_joint_torque_nm.max(ls.peak_moment_nm);
+    let mut change = None;
+    if ls.peak_force_n > spec.latch.break_force_n {
+        if let Some(c) = compliant {
+            c.link.latch = None;
+            c.enabled = true;
+        }
+        let reason = format!(
+            "latch broke: joint force {:.1} N > break force {:.1} N",
+            ls.peak_force_n, spec.latch.break_force_n
+        );
+        change = Some((DockState::Free, reason));
+        dock.let_go = Some(let_go_text(
+            "the latch broke",
+            "joint",
+            t,
+            ls.peak_force_n,
+            spec.latch.break_force_n,
+        ));
+    }
+    (joint_now, change)
+}
+
+/// LATCHED with a rigid latch (a rapier fixed joint): the joint's load on the chaser and its
+/// peaks, the impulse of the first latched step, and the joint breaking above the break force.
+/// Returns the joint's load on the chaser this step (N, N·m) and the change.
+fn rigid_latch_step(
+    dock: &mut Docking,
+    s: &MonitorStep,
+    phys: &mut Physics,
+    contacts: &ContactState,
+    compliant: Option<&mut CompliantContact>,
+) -> ((f64, f64), Option<Change>) {
+    let (t, dt, spec) = (s.t, s.dt, s.spec);
+    let (cs, cb) = s.chaser;
+    let mut joint_now = (0.0, 0.0);
+    let mut change = None;
+    if let Some(h) = dock.joint
+        && let Some(j) = phys.world.impulse_joints.get(h)
+    {
+        // The joint's load on the chaser: its momentum change less the applied forces
+        // (exact for the step rapier took, whatever its solver passes wrote back),
+        // when no contact shares it; the moment about the chaser's port. Otherwise
+        // rapier's last-pass joint impulses.
+        let ci = cb.index;
+        let shared = contacts
+            .step_pairs
+            .iter()
+            .any(|p| p.bodies.0 == ci || p.bodies.1 == ci);
+        let (f, tq) = match (
+            contacts.body_impulse.get(ci),
+            contacts.body_angular_impulse.get(ci),
+        ) {
+            (Some(jl), Some(ja)) if !shared => {
+                let (pc, _) = port_world(cs, &cb.com_body_m, &dock.ports.0);
+                let m_port = ja - (pc - cs.pos_m).cross(jl);
+                (jl.norm() / dt, m_port.norm() / dt)
+            }
+            _ => (
+                Vector3::new(j.impulses[0], j.impulses[1], j.impulses[2])
+                    .map(f64::from)
+                    .norm()
+                    / dt,
+                Vector3::new(j.impulses[3], j.impulses[4], j.impulses[5])
+                    .map(f64::from)
+                    .norm()
+                    / dt,
+            ),
+        };
+        if dock.loads.latch_impulse_ns.is_none() {
+            dock.loads.latch_impulse_ns = Some(f * dt);
+        }
+        joint_now = (f, tq);
+        dock.peak_joint_force_n = dock.peak_joint_force_n.max(f);
+        dock.loads.peak_joint_force_n = dock.peak_joint_force_n;
+        dock.loads.peak_joint_torque_nm = dock.loads.peak_joint_torque_nm.max(tq);
+        if f > spec.latch.break_force_n {
+            phys.world.impulse_joints.remove(h, true);
+            dock.joint = None;
+            if let Some(c) = compliant {
+                c.enabled = true;
+            }
+            let reason = format!(
+                "latch broke: joint force {f:.1} N > break force {:.1} N",
+                spec.latch.break_force_n
+            );
+            change = Some((DockState::Free, reason));
+            dock.let_go = Some(let_go_text(
+                "the latch broke",
+                "joint",
+                t,
+                f,
+                spec.latch.break_force_n,
+            ));
+        }
+    }
+    (joint_now, change)
+}
+
+/// The approach (FREE, ATTRACTING, CONTACT, SOFT_CAPTURE, JAMMED, REBOUND), the first that
+/// applies of: a miss ([`missed`]); the capture latches' one try per visit of the capture zone
+/// (soft capture, [`try_capture_latches`]); the seat, the dwell and the latch (cone and slot,
+/// [`seat_and_latch`]); contact and jamming ([`in_contact`]); or no contact
+/// ([`out_of_contact`]).
+fn approach_step(
+    dock: &mut Docking,
+    s: &MonitorStep,
+    seen: &Seen,
+    phys: &mut Physics,
+    compliant: Option<&mut CompliantContact>,
+    log: &mut EventLog,
+) -> Option<Change> {
+    let old = dock.state;
+    let soft = soft_spec(s.spec);
+    if let Some(miss) = missed(dock, s, seen) {
+        Some(miss)
+    } else if let Some(sc) = soft
+        && seen.seated
+        && !dock.soft.as_ref().is_some_and(|r| r.attempted)
+    {
+        try_capture_latches(dock, s, sc, compliant, log)
+    } else if soft.is_none()
+        && seen.seated
+        && (seen.docking_contact || old == DockState::SoftCapture)
+    {
+        seat_and_latch(dock, s, phys, compliant, log)
+    } else if seen.docking_contact {
+        in_contact(dock, s)
+    } else {
+        out_of_contact(dock, s)
+    }
+}
+
+/// A miss on the approach: another part collided, the chaser port passed beside the slot (it
+/// crossed the seat plane from the front outside the mouth), or the approach turned away
+/// outside the mouth before any contact.
+fn missed(dock: &Docking, s: &MonitorStep, seen: &Seen) -> Option<Change> {
+    use DockState::*;
+    let (g, spec) = (s.g, s.spec);
+    let old = dock.state;
+    let reason = if let Some(pair) = &seen.collision {
+        match dock.let_go.as_deref() {
+            Some(why) => format!("collision between {pair} after {why}"),
+            None => format!("collision between {pair} before the latch engaged"),
+        }
+    } else if seen.armed
+        && g.axial_error_m < 0.0
+        && seen.crossed_from_front
+        && g.lateral_m > spec.mouth_radius_m
+    {
+        format!(
+            "the chaser port passed beside the slot: lateral offset {:.3} m > mouth radius {:.3} m",
+            g.lateral_m, spec.mouth_radius_m
+        )
+    } else if seen.armed
+        && !seen.docking_contact
+        && matches!(old, Free | Attracting)
+        && g.axial_rate_m_s > spec.miss.rebound_speed_m_s
+        && g.lateral_m > spec.mouth_radius_m
+    {
+        format!(
+            "the approach turned away outside the mouth: lateral offset {:.3} m > {:.3} m, separating at {:.3e} m/s",
+            g.lateral_m, spec.mouth_radius_m, g.axial_rate_m_s
+        )
+    } else {
+        return None;
+    };
+    Some((Missed, reason))
+}
+
+/// Soft capture, seated, the capture latches not yet tried in this visit of the capture zone:
+/// they try once, and engage (SOFT_CAPTURED, [`engage_platform`]) unless a capture rate limit
+/// refuses them (a `capture_refused` event).
+fn try_capture_latches(
+    dock: &mut Docking,
+    s: &MonitorStep,
+    sc: &crate::scene::SoftCaptureSpec,
+    compliant: Option<&mut CompliantContact>,
+    log: &mut EventLog,
+) -> Option<Change> {
+    let (t, g, spec) = (s.t, s.g, s.spec);
+    // The capture latches get one try per visit of the capture zone.
+    if let Some(r) = dock.soft.as_mut() {
+        r.attempted = true;
+    }
+    if let Some((payload, why)) = capture_rate_violation(&spec.latch.capture_rates, g) {
+        dock.refusals += 1;
+        let mut payload = payload;
+        payload["reason"] = why.replace("latch refused", "capture refused").into();
+        log.push(t, "capture_refused", payload);
+        dock.reason = why.replace("latch refused", "capture refused");
+        None
+    } else {
+        dock.latch_rates = Some([
+            g.axial_rate_m_s.abs(),
+            g.lateral_rate_m_s,
+            g.angular_rate_deg_s,
+        ]);
+        let reason = format!(
+            "capture latches engaged: axial {:.4} m, lateral {:.4} m, misalignment {:.2}°, closing at {:.4} m/s",
+            g.axial_error_m, g.lateral_m, g.misalignment_deg, -g.axial_rate_m_s
+        );
+        if let Some(c) = compliant {
+            engage_platform(dock, sc, s.chaser, s.target, c);
+        }
+        if let Some(r) = dock.soft.as_mut() {
+            r.t_soft_captured_s = Some(t);
+        }
+        Some((DockState::SoftCaptured, reason))
+    }
+}
+
+/// Cone and slot, seated: entering SOFT_CAPTURE, then after the dwell the latch closes
+/// (LATCHED, [`engage_latch`]) unless a capture rate limit refuses it (a `capture_refused`
+/// event when a refusal starts or the rate it names changes).
+fn seat_and_latch(
+    dock: &mut Docking,
+    s: &MonitorStep,
+    phys: &mut Physics,
+    compliant: Option<&mut CompliantContact>,
+    log: &mut EventLog,
+) -> Option<Change> {
+    let (t, g, spec) = (s.t, s.g, s.spec);
+    if dock.state != DockState::SoftCapture {
+        dock.seated_since = Some(t);
+        let reason = format!(
+            "seated: axial {:.4} m, lateral {:.4} m, misalignment {:.2}°",
+            g.axial_error_m, g.lateral_m, g.misalignment_deg
+        );
+        Some((DockState::SoftCapture, reason))
+    } else if t - dock.seated_since.unwrap_or(t) >= spec.latch.dwell_s - 1e-9
+        && let Some((payload, why)) = capture_rate_violation(&spec.latch.capture_rates, g)
+    {
+        let rate = payload["rate"].as_str().unwrap_or_default().to_string();
+        if dock.refusing.as_deref() != Some(rate.as_str()) {
+            dock.refusals += 1;
+            let mut payload = payload;
+            payload["reason"] = why.clone().into();
+            log.push(t, "capture_refused", payload);
+            dock.refusing = Some(rate);
+        }
+        dock.reason = why;
+        None
+    } else if t - dock.seated_since.unwrap_or(t) >= spec.latch.dwell_s - 1e-9 {
+        dock.refusing = None;
+        dock.latch_rates = Some([
+            g.axial_rate_m_s.abs(),
+            g.lateral_rate_m_s,
+            g.angular_rate_deg_s,
+        ]);
+        let reason = format!(
+            "latched after {:.2} s seated (axial {:.4} m, lateral {:.4} m, misalignment {:.2}°)",
+            spec.latch.dwell_s, g.axial_error_m, g.lateral_m, g.misalignment_deg
+        );
+        engage_latch(dock, s.chaser, s.target, phys, compliant);
+        dock.t_latch_s = Some(t);
+        Some((DockState::Latched, reason))
+    } else {
+        None
+    }
+}
+
+/// In docking contact, not seated: CONTACT, and JAMMED after `miss.jam_time_s` slower than
+/// `miss.jam_speed_m_s` (back to CONTACT when it moves again).
+fn in_contact(dock: &mut Docking, s: &MonitorStep) -> Option<Change> {
+    use DockState::*;
+    let (t, g, spec) = (s.t, s.g, s.spec);
+    let old = dock.state;
+    let mut change = None;
+    if old != Contact && old != Jammed {
+        change = Some((Contact, "cone touches the slot".into()));
+        dock.jam_since = None;
+    }
+    if g.rel_speed_m_s < spec.miss.jam_speed_m_s {
+        let since = *dock.jam_since.get_or_insert(t);
+        if old != Jammed && t - since >= spec.miss.jam_time_s {
+            let reason = format!(
+                "in contact, not seated, relative speed < {} m/s for {} s (axial {:.4} m, lateral {:.4} m, misalignment {:.2}°)",
+                spec.miss.jam_speed_m_s,
+                spec.miss.jam_time_s,
+                g.axial_error_m,
+                g.lateral_m,
+                g.misalignment_deg
+            );
+            change = Some((Jammed, reason));
+        }
+    } else {
+        dock.jam_since = None;
+        if old == Jammed {
+            change = Some((Contact, "moving again".into()));
+        }
+    }
+    change
+}
+
+/// No docking contact: a contact that ended (REBOUND if the cone left separating faster than
+/// `miss.rebound_speed_m_s`), a deflection after an earlier touch (REBOUND), or the magnet
+/// switching on (ATTRACTING).
+fn out_of_contact(dock: &Docking, s: &MonitorStep) -> Option<Change> {
+    use DockState::*;
+    let (g, spec) = (s.g, s.spec);
+    let old = dock.state;
+    if matches!(old, Contact | SoftCapture | Jammed) {
+        if g.axial_rate_m_s > spec.miss.rebound_speed_m_s {
+            let reason = format!(
+                "the cone left the slot separating at {:.3e} m/s",
+                g.axial_rate_m_s
+            );
+            Some((Rebound, reason))
+        } else {
+            let new = if dock.magnet_on { Attracting } else { Free };
+            Some((new, "contact ended".into()))
+        }
+    } else if matches!(old, Free | Attracting)
+        && dock.t_first_contact_s.is_some()
+        && g.axial_rate_m_s > spec.miss.rebound_speed_m_s
+    {
+        let reason = format!(
+            "deflected: after touching the slot the cone moves away at {:.3e} m/s",
+            g.axial_rate_m_s
+        );
+        Some((Rebound, reason))
+    } else if old == Free && dock.magnet_on {
+        Some((Attracting, format!("magnet on at gap {:.3} m", g.gap_m)))
+    } else {
+        None
+    }
+}
+
+/// The `dock.*` columns: the port geometry, the magnet force, the state (after this step's
+/// change) and the load `joint_now` (N, N·m) of what holds the chaser; then a soft-capture
+/// platform's ([`write_soft_columns`]).
+fn write_columns(
+    dock: &Docking,
+    s: &MonitorStep,
+    joint_now: (f64, f64),
+    compliant: Option<&CompliantContact>,
+    diag: &mut Diagnostics,
+) {
+    let g = s.g;
     let values = [
         g.gap_m,
         g.axial_error_m,
@@ -1227,47 +1543,56 @@ fn docking_monitor(
     for (c, v) in dock.cols.iter().zip(values) {
         diag.values[*c] = v;
     }
-    if let (Some(r), Some(sc)) = (dock.soft.as_ref(), soft_spec.as_ref()) {
-        // The platform while it carries the chaser; otherwise the ring at rest on its stops at
-        // the neutral pose and no load.
-        let live = compliant.as_deref().filter(|c| c.link.platform.is_some());
-        let ps = live.map(|c| c.platform_step.clone()).unwrap_or_default();
-        let n = (r.cols.len() - 13) / 2;
-        for i in 0..n {
-            let leg = ps.end.as_ref().and_then(|l| l.legs.get(i));
-            diag.values[r.cols[2 * i]] = leg.map_or(0.0, |l| l.stroke_m);
-            diag.values[r.cols[2 * i + 1]] = leg.map_or(0.0, |l| l.force_n);
-        }
-        let ring = ps
-            .ring_in_base
-            .unwrap_or_else(|| Isometry3::translation(0.0, 0.0, sc.platform.height_m));
-        let rot = ring.rotation.scaled_axis().map(f64::to_degrees);
-        let (f, m) = live.map_or((Vector3::zeros(), Vector3::zeros()), |c| {
-            (c.link_step.force_end_n, c.link_step.moment_end_nm)
-        });
-        let retraction = live
-            .and_then(|c| c.link.platform.as_ref())
-            .map_or(0.0, |p| p.retraction_m);
-        let rest = [
-            ring.translation.vector.x,
-            ring.translation.vector.y,
-            ring.translation.vector.z,
-            rot.x,
-            rot.y,
-            rot.z,
-            f.x,
-            f.y,
-            f.z,
-            m.x,
-            m.y,
-            m.z,
-            retraction,
-        ];
-        for (c, v) in r.cols[2 * n..].iter().zip(rest) {
-            diag.values[*c] = v;
-        }
+    if let (Some(r), Some(sc)) = (dock.soft.as_ref(), soft_spec(s.spec)) {
+        write_soft_columns(r, sc, compliant, diag);
     }
-    dock.geometry = g;
+}
+
+/// A soft-capture platform's columns: per leg (stroke, force), the ring pose in P, the
+/// interface force and moment and the retraction. The platform while it carries the chaser;
+/// otherwise the ring at rest on its stops at the neutral pose and no load.
+fn write_soft_columns(
+    r: &SoftCaptureResults,
+    sc: &crate::scene::SoftCaptureSpec,
+    compliant: Option<&CompliantContact>,
+    diag: &mut Diagnostics,
+) {
+    let live = compliant.filter(|c| c.link.platform.is_some());
+    let ps = live.map(|c| c.platform_step.clone()).unwrap_or_default();
+    let n = (r.cols.len() - 13) / 2;
+    for i in 0..n {
+        let leg = ps.end.as_ref().and_then(|l| l.legs.get(i));
+        diag.values[r.cols[2 * i]] = leg.map_or(0.0, |l| l.stroke_m);
+        diag.values[r.cols[2 * i + 1]] = leg.map_or(0.0, |l| l.force_n);
+    }
+    let ring = ps
+        .ring_in_base
+        .unwrap_or_else(|| Isometry3::translation(0.0, 0.0, sc.platform.height_m));
+    let rot = ring.rotation.scaled_axis().map(f64::to_degrees);
+    let (f, m) = live.map_or((Vector3::zeros(), Vector3::zeros()), |c| {
+        (c.link_step.force_end_n, c.link_step.moment_end_nm)
+    });
+    let retraction = live
+        .and_then(|c| c.link.platform.as_ref())
+        .map_or(0.0, |p| p.retraction_m);
+    let rest = [
+        ring.translation.vector.x,
+        ring.translation.vector.y,
+        ring.translation.vector.z,
+        rot.x,
+        rot.y,
+        rot.z,
+        f.x,
+        f.y,
+        f.z,
+        m.x,
+        m.y,
+        m.z,
+        retraction,
+    ];
+    for (c, v) in r.cols[2 * n..].iter().zip(rest) {
+        diag.values[*c] = v;
+    }
 }
 
 /// The capture latches engage: the chaser's ring, at the platform's neutral pose, is pressed

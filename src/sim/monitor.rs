@@ -8,8 +8,7 @@
 use super::broadphase::BroadPhase;
 use super::motion::StepMotion;
 use super::{BodyState, Clock, EventLog, MonitorState, NamedPairs, Part, Roster, SimBody, conv};
-use crate::geometry::bounds::{Bracket, interval_lower_bound, minimize};
-use crate::guarantee::{BodyView, PairDistance};
+use crate::geometry::bounds::{Bracket, interval_lower_bound};
 use bevy::prelude::*;
 use bevy_rapier3d::parry::query;
 use bevy_rapier3d::rapier::math::Pose;
@@ -18,6 +17,7 @@ use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use std::collections::{BTreeMap, HashMap};
 
 pub mod memo;
+mod tracked;
 
 /// Who a collider is.
 #[derive(Debug, Clone)]
@@ -1510,6 +1510,11 @@ const MAX_MIN_EVALS: u32 = 48;
 /// ([`min_distance_tolerance_m`]), the step is bisected on the bodies' paths
 /// ([`crate::geometry::bounds::minimize`]) and the closest approach recorded where it is,
 /// inside the interval if that is where it is.
+///
+/// Its steps, in order, are in `sim/monitor/tracked.rs`: the body views, each tracked pair's
+/// sample and closest approach over the step, the closest tracked pair, the closest pair of a
+/// trajectory row when no tracked pair is within the horizon, and the closest approach over
+/// the run.
 #[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 pub fn distances(
     roster: Res<Roster>,
@@ -1527,333 +1532,29 @@ pub fn distances(
     let t = clock.t_s();
     let n = roster.bodies.len();
     let sc = &mut *scratch;
-    if mon.bodies.len() != n {
-        mon.bodies = roster
-            .bodies
-            .iter()
-            .map(|be| {
-                let (b, s) = bodies.get(*be).expect("roster body");
-                BodyView {
-                    name: b.name.clone(),
-                    pos_m: s.pos_m,
-                    vel_m_s: s.vel_m_s,
-                    att: s.att,
-                    omega_rad_s: s.omega_rad_s,
-                }
-            })
-            .collect();
-    }
+    let mon = &mut *mon;
+    tracked::refresh_views(mon, &roster, &bodies);
     if sc.poses.len() != n {
         sc.poses = vec![(u64::MAX, Vec::new()); n];
     }
-    for (k, be) in roster.bodies.iter().enumerate() {
-        let (_, s) = bodies.get(*be).expect("roster body");
-        let v = &mut mon.bodies[k];
-        v.pos_m = s.pos_m;
-        v.vel_m_s = s.vel_m_s;
-        v.att = s.att;
-        v.omega_rad_s = s.omega_rad_s;
-    }
     let step = clock.step;
-    let mut count = QueryCount::default();
-    // Tracked pairs, in a stable order: every pair (i < j) when all are tracked; else pairs
-    // join the list when first tracked and keep their place.
-    let tracked_now: Vec<(usize, usize)> = if bp.all_pairs {
-        (0..n)
-            .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
-            .collect()
-    } else {
-        let mut v: Vec<(usize, usize)> = bp
-            .near
-            .iter()
-            .copied()
-            .filter(|(i, j)| bp.sphere_gap(*i, *j) <= bp.horizon_m)
-            .collect();
-        v.extend(named.0.iter().copied());
-        v.sort_unstable();
-        v.dedup();
-        v
+    let s = tracked::Step {
+        geo: &geo,
+        motion: &motion,
+        t,
+        step,
     };
-    for &(i, j) in &tracked_now {
-        let k = match mon.pair_index.get(&(i, j)) {
-            Some(k) => *k,
-            None => {
-                let k = mon.pairs.len();
-                mon.pair_index.insert((i, j), k);
-                mon.pairs.push(PairDistance {
-                    a: i,
-                    b: j,
-                    distance_m: f64::INFINITY,
-                    part_a: 0,
-                    part_b: 0,
-                    clearance_m: f64::INFINITY,
-                    lower_m: f64::INFINITY,
-                    t_s: f64::NAN,
-                });
-                mon.min_per_pair.push(super::PairMin {
-                    distance_m: f64::INFINITY,
-                    part_a: 0,
-                    part_b: 0,
-                    t_s: t,
-                    inside: false,
-                    tolerance_m: 0.0,
-                });
-                mon.min_clearance_per_pair.push(f64::INFINITY);
-                k
-            }
-        };
-        for b in [i, j] {
-            if sc.poses[b].0 != step {
-                let s = &mon.bodies[b];
-                let (pos, att) = (s.pos_m, s.att);
-                geo.part_poses(b, &pos, &att, &mut sc.poses[b].1);
-                sc.poses[b].0 = step;
-            }
-        }
-        let prev = mon.pairs[k].clone();
-        let fresh_prev = prev.t_s.is_finite();
-        let warm = fresh_prev.then_some((prev.part_a, prev.part_b));
-        let (pi, pj) = (&sc.poses[i].1, &sc.poses[j].1);
-        let hit = closest_parts(
-            &geo,
-            i,
-            pi,
-            j,
-            pj,
-            &|_, _| true,
-            warm,
-            true,
-            &mut sc.candidates,
-            &mut sc.evaluated,
-            &mut count,
-        );
-        let (dock_i, dock_j) = (&geo.docking[i], &geo.docking[j]);
-        let clearance =
-            if geo.has_docking[i] && geo.has_docking[j] && dock_i[hit.a] && dock_j[hit.b] {
-                closest_parts(
-                    &geo,
-                    i,
-                    pi,
-                    j,
-                    pj,
-                    &|a, b| !(dock_i[a] && dock_j[b]),
-                    None,
-                    false,
-                    &mut sc.candidates,
-                    &mut sc.evaluated,
-                    &mut count,
-                )
-                .d
-                .value
-            } else {
-                hit.d.value
-            };
-        mon.pairs[k] = PairDistance {
-            a: i,
-            b: j,
-            distance_m: hit.d.value,
-            part_a: hit.a,
-            part_b: hit.b,
-            clearance_m: clearance,
-            lower_m: hit.d.lower,
-            t_s: t,
-        };
-        // The closest approach over the run, judged on [t − dt, t].
-        let w = mon.min_per_pair[k].distance_m;
-        let mut best = super::PairMin {
-            distance_m: hit.d.value,
-            part_a: hit.a,
-            part_b: hit.b,
-            t_s: t,
-            inside: false,
-            tolerance_m: sample_tolerance_m(&hit.d),
-        };
-        let dt = motion.dt_s;
-        if motion.ready && fresh_prev && (prev.t_s - (t - dt)).abs() <= 1e-9 * t.max(1.0) {
-            let rate = motion.distance_rate_bound(i, j);
-            let d0 = Bracket {
-                value: prev.distance_m,
-                lower: prev.lower_m,
-            };
-            // A distance is never negative: a threshold at or under zero (the pair has touched
-            // already) is cleared by every sub-interval, whatever the rate bound (no refinement
-            // while two bodies stay in contact, latched or not).
-            // A closest pair whose certified lower bound is farther below its value than the
-            // tolerance (a mesh part's, d·GJK_REL_TOL below; a faceted cone against a wall,
-            // where the gap along GJK's witness direction falls short of the distance) could
-            // never have the tolerance proved: the search would spend its budget every step
-            // and still not prove it. Its tolerance is twice its own bracket's width (the bound
-            // stays certified; only how close the recorded closest approach is to the true one
-            // changes, by that width, and the summary's `tolerance_m` says so).
-            let slack = 2.0 * (hit.d.value - hit.d.lower).max(d0.value - d0.lower);
-            let thr = |b: f64| {
-                let w = w.min(b);
-                let t = w - min_distance_tolerance_m(w).max(slack);
-                if t <= 0.0 { f64::NEG_INFINITY } else { t }
-            };
-            if interval_lower_bound(d0.lower, hit.d.lower, rate, dt).max(0.0) < thr(hit.d.value) {
-                // A body turning fast: the per-part-pair bounds (`search_parts`).
-                let (pair_rate, body_rate) =
-                    pair_rate_gain(&geo, &motion, i, j, (hit.a, hit.b), sc);
-                let (r, (pa, pb)) = if body_rate >= PER_PART_MIN_GAIN * pair_rate {
-                    let (r, parts) = search_parts(
-                        &geo,
-                        &motion,
-                        i,
-                        j,
-                        (d0, hit.d),
-                        0.0,
-                        thr,
-                        MAX_MIN_EVALS,
-                        Some((hit.a, hit.b)),
-                        sc,
-                        &mut count,
-                    );
-                    (r, parts.unwrap_or((prev.part_a, prev.part_b)))
-                } else {
-                    let mut at = (hit.a, hit.b);
-                    let mut parts_at = Vec::new();
-                    let r = minimize(dt, d0, hit.d, rate, thr, MAX_MIN_EVALS, dt * 1e-9, |tau| {
-                        let h = pair_at(&geo, &motion, i, j, tau, Some(at), sc, &mut count);
-                        at = (h.a, h.b);
-                        parts_at.push((tau, h.a, h.b));
-                        h.d
-                    });
-                    let parts = parts_at
-                        .iter()
-                        .find(|p| p.0 == r.t)
-                        .map_or((prev.part_a, prev.part_b), |p| (p.1, p.2));
-                    (r, parts)
-                };
-                mon.interval_evals += u64::from(r.evals);
-                if r.value < best.distance_m && r.t < dt {
-                    best = super::PairMin {
-                        distance_m: r.value,
-                        part_a: pa,
-                        part_b: pb,
-                        t_s: t - dt + r.t,
-                        inside: r.t > 0.0,
-                        tolerance_m: min_distance_tolerance_m(r.value).max(slack),
-                    };
-                }
-                mon.min_lower_m = mon.min_lower_m.min(r.lower.max(0.0));
-            }
-        }
-        if !mon.min_per_pair[k].distance_m.is_finite() || best.distance_m < w {
-            mon.min_per_pair[k] = best;
-        }
-        let c = &mut mon.min_clearance_per_pair[k];
-        *c = c.min(clearance);
+    let mut count = QueryCount::default();
+    for (i, j) in tracked::tracked_pairs(&bp, &named, n) {
+        let k = tracked::pair_slot(mon, (i, j), t);
+        tracked::track_pair(&s, mon, sc, &mut count, (i, j), k);
     }
-    // The closest pair now: the first smallest among the tracked pairs, in list order.
-    let mut closest: Option<usize> = None;
-    for (k, p) in mon.pairs.iter().enumerate() {
-        if p.t_s == t && closest.is_none_or(|c| p.distance_m < mon.pairs[c].distance_m) {
-            closest = Some(k);
-        }
-    }
-    mon.closest = closest.map(|k| mon.pairs[k].clone());
+    tracked::closest_tracked(mon, t);
     let row_due = step.is_multiple_of(u64::from(every.0.max(1))) || every.1;
     if !bp.all_pairs && row_due {
-        let mut best = mon.closest.as_ref().map_or(f64::INFINITY, |p| p.distance_m);
-        if best > bp.horizon_m {
-            // No tracked pair within the horizon: the closest pair may be any. Start from the
-            // last row's closest pair.
-            let mut found: Option<PairDistance> = None;
-            let mut cands = Vec::new();
-            if let Some((i, j)) = mon.row_closest_pair {
-                cands.push((f64::NEG_INFINITY, i, j));
-            }
-            let x: Vec<Vector3<f64>> = mon.bodies.iter().map(|b| b.pos_m).collect();
-            let mut swept = false;
-            let mut k = 0;
-            while k < cands.len() || !swept {
-                if k == cands.len() {
-                    cands.extend(bp.closest_candidates(&x, &geo.extent_m, best));
-                    swept = true;
-                    continue;
-                }
-                let (lb, i, j) = cands[k];
-                k += 1;
-                if lb >= best {
-                    break;
-                }
-                for b in [i, j] {
-                    if sc.poses[b].0 != step {
-                        let s = &mon.bodies[b];
-                        let (pos, att) = (s.pos_m, s.att);
-                        geo.part_poses(b, &pos, &att, &mut sc.poses[b].1);
-                        sc.poses[b].0 = step;
-                    }
-                }
-                let hit = closest_parts(
-                    &geo,
-                    i,
-                    &sc.poses[i].1,
-                    j,
-                    &sc.poses[j].1,
-                    &|_, _| true,
-                    None,
-                    false,
-                    &mut sc.candidates,
-                    &mut sc.evaluated,
-                    &mut count,
-                );
-                if hit.d.value < best || found.is_none() && hit.d.value <= best {
-                    best = hit.d.value;
-                    found = Some(PairDistance {
-                        a: i,
-                        b: j,
-                        distance_m: hit.d.value,
-                        part_a: hit.a,
-                        part_b: hit.b,
-                        clearance_m: hit.d.value,
-                        lower_m: hit.d.lower,
-                        t_s: t,
-                    });
-                }
-            }
-            if let Some(f) = &found {
-                mon.row_closest_pair = Some((f.a, f.b));
-            }
-            if found.is_some() {
-                mon.closest = found;
-            }
-        }
+        tracked::row_closest(&s, mon, sc, &mut count, &bp);
     }
-    if let Some(c) = mon.closest.clone()
-        && mon
-            .overall
-            .as_ref()
-            .is_none_or(|o| c.distance_m < o.distance_m)
-    {
-        mon.overall = Some(super::PairMin {
-            distance_m: c.distance_m,
-            part_a: c.part_a,
-            part_b: c.part_b,
-            t_s: t,
-            inside: false,
-            tolerance_m: sample_tolerance_m(&Bracket {
-                value: c.distance_m,
-                lower: c.lower_m,
-            }),
-        });
-        mon.overall_pair = (c.a, c.b);
-    }
-    // Interval minima found inside a step can undercut the sampled overall minimum.
-    let mut under: Option<usize> = None;
-    for (k, m) in mon.min_per_pair.iter().enumerate() {
-        let cur = under.map_or(mon.overall.as_ref().map(|o| o.distance_m), |u| {
-            Some(mon.min_per_pair[u].distance_m)
-        });
-        if m.inside && cur.is_none_or(|o| m.distance_m < o) {
-            under = Some(k);
-        }
-    }
-    if let Some(k) = under {
-        mon.overall_pair = (mon.pairs[k].a, mon.pairs[k].b);
-        mon.overall = Some(mon.min_per_pair[k].clone());
-    }
+    tracked::update_overall(mon, t);
     mon.exact_queries += count.exact;
     mon.pruned_pairs += count.pruned;
 }
