@@ -515,9 +515,13 @@ fn docked_success_is_the_soft_capture_end_state_and_latched_is_refused() {
     let f = d.join("latched.ron");
     let text = std::fs::read_to_string("scenes/trials/initial_contact_envelope.ron").unwrap();
     let scene = std::fs::canonicalize("scenes/examples/soft_capture.ron").unwrap();
+    assert!(
+        text.contains("\"../examples/soft_capture.ron\""),
+        "the trials file's scene path"
+    );
     std::fs::write(
         &f,
-        text.replace("../soft_capture.ron", &scene.display().to_string())
+        text.replace("../examples/soft_capture.ron", &scene.display().to_string())
             .replace("success: Docked,", "success: Latched,"),
     )
     .unwrap();
