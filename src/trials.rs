@@ -949,7 +949,7 @@ const RESULT_COLS: [&str; 9] = [
     "first_collision_s",
 ];
 
-/// The result columns a soft-capture campaign adds after [`RESULT_COLS`] (empty: never
+/// The result columns a soft-capture campaign adds after `RESULT_COLS` (empty: never
 /// captured): peak |leg stroke| (m), peak |leg force| (N), peak interface force (N) and moment
 /// (N·m) on the chaser at its port, the capture and hard-dock times (s).
 pub const SOFT_CAPTURE_COLS: [&str; 6] = [

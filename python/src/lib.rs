@@ -4,7 +4,7 @@
 //! - [`PySimulation`] wraps [`rpod::sim::Simulation`]: a scene file with `--set`-style
 //!   overrides, stepping, states (world and Hill frames), forces applied from Python, the
 //!   monitor, events, the summary and the standard output files.
-//! - A Python callable added with `add_controller` becomes a [`PyLaw`], a
+//! - A Python callable added with `add_controller` becomes a `PyLaw`, a
 //!   [`rpod::control::Controller`] hosted by the same generic host as every Rust law: it is
 //!   called at its own period inside the fixed-step pipeline (Sense → Control → Actuate), its
 //!   command held in between and passed through the slot's actuator.

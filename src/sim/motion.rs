@@ -5,7 +5,7 @@
 //! A body in f64 free flight is moved by `physics_step` from its state at t₀ with the wrench
 //! held over the step: the centre of mass by x(τ) = x₀ + v₀τ + ½aτ² with a = a_g(x₀) + F/m
 //! (exactly the committed position at τ = dt: velocity Verlet's position update), the attitude
-//! by [`rotate_rk4`](super::rotate_rk4) over [0, τ] (at τ = dt exactly the committed attitude).
+//! by [`rotate_rk4`] over [0, τ] (at τ = dt exactly the committed attitude).
 //! That family *is* the path inside the step: the monitor evaluates bodies between samples on
 //! it, and the physics stage splits a step on it at a time of impact, so the body it hands to
 //! rapier is where the path says. A body that rapier moved (contact, joint) follows the
@@ -484,7 +484,7 @@ fn straight_rates(p: &BodyPath) -> Option<(Vector3<f64>, Vector3<f64>)> {
 
 /// Bound on the rate of change of the distance between body A (path `a`, extent `r_a`) and
 /// body B (path `b`) over the step, measured in B's frame, when both paths are straight over
-/// the whole step ([`straight_rates`]); else `None`.
+/// the whole step (`straight_rates`); else `None`.
 ///
 /// The distance between two rigid bodies is the distance between A and B seen from B's frame,
 /// where B's parts stand still and a point of A at r from A's centre of mass (|r| ≤ `r_a`)

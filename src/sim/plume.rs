@@ -284,7 +284,7 @@ pub fn plume_hits(
 /// lies wholly outside the cone or beyond the plume's length is never cast against; for the
 /// others, a ray is cast against a part only when it meets the part's sphere within the
 /// plume's length and no nearer than the nearest strike found so far (found from the rays
-/// within each part's angular cap seen from the nozzle, [`ray_masks`]). A ray that misses a
+/// within each part's angular cap seen from the nozzle, `ray_masks`). A ray that misses a
 /// part's bounding sphere misses the part, and a strike is never nearer than the sphere's
 /// entry point, so no strike the plain cast would find is skipped.
 pub fn plume_loads(

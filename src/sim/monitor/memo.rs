@@ -4,7 +4,7 @@
 //! ([`super::hull_bracket`]: a concavity, or a part inside the other's hull — the docking
 //! collar of the example vehicle around the chaser's cone, every triangle of its rim equally
 //! close), the monitor evaluates it triangle by triangle ([`mesh_exact`]) and keeps the result
-//! ([`MeshPairMemo`]): the relative pose, a certified lower bound and the witness points (a
+//! ([`PairMemo`]): the relative pose, a certified lower bound and the witness points (a
 //! point of each part, in its own frame). At any later relative pose of the same two parts:
 //!
 //! * **lower bound**: the distance is 1-Lipschitz in a rigid displacement of either set, and
