@@ -119,10 +119,12 @@ def plot(curve_csv: pathlib.Path, png: pathlib.Path, eval_rate: float, eval_n: i
     succ = np.array([float(r["latched_frac"]) if r["latched_frac"] else np.nan for r in rows])
     stage = np.array([int(r["stage"]) for r in rows])
     fig, ax = plt.subplots(1, 2, figsize=(11, 4))
-    for k in np.nonzero(np.diff(stage))[0]:
+    for j, k in enumerate(np.nonzero(np.diff(stage))[0]):
         for a_ in ax:
             a_.axvline(steps[k + 1] / 1e3, color="0.6", lw=0.8)
-        ax[0].text(steps[k + 1] / 1e3, 3, f" stage {stage[k + 1]}", fontsize=7, color="0.4")
+        # Stages can start a few rollouts apart: each label one line above the last.
+        ax[0].text(steps[k + 1] / 1e3, 3 + 7 * j, f" stage {stage[k + 1]}", fontsize=7,
+                   color="0.4")
     ax[0].plot(steps / 1e3, 100 * succ, color="tab:green", marker="o", ms=3,
                label="training episodes of each rollout")
     if np.isfinite(eval_rate):
@@ -172,7 +174,12 @@ def main():
                     help="stop the evaluation after this (the episodes done are reported)")
     ap.add_argument("--evaluate-only", action="store_true",
                     help="evaluate OUT/model.zip (trained earlier) and plot; no training")
+    ap.add_argument("--replot", action="store_true",
+                    help="only redraw OUT/learning_curve.png from OUT/curve.csv and eval.json")
     a = ap.parse_args()
+    if a.replot:
+        replot(a)
+        return
     if a.evaluate_only:
         finish_evaluation(a)
         return
@@ -258,6 +265,23 @@ def main():
     finish_evaluation(a)
 
 
+def title_of(train: dict) -> str:
+    return (f"PPO (Stable-Baselines3, CPU) on rpod/Docking-v0, seed {train['seed']}: "
+            f"{train['env_steps']} steps in {train['training_minutes']:.0f} min on "
+            f"{train['n_envs']} workers")
+
+
+def replot(a):
+    """Redraws the plot of a finished run (`curve.csv`, `train.json`, `eval.json`)."""
+    summary = json.loads((a.out / "eval.json").read_text())
+    png = a.out / "learning_curve.png"
+    plot(a.out / "curve.csv", png, summary["latched_rate"], summary["eval_episodes_done"],
+         title_of(summary))
+    if a.plot is not None:
+        a.plot.parent.mkdir(parents=True, exist_ok=True)
+        a.plot.write_bytes(png.read_bytes())
+
+
 def finish_evaluation(a):
     """Evaluates `a.out/model.zip` on the seeded episodes, writes eval.json and the plot."""
     train = json.loads((a.out / "train.json").read_text())
@@ -278,9 +302,7 @@ def finish_evaluation(a):
         "episodes": results,
     })
     (a.out / "eval.json").write_text(json.dumps(summary, indent=1))
-    title = (f"PPO (Stable-Baselines3, CPU) on rpod/Docking-v0, seed {train['seed']}: "
-             f"{train['env_steps']} steps in {train['training_minutes']:.0f} min on "
-             f"{train['n_envs']} workers")
+    title = title_of(train)
     png = a.out / "learning_curve.png"
     plot(a.out / "curve.csv", png, rate, len(results), title)
     if a.plot is not None:
