@@ -675,7 +675,7 @@ fn val_requirements_campaign_reports_each_requirement() {
     let bundled = read(Path::new("scenes/trials/requirements_campaign.ron"));
     let text = bundled
         .replace(
-            "\"../requirements_approach.ron\"",
+            "\"../examples/requirements_approach.ron\"",
             &format!("{:?}", scene.display().to_string()),
         )
         .replace("duration_s: 2300.0", "duration_s: 60.0")

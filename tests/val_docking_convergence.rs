@@ -140,11 +140,11 @@ fn envelope_outcomes_at_three_dts(which: Option<&[usize]>) {
         let scene = dir.join(format!("aligned_{dt}.ron"));
         std::fs::write(&scene, base.replace("dt_s: 0.01,", &format!("dt_s: {dt},"))).unwrap();
         let tf = dir.join(format!("envelope_{dt}.ron"));
-        assert!(trials.contains("scene: \"../docking_aligned.ron\""));
+        assert!(trials.contains("scene: \"../examples/docking_aligned.ron\""));
         std::fs::write(
             &tf,
             trials.replace(
-                "scene: \"../docking_aligned.ron\"",
+                "scene: \"../examples/docking_aligned.ron\"",
                 &format!("scene: \"aligned_{dt}.ron\""),
             ),
         )
