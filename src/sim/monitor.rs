@@ -16,6 +16,7 @@ use bevy_rapier3d::rapier::prelude as rp;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use std::collections::{BTreeMap, HashMap};
 
+mod contact_steps;
 pub mod memo;
 mod tracked;
 
@@ -1633,6 +1634,11 @@ pub fn touch_time(
 /// that body. Each pair's impulse is the mean of the two bodies' attributions (equal when the
 /// pair is the only contact). The compliant model's pairs ([`super::contact_model`]) come with
 /// their exact impulses and sub-step peak forces.
+///
+/// Its steps, in order, are in `sim/monitor/contact_steps.rs`: rapier's touching part pairs
+/// and their contact points, each body's raw normal impulse, the compliant model's pairs, the
+/// contacts that ended, and per pair in contact its impulse, its start (with the time of first
+/// touch, [`touch_time`]) and its totals.
 #[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it uses
 pub fn contacts(
     phys: Res<super::Physics>,
@@ -1651,209 +1657,27 @@ pub fn contacts(
     cs.points.clear();
     cs.step_pairs.clear();
     // (pair key) → (docking, body a, body b, rapier's raw normal impulse)
-    let mut now: BTreeMap<(String, String), (bool, usize, usize, f64)> = BTreeMap::new();
+    let mut now = contact_steps::NowPairs::new();
     // (pair key) → (body, part) of each side, for the time of first touch.
     let mut who: BTreeMap<(String, String), ContactSides> = BTreeMap::new();
-    // When rapier did not step (nothing near), its contact pairs are an older step's.
-    let pairs = phys
-        .world
-        .narrow_phase
-        .contact_pairs()
-        .filter(|_| sync.stepped);
-    for pair in pairs {
-        if !touching(pair) {
-            continue;
-        }
-        let (Some(a), Some(b)) = (
-            cs.colliders.get(&pair.collider1),
-            cs.colliders.get(&pair.collider2),
-        ) else {
-            continue;
-        };
-        if a.body == b.body {
-            continue;
-        }
-        let raw: f64 = pair
-            .manifolds
-            .iter()
-            .flat_map(|m| m.points.iter())
-            .map(|p| p.data.impulse.max(0.0) as f64)
-            .sum();
-        let docking = a.docking && b.docking;
-        let swapped = (a.body, &a.full_name) > (b.body, &b.full_name);
-        let (key, ba, bb, sides) = if !swapped {
-            (
-                (a.full_name.clone(), b.full_name.clone()),
-                a.body,
-                b.body,
-                ((a.body, a.part), (b.body, b.part)),
-            )
-        } else {
-            (
-                (b.full_name.clone(), a.full_name.clone()),
-                b.body,
-                a.body,
-                ((b.body, b.part), (a.body, a.part)),
-            )
-        };
-        who.insert(key.clone(), sides);
-        // rapier's normal points from collider 1 to collider 2 and pushes collider 2 along it.
-        let sign = if swapped { -1.0 } else { 1.0 };
-        if let (Some(c1), Some(c2)) = (
-            phys.world.colliders.get(pair.collider1),
-            phys.world.colliders.get(pair.collider2),
-        ) {
-            for m in pair.solver_manifolds() {
-                let n = conv::na(m.data.normal) * sign;
-                for p in &m.points {
-                    if !(p.dist <= 0.0 || p.data.impulse > 0.0) {
-                        continue;
-                    }
-                    let p1 = conv::na(c1.position().transform_point(p.local_p1));
-                    let p2 = conv::na(c2.position().transform_point(p.local_p2));
-                    let j = f64::from(p.data.impulse.max(0.0));
-                    cs.points.push(PointRow {
-                        t_s: t,
-                        a: key.0.clone(),
-                        b: key.1.clone(),
-                        compliant: false,
-                        point_m: (p1 + p2) * 0.5,
-                        normal_on_b: n,
-                        depth_m: -f64::from(p.dist),
-                        normal_force_n: j / dt,
-                        normal_impulse_ns: j,
-                        force_on_b_n: n * (j / dt),
-                    });
-                }
-            }
-        }
-        let e = now.entry(key).or_insert((docking, ba, bb, 0.0));
-        e.3 += raw;
-    }
-    let mut raw_per_body = vec![0.0; cs.body_impulse.len()];
-    for (_, ba, bb, raw) in now.values() {
-        raw_per_body[*ba] += raw;
-        raw_per_body[*bb] += raw;
-    }
+    contact_steps::rapier_pairs(&phys, sync.stepped, cs, (t, dt), &mut now, &mut who);
+    let raw_per_body = contact_steps::raw_per_body(&now, cs.body_impulse.len());
     // The compliant model's pairs: (impulse on b, peak force) per key.
-    let mut given: BTreeMap<(String, String), (nalgebra::Vector3<f64>, f64)> = BTreeMap::new();
+    let mut given = contact_steps::GivenPairs::new();
     if let Some(cc) = &compliant {
-        for st in &cc.step {
-            let p = &cc.pairs[st.pair];
-            now.entry(p.names.clone())
-                .or_insert((true, cc.indices.0, cc.indices.1, 0.0));
-            given.insert(p.names.clone(), (st.impulse_on_b_ns, st.peak_force_n));
-        }
-        let t0 = t - dt;
-        for smp in &cc.samples {
-            let p = &cc.pairs[smp.pair];
-            cs.points.push(PointRow {
-                t_s: t0 + smp.t_in_step_s,
-                a: p.names.0.clone(),
-                b: p.names.1.clone(),
-                compliant: true,
-                point_m: smp.point_m,
-                normal_on_b: smp.normal_on_b,
-                depth_m: smp.depth_m,
-                normal_force_n: smp.normal_force_n,
-                normal_impulse_ns: smp.normal_force_n * smp.h_s,
-                force_on_b_n: smp.force_on_b_n,
-            });
-        }
+        contact_steps::compliant_pairs(cc, (t, dt), &mut now, &mut given, &mut cs.points);
     }
-    let share = |body: usize, raw: f64, cs: &ContactState| {
-        if raw_per_body[body] > 0.0 {
-            cs.body_impulse[body].norm() * raw / raw_per_body[body]
-        } else {
-            0.0
-        }
-    };
     // Ended contacts.
-    let ended: Vec<(String, String)> = cs
-        .active
-        .keys()
-        .filter(|k| !now.contains_key(*k))
-        .cloned()
-        .collect();
-    for k in ended {
-        let c = cs.active.remove(&k).expect("active");
-        log.push(
-            t,
-            "contact_end",
-            serde_json::json!({"a": k.0, "b": k.1, "docking": c.docking,
-                "duration_s": t - c.start_s, "peak_force_n": c.peak_force_n, "impulse_ns": c.impulse_ns}),
-        );
-    }
+    contact_steps::end_contacts(cs, &now, &mut log, t);
     for (k, (docking, ba, bb, raw)) in now {
-        // Impulse magnitude, peak force, and the impulse vectors on the two parts.
-        let (impulse, force, on_a, on_b) = match given.get(&k) {
-            Some((j, peak)) => (j.norm(), *peak, -j, *j),
-            None => {
-                let impulse = 0.5 * (share(ba, raw, cs) + share(bb, raw, cs));
-                let on = |body: usize| {
-                    if raw_per_body[body] > 0.0 {
-                        cs.body_impulse[body] * (raw / raw_per_body[body])
-                    } else {
-                        nalgebra::Vector3::zeros()
-                    }
-                };
-                (impulse, impulse / dt, on(ba), on(bb))
-            }
-        };
+        let imp = contact_steps::pair_impulse(&k, (ba, bb, raw), &given, &raw_per_body, cs, dt);
         if !cs.active.contains_key(&k) {
-            cs.first_contact_s.get_or_insert(t);
-            let (t_touch, t_tol) = match (motion.ready, who.get(&k)) {
+            let touch = match (motion.ready, who.get(&k)) {
                 (true, Some(&(sa, sb))) => touch_time(&geo, &motion, sa, sb, &mut scratch),
                 _ => (t, 0.0),
             };
-            cs.first_touch_s.get_or_insert(t_touch);
-            log.push(
-                t,
-                "contact_start",
-                serde_json::json!({"a": k.0, "b": k.1, "docking": docking,
-                    "t_contact_s": t_touch, "t_tol_s": t_tol}),
-            );
-            if !docking {
-                cs.first_collision_s.get_or_insert(t);
-                cs.collisions.push((t, k.0.clone(), k.1.clone()));
-                log.push(t, "collision", serde_json::json!({"a": k.0, "b": k.1}));
-            }
-            cs.active.insert(
-                k.clone(),
-                ActiveContact {
-                    start_s: t,
-                    docking,
-                    peak_force_n: 0.0,
-                    impulse_ns: 0.0,
-                },
-            );
+            contact_steps::start_contact(cs, &mut log, &k, docking, t, touch);
         }
-        let c = cs.active.get_mut(&k).expect("active");
-        c.peak_force_n = c.peak_force_n.max(force);
-        c.impulse_ns += impulse;
-        let cum = cs
-            .cumulative_impulse_ns
-            .entry(k.clone())
-            .or_insert_with(|| CumulativeImpulse {
-                docking,
-                ..Default::default()
-            });
-        cum.magnitude_ns += impulse;
-        cum.on_b_ns += on_b;
-        for (name, vec) in [(&k.0, on_a), (&k.1, on_b)] {
-            let s = cs.per_part.entry(name.clone()).or_default();
-            s.peak_force_n = s.peak_force_n.max(force);
-            s.total_impulse_ns += impulse;
-            for (n, v) in s.net_impulse_ns.iter_mut().zip(vec.iter()) {
-                *n += v;
-            }
-        }
-        cs.step_pairs.push(StepPair {
-            key: k,
-            docking,
-            bodies: (ba, bb),
-            impulse_on_b_ns: on_b,
-            peak_force_n: force,
-        });
+        contact_steps::accumulate(cs, k, docking, (ba, bb), &imp);
     }
 }
