@@ -332,7 +332,6 @@ pub fn hull_bracket(
     (b, hb, rb): (&dyn rp::Shape, Option<&super::mesh::HullSupport>, f64),
     clear_at: f64,
 ) -> HullEval {
-    use bevy_rapier3d::parry::query::PointQuery;
     use bevy_rapier3d::parry::shape::SupportMap;
     fn side<'s>(
         s: &'s dyn rp::Shape,
@@ -351,6 +350,77 @@ pub fn hull_bracket(
     // First the shell of a mesh part against a part with a support map: no support or
     // triangle query at all where it is narrow enough (a round part, far away).
     let pair_eps = F32_REL_TOL * scale;
+    let (has_shell, shell_lower, shell_upper) =
+        match shell_tier(pose_a, (a, ha, ra), pose_b, (b, hb, rb), pair_eps, clear_at) {
+            Ok(tier) => tier,
+            Err(answer) => return answer,
+        };
+    let hull_tol = super::mesh::HULL_SUPPORT_REL_TOL
+        * (ha.map_or(0.0, |h| h.radius_m()) + hb.map_or(0.0, |h| h.radius_m()));
+    let eps = F32_REL_TOL * scale + hull_tol;
+    let rel32 = conv::pose(&rel);
+    let (ma, mb) = (ha.and(a.as_trimesh()), hb.and(b.as_trimesh()));
+    let pair = HullPair {
+        a,
+        ma,
+        b,
+        mb,
+        sa,
+        sb,
+        rel32,
+        eps,
+    };
+    let (p1, p2) =
+        match query::details::closest_points_support_map_support_map(&rel32, sa, sb, f32::MAX) {
+            // p₁ in A's frame, p₂ in B's.
+            query::ClosestPoints::WithinMargin(p1, p2) => (p1, p2),
+            _ => return HullEval::None,
+        };
+    let p2a = rel32 * p2;
+    let d = (p2a - p1).length();
+    if d.is_nan() || d <= 0.0 {
+        return HullEval::None;
+    }
+    let gap = pair.gap_along((p2a - p1) / d).min(f64::from(d));
+    let gap = if has_shell {
+        gap.max(shell_lower + eps)
+    } else {
+        gap
+    };
+    if gap - eps >= clear_at {
+        return HullEval::Clear(gap - eps);
+    }
+    // A point of each part near its witness: a mesh's point closest to its hull's witness,
+    // or a primitive's own witness (in it: a convex combination of its support points); the
+    // upper bound is the smaller distance of either to the other part.
+    if ma.is_none() && mb.is_none() {
+        return HullEval::None;
+    }
+    let (upper, gap) = pair.upper_bound(p1, p2, gap);
+    if !upper.is_finite() {
+        return HullEval::None;
+    }
+    let upper = f64::from(upper).min(shell_upper);
+    let lower = (gap - eps).max(0.0);
+    HullEval::Bracket {
+        lower: lower.min(upper),
+        upper,
+    }
+}
+
+/// The first tier of [`hull_bracket`]: for a mesh part against a part with a support map, its
+/// shell bracket (`shell_bound`, with the pair's f32 rounding `pair_eps`, m). `Ok` with
+/// (whether there is one, its lower bound, its upper bound), m (0 and ∞ without one); `Err`
+/// with the answer when the shell already gives it: clear at `clear_at`, m, or a bracket as
+/// narrow as the caller's test of an exact value.
+fn shell_tier(
+    pose_a: &Isometry3<f64>,
+    (a, ha, ra): (&dyn rp::Shape, Option<&super::mesh::HullSupport>, f64),
+    pose_b: &Isometry3<f64>,
+    (b, hb, rb): (&dyn rp::Shape, Option<&super::mesh::HullSupport>, f64),
+    pair_eps: f64,
+    clear_at: f64,
+) -> Result<(bool, f64, f64), HullEval> {
     let shell = match (ha.and_then(|h| h.shell()), hb.and_then(|h| h.shell())) {
         (Some(s), None) if hb.is_none() => {
             shell_bound((pose_b, b, rb), pose_a, s, pair_eps, clear_at)
@@ -364,121 +434,163 @@ pub fn hull_bracket(
         (l.max(0.0), u.unwrap_or(f64::INFINITY))
     });
     if shell.is_some() && shell_lower >= clear_at {
-        return HullEval::Clear(shell_lower);
+        return Err(HullEval::Clear(shell_lower));
     }
     if shell_lower >= shell_upper * (1.0 - GJK_REL_TOL) - pair_eps {
-        return HullEval::Bracket {
+        return Err(HullEval::Bracket {
             lower: shell_lower.min(shell_upper),
             upper: shell_upper,
-        };
+        });
     }
-    let hull_tol = super::mesh::HULL_SUPPORT_REL_TOL
-        * (ha.map_or(0.0, |h| h.radius_m()) + hb.map_or(0.0, |h| h.radius_m()));
-    let eps = F32_REL_TOL * scale + hull_tol;
-    let rel32 = conv::pose(&rel);
-    let (p1, p2) =
-        match query::details::closest_points_support_map_support_map(&rel32, sa, sb, f32::MAX) {
-            // p₁ in A's frame, p₂ in B's.
-            query::ClosestPoints::WithinMargin(p1, p2) => (p1, p2),
-            _ => return HullEval::None,
-        };
-    let p2a = rel32 * p2;
-    let d = (p2a - p1).length();
-    if d.is_nan() || d <= 0.0 {
-        return HullEval::None;
-    }
-    // The hulls' gap along a unit direction n (A's frame): n·(s_b(−n) − s_a(n)).
-    let gap_along = |n: bevy_rapier3d::rapier::math::Vector| {
+    Ok((shell.is_some(), shell_lower, shell_upper))
+}
+
+/// Two parts in A's frame, for the hull tier of [`hull_bracket`]: their shapes, their
+/// triangles when they are meshes with a hull, their support maps (a mesh's hull's), B's pose
+/// in A's frame (f32) and the pair's rounding allowance.
+struct HullPair<'s> {
+    /// Part A.
+    a: &'s dyn rp::Shape,
+    /// A's triangles, when it is a mesh with a hull.
+    ma: Option<&'s bevy_rapier3d::parry::shape::TriMesh>,
+    /// Part B.
+    b: &'s dyn rp::Shape,
+    /// B's triangles, when it is a mesh with a hull.
+    mb: Option<&'s bevy_rapier3d::parry::shape::TriMesh>,
+    /// A's support map (its hull's for a mesh).
+    sa: &'s dyn bevy_rapier3d::parry::shape::SupportMap,
+    /// B's support map (its hull's for a mesh).
+    sb: &'s dyn bevy_rapier3d::parry::shape::SupportMap,
+    /// B's pose in A's frame.
+    rel32: Pose,
+    /// The f32 rounding of the relative pose and of the hulls' maxima, m.
+    eps: f64,
+}
+
+impl HullPair<'_> {
+    /// The hulls' gap along a unit direction n (A's frame): n·(s_b(−n) − s_a(n)), m.
+    fn gap_along(&self, n: bevy_rapier3d::rapier::math::Vector) -> f64 {
+        let (sa, sb, rel32) = (self.sa, self.sb, self.rel32);
         let s1 = sa.local_support_point(n);
         let s2 = rel32 * sb.local_support_point(rel32.rotation.inverse() * -n);
         f64::from(n.dot(s2 - s1))
-    };
-    let gap = gap_along((p2a - p1) / d).min(f64::from(d));
-    let gap = if shell.is_some() {
-        gap.max(shell_lower + eps)
-    } else {
-        gap
-    };
-    if gap - eps >= clear_at {
-        return HullEval::Clear(gap - eps);
     }
-    // A point of each part near its witness: a mesh's point closest to its hull's witness,
-    // or a primitive's own witness (in it: a convex combination of its support points); the
-    // upper bound is the smaller distance of either to the other part.
-    let (ma, mb) = (ha.and(a.as_trimesh()), hb.and(b.as_trimesh()));
-    if ma.is_none() && mb.is_none() {
-        return HullEval::None;
+
+    /// A point of a part near `p` (its frame): for a mesh `m`, its triangles' point closest to
+    /// `p`; for a primitive, `p` itself.
+    fn on(
+        m: Option<&bevy_rapier3d::parry::shape::TriMesh>,
+        p: bevy_rapier3d::rapier::math::Vector,
+    ) -> bevy_rapier3d::rapier::math::Vector {
+        use bevy_rapier3d::parry::query::PointQuery;
+        match m {
+            Some(m) => m.project_local_point(p, false).point,
+            None => p,
+        }
     }
-    let on = |m: Option<&bevy_rapier3d::parry::shape::TriMesh>, p| match m {
-        Some(m) => m.project_local_point(p, false).point,
-        None => p,
-    };
-    // The point of a part closest to w (its frame): the mesh's triangles (its surface, as the
-    // exact query judges it), or the solid primitive.
-    let near = |s: &dyn rp::Shape, m: Option<&bevy_rapier3d::parry::shape::TriMesh>, w| match m {
-        Some(m) => m.project_local_point(w, false).point,
-        None => s.project_local_point(w, true).point,
-    };
-    use bevy_rapier3d::rapier::math::Vector;
-    let near_a = |w| near(a, ma, w);
-    let near_b = |w| rel32 * near(b, mb, rel32.inverse_transform_point(w));
-    // The gap along the direction of a point pair (from ∈ A, to ∈ B, |to − from| = d), often
-    // nearer the true direction than GJK's on a curved part (any direction's gap is a lower
-    // bound).
-    let along = |from: Vector, to: Vector, d: f32, gap: f64| {
+
+    /// The point of a part closest to w (its frame): the mesh's triangles (its surface, as the
+    /// exact query judges it), or the solid primitive.
+    fn near(
+        s: &dyn rp::Shape,
+        m: Option<&bevy_rapier3d::parry::shape::TriMesh>,
+        w: bevy_rapier3d::rapier::math::Vector,
+    ) -> bevy_rapier3d::rapier::math::Vector {
+        use bevy_rapier3d::parry::query::PointQuery;
+        match m {
+            Some(m) => m.project_local_point(w, false).point,
+            None => s.project_local_point(w, true).point,
+        }
+    }
+
+    /// The point of A closest to `w` (A's frame).
+    fn near_a(
+        &self,
+        w: bevy_rapier3d::rapier::math::Vector,
+    ) -> bevy_rapier3d::rapier::math::Vector {
+        Self::near(self.a, self.ma, w)
+    }
+
+    /// The point of B closest to `w` (both in A's frame).
+    fn near_b(
+        &self,
+        w: bevy_rapier3d::rapier::math::Vector,
+    ) -> bevy_rapier3d::rapier::math::Vector {
+        let rel32 = self.rel32;
+        rel32 * Self::near(self.b, self.mb, rel32.inverse_transform_point(w))
+    }
+
+    /// The gap along the direction of a point pair (from ∈ A, to ∈ B, |to − from| = d), often
+    /// nearer the true direction than GJK's on a curved part (any direction's gap is a lower
+    /// bound): the larger of it and `gap`, m.
+    fn along(
+        &self,
+        from: bevy_rapier3d::rapier::math::Vector,
+        to: bevy_rapier3d::rapier::math::Vector,
+        d: f32,
+        gap: f64,
+    ) -> f64 {
         let n = (to - from) / d;
         if d > 0.0 && n.is_finite() {
-            gap.max(gap_along(n))
+            gap.max(self.gap_along(n))
         } else {
             gap
         }
-    };
-    // Done once the bracket is down to the rounding (as exact as parry's own f32 queries).
-    let settled = |upper: f32, gap: f64| f64::from(upper) - gap <= eps;
-    let q1 = on(ma, p1);
-    let r2 = near_b(q1);
-    let (mut upper, mut from, mut to) = ((r2 - q1).length(), q1, r2);
-    let mut gap = if settled(upper, gap) {
-        gap
-    } else {
-        along(from, to, upper, gap)
-    };
-    if !settled(upper, gap) {
-        let q2 = rel32 * on(mb, p2);
-        let r1 = near_a(q2);
-        let d2 = (q2 - r1).length();
-        if d2 < upper {
-            (upper, from, to) = (d2, r1, q2);
-            gap = along(from, to, upper, gap);
-        }
-        // Alternating projections (x ← the point of A nearest y, y ← the point of B nearest
-        // x) never increase |x − y| and walk a witness that GJK left off the true closest
-        // point (on a curved part) towards it: a few, while they gain.
-        for _ in 0..HULL_UPPER_SWEEPS {
-            if settled(upper, gap) {
-                break;
-            }
-            let x = near_a(to);
-            let y = near_b(x);
-            let d = (y - x).length();
-            let gains = d < upper * (1.0 - 1e-7);
-            if d < upper {
-                (upper, from, to) = (d, x, y);
-                gap = along(from, to, upper, gap);
-            }
-            if !gains {
-                break;
-            }
-        }
     }
-    if !upper.is_finite() {
-        return HullEval::None;
+
+    /// Done once the bracket is down to the rounding (as exact as parry's own f32 queries).
+    fn settled(&self, upper: f32, gap: f64) -> bool {
+        f64::from(upper) - gap <= self.eps
     }
-    let upper = f64::from(upper).min(shell_upper);
-    let lower = (gap - eps).max(0.0);
-    HullEval::Bracket {
-        lower: lower.min(upper),
-        upper,
+
+    /// The hull tier's upper bound from GJK's hull witnesses `p1` (A's frame) and `p2` (B's):
+    /// each side's point near its witness ([`Self::on`]), its distance to the other part, the
+    /// smaller, then up to [`HULL_UPPER_SWEEPS`] alternating projections while they gain;
+    /// with the lower bound `gap`, m, raised along each better point pair ([`Self::along`]).
+    /// Returns (upper bound, m; gap, m).
+    fn upper_bound(
+        &self,
+        p1: bevy_rapier3d::rapier::math::Vector,
+        p2: bevy_rapier3d::rapier::math::Vector,
+        gap: f64,
+    ) -> (f32, f64) {
+        let q1 = Self::on(self.ma, p1);
+        let r2 = self.near_b(q1);
+        let (mut upper, mut from, mut to) = ((r2 - q1).length(), q1, r2);
+        let mut gap = if self.settled(upper, gap) {
+            gap
+        } else {
+            self.along(from, to, upper, gap)
+        };
+        if !self.settled(upper, gap) {
+            let q2 = self.rel32 * Self::on(self.mb, p2);
+            let r1 = self.near_a(q2);
+            let d2 = (q2 - r1).length();
+            if d2 < upper {
+                (upper, from, to) = (d2, r1, q2);
+                gap = self.along(from, to, upper, gap);
+            }
+            // Alternating projections (x ← the point of A nearest y, y ← the point of B nearest
+            // x) never increase |x − y| and walk a witness that GJK left off the true closest
+            // point (on a curved part) towards it: a few, while they gain.
+            for _ in 0..HULL_UPPER_SWEEPS {
+                if self.settled(upper, gap) {
+                    break;
+                }
+                let x = self.near_a(to);
+                let y = self.near_b(x);
+                let d = (y - x).length();
+                let gains = d < upper * (1.0 - 1e-7);
+                if d < upper {
+                    (upper, from, to) = (d, x, y);
+                    gap = self.along(from, to, upper, gap);
+                }
+                if !gains {
+                    break;
+                }
+            }
+        }
+        (upper, gap)
     }
 }
 
