@@ -1267,6 +1267,10 @@ pub fn part_bracket(
 /// part a, part b).
 pub type Evaluated = (f64, f64, usize, usize);
 
+/// [`closest_parts`], and with `lows` (when given) every part pair's lower bound, row-major
+/// (part a of body i by part b of body j), m: its bounding-sphere gap ([`sphere_lows`]), raised
+/// to the certified bound of a pair that a hull cleared. The certified lower bound of the
+/// closest pair, with `certify`, is [`certified_lower`]'s.
 #[allow(clippy::too_many_arguments)]
 fn closest_parts_inner(
     geo: &MonitorGeometry,
@@ -1282,15 +1286,9 @@ fn closest_parts_inner(
     count: &mut QueryCount,
     lows: &mut Option<&mut Vec<f64>>,
 ) -> PartPairHit {
-    let (si, sj) = (&geo.shapes[i], &geo.shapes[j]);
     let nj = pj.len();
     if let Some(l) = lows.as_deref_mut() {
-        l.clear();
-        for (pa, ra) in pi {
-            for (pb, rb) in pj {
-                l.push((pa.translation.vector - pb.translation.vector).norm() - ra - rb);
-            }
-        }
+        sphere_lows(pi, pj, l);
     }
     // A pair a hull cleared: its certified bound joins the lows.
     let cleared = |a: usize, b: usize, l: f64, lows: &mut Option<&mut Vec<f64>>| {
@@ -1357,6 +1355,43 @@ fn closest_parts_inner(
             b: bb,
         };
     }
+    let lower = certified_lower(geo, (i, pi), (j, pj), evaluated, (ba, bb), count);
+    PartPairHit {
+        d: Bracket {
+            value: best,
+            lower: lower.min(best),
+        },
+        a: ba,
+        b: bb,
+    }
+}
+
+/// Every part pair's bounding-sphere gap |c_a − c_b| − r_a − r_b, m, into `l` (cleared first),
+/// row-major: part a of `pi` by part b of `pj` (world poses and bounding radii, m).
+fn sphere_lows(pi: &[(Isometry3<f64>, f64)], pj: &[(Isometry3<f64>, f64)], l: &mut Vec<f64>) {
+    l.clear();
+    for (pa, ra) in pi {
+        for (pb, rb) in pj {
+            l.push((pa.translation.vector - pb.translation.vector).norm() - ra - rb);
+        }
+    }
+}
+
+/// The certified lower bound, m, of the distance of bodies i and j (their parts' world poses
+/// and bounding radii `pi`, `pj`) whose closest evaluated part pair is (`ba`, `bb`): that
+/// pair's certified bound, lowered to any other evaluated pair's whose value less its GJK and
+/// f32 tolerances could be below it (see [`closest_parts`]). A pair's certified bound is the
+/// one its evaluation gave (mesh pairs), else its [`shape_bracket`]'s lower bound (one more
+/// exact query in `count`).
+fn certified_lower(
+    geo: &MonitorGeometry,
+    (i, pi): (usize, &[(Isometry3<f64>, f64)]),
+    (j, pj): (usize, &[(Isometry3<f64>, f64)]),
+    evaluated: &[Evaluated],
+    (ba, bb): (usize, usize),
+    count: &mut QueryCount,
+) -> f64 {
+    let (si, sj) = (&geo.shapes[i], &geo.shapes[j]);
     // A pair's certified lower bound: the one its evaluation gave (mesh pairs), else its
     // certified bracket.
     let mut certified = |e: &Evaluated| {
@@ -1386,14 +1421,7 @@ fn closest_parts_inner(
             lower = lower.min(certified(e));
         }
     }
-    PartPairHit {
-        d: Bracket {
-            value: best,
-            lower: lower.min(best),
-        },
-        a: ba,
-        b: bb,
-    }
+    lower
 }
 
 /// World poses and bounding radii of one body's parts.
