@@ -16,6 +16,7 @@ use bevy_rapier3d::rapier::prelude as rp;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use std::collections::{BTreeMap, HashMap};
 
+mod contact_steps;
 pub mod memo;
 mod tracked;
 
@@ -331,7 +332,6 @@ pub fn hull_bracket(
     (b, hb, rb): (&dyn rp::Shape, Option<&super::mesh::HullSupport>, f64),
     clear_at: f64,
 ) -> HullEval {
-    use bevy_rapier3d::parry::query::PointQuery;
     use bevy_rapier3d::parry::shape::SupportMap;
     fn side<'s>(
         s: &'s dyn rp::Shape,
@@ -350,6 +350,77 @@ pub fn hull_bracket(
     // First the shell of a mesh part against a part with a support map: no support or
     // triangle query at all where it is narrow enough (a round part, far away).
     let pair_eps = F32_REL_TOL * scale;
+    let (has_shell, shell_lower, shell_upper) =
+        match shell_tier(pose_a, (a, ha, ra), pose_b, (b, hb, rb), pair_eps, clear_at) {
+            Ok(tier) => tier,
+            Err(answer) => return answer,
+        };
+    let hull_tol = super::mesh::HULL_SUPPORT_REL_TOL
+        * (ha.map_or(0.0, |h| h.radius_m()) + hb.map_or(0.0, |h| h.radius_m()));
+    let eps = F32_REL_TOL * scale + hull_tol;
+    let rel32 = conv::pose(&rel);
+    let (ma, mb) = (ha.and(a.as_trimesh()), hb.and(b.as_trimesh()));
+    let pair = HullPair {
+        a,
+        ma,
+        b,
+        mb,
+        sa,
+        sb,
+        rel32,
+        eps,
+    };
+    let (p1, p2) =
+        match query::details::closest_points_support_map_support_map(&rel32, sa, sb, f32::MAX) {
+            // p₁ in A's frame, p₂ in B's.
+            query::ClosestPoints::WithinMargin(p1, p2) => (p1, p2),
+            _ => return HullEval::None,
+        };
+    let p2a = rel32 * p2;
+    let d = (p2a - p1).length();
+    if d.is_nan() || d <= 0.0 {
+        return HullEval::None;
+    }
+    let gap = pair.gap_along((p2a - p1) / d).min(f64::from(d));
+    let gap = if has_shell {
+        gap.max(shell_lower + eps)
+    } else {
+        gap
+    };
+    if gap - eps >= clear_at {
+        return HullEval::Clear(gap - eps);
+    }
+    // A point of each part near its witness: a mesh's point closest to its hull's witness,
+    // or a primitive's own witness (in it: a convex combination of its support points); the
+    // upper bound is the smaller distance of either to the other part.
+    if ma.is_none() && mb.is_none() {
+        return HullEval::None;
+    }
+    let (upper, gap) = pair.upper_bound(p1, p2, gap);
+    if !upper.is_finite() {
+        return HullEval::None;
+    }
+    let upper = f64::from(upper).min(shell_upper);
+    let lower = (gap - eps).max(0.0);
+    HullEval::Bracket {
+        lower: lower.min(upper),
+        upper,
+    }
+}
+
+/// The first tier of [`hull_bracket`]: for a mesh part against a part with a support map, its
+/// shell bracket (`shell_bound`, with the pair's f32 rounding `pair_eps`, m). `Ok` with
+/// (whether there is one, its lower bound, its upper bound), m (0 and ∞ without one); `Err`
+/// with the answer when the shell already gives it: clear at `clear_at`, m, or a bracket as
+/// narrow as the caller's test of an exact value.
+fn shell_tier(
+    pose_a: &Isometry3<f64>,
+    (a, ha, ra): (&dyn rp::Shape, Option<&super::mesh::HullSupport>, f64),
+    pose_b: &Isometry3<f64>,
+    (b, hb, rb): (&dyn rp::Shape, Option<&super::mesh::HullSupport>, f64),
+    pair_eps: f64,
+    clear_at: f64,
+) -> Result<(bool, f64, f64), HullEval> {
     let shell = match (ha.and_then(|h| h.shell()), hb.and_then(|h| h.shell())) {
         (Some(s), None) if hb.is_none() => {
             shell_bound((pose_b, b, rb), pose_a, s, pair_eps, clear_at)
@@ -363,121 +434,163 @@ pub fn hull_bracket(
         (l.max(0.0), u.unwrap_or(f64::INFINITY))
     });
     if shell.is_some() && shell_lower >= clear_at {
-        return HullEval::Clear(shell_lower);
+        return Err(HullEval::Clear(shell_lower));
     }
     if shell_lower >= shell_upper * (1.0 - GJK_REL_TOL) - pair_eps {
-        return HullEval::Bracket {
+        return Err(HullEval::Bracket {
             lower: shell_lower.min(shell_upper),
             upper: shell_upper,
-        };
+        });
     }
-    let hull_tol = super::mesh::HULL_SUPPORT_REL_TOL
-        * (ha.map_or(0.0, |h| h.radius_m()) + hb.map_or(0.0, |h| h.radius_m()));
-    let eps = F32_REL_TOL * scale + hull_tol;
-    let rel32 = conv::pose(&rel);
-    let (p1, p2) =
-        match query::details::closest_points_support_map_support_map(&rel32, sa, sb, f32::MAX) {
-            // p₁ in A's frame, p₂ in B's.
-            query::ClosestPoints::WithinMargin(p1, p2) => (p1, p2),
-            _ => return HullEval::None,
-        };
-    let p2a = rel32 * p2;
-    let d = (p2a - p1).length();
-    if d.is_nan() || d <= 0.0 {
-        return HullEval::None;
-    }
-    // The hulls' gap along a unit direction n (A's frame): n·(s_b(−n) − s_a(n)).
-    let gap_along = |n: bevy_rapier3d::rapier::math::Vector| {
+    Ok((shell.is_some(), shell_lower, shell_upper))
+}
+
+/// Two parts in A's frame, for the hull tier of [`hull_bracket`]: their shapes, their
+/// triangles when they are meshes with a hull, their support maps (a mesh's hull's), B's pose
+/// in A's frame (f32) and the pair's rounding allowance.
+struct HullPair<'s> {
+    /// Part A.
+    a: &'s dyn rp::Shape,
+    /// A's triangles, when it is a mesh with a hull.
+    ma: Option<&'s bevy_rapier3d::parry::shape::TriMesh>,
+    /// Part B.
+    b: &'s dyn rp::Shape,
+    /// B's triangles, when it is a mesh with a hull.
+    mb: Option<&'s bevy_rapier3d::parry::shape::TriMesh>,
+    /// A's support map (its hull's for a mesh).
+    sa: &'s dyn bevy_rapier3d::parry::shape::SupportMap,
+    /// B's support map (its hull's for a mesh).
+    sb: &'s dyn bevy_rapier3d::parry::shape::SupportMap,
+    /// B's pose in A's frame.
+    rel32: Pose,
+    /// The f32 rounding of the relative pose and of the hulls' maxima, m.
+    eps: f64,
+}
+
+impl HullPair<'_> {
+    /// The hulls' gap along a unit direction n (A's frame): n·(s_b(−n) − s_a(n)), m.
+    fn gap_along(&self, n: bevy_rapier3d::rapier::math::Vector) -> f64 {
+        let (sa, sb, rel32) = (self.sa, self.sb, self.rel32);
         let s1 = sa.local_support_point(n);
         let s2 = rel32 * sb.local_support_point(rel32.rotation.inverse() * -n);
         f64::from(n.dot(s2 - s1))
-    };
-    let gap = gap_along((p2a - p1) / d).min(f64::from(d));
-    let gap = if shell.is_some() {
-        gap.max(shell_lower + eps)
-    } else {
-        gap
-    };
-    if gap - eps >= clear_at {
-        return HullEval::Clear(gap - eps);
     }
-    // A point of each part near its witness: a mesh's point closest to its hull's witness,
-    // or a primitive's own witness (in it: a convex combination of its support points); the
-    // upper bound is the smaller distance of either to the other part.
-    let (ma, mb) = (ha.and(a.as_trimesh()), hb.and(b.as_trimesh()));
-    if ma.is_none() && mb.is_none() {
-        return HullEval::None;
+
+    /// A point of a part near `p` (its frame): for a mesh `m`, its triangles' point closest to
+    /// `p`; for a primitive, `p` itself.
+    fn on(
+        m: Option<&bevy_rapier3d::parry::shape::TriMesh>,
+        p: bevy_rapier3d::rapier::math::Vector,
+    ) -> bevy_rapier3d::rapier::math::Vector {
+        use bevy_rapier3d::parry::query::PointQuery;
+        match m {
+            Some(m) => m.project_local_point(p, false).point,
+            None => p,
+        }
     }
-    let on = |m: Option<&bevy_rapier3d::parry::shape::TriMesh>, p| match m {
-        Some(m) => m.project_local_point(p, false).point,
-        None => p,
-    };
-    // The point of a part closest to w (its frame): the mesh's triangles (its surface, as the
-    // exact query judges it), or the solid primitive.
-    let near = |s: &dyn rp::Shape, m: Option<&bevy_rapier3d::parry::shape::TriMesh>, w| match m {
-        Some(m) => m.project_local_point(w, false).point,
-        None => s.project_local_point(w, true).point,
-    };
-    use bevy_rapier3d::rapier::math::Vector;
-    let near_a = |w| near(a, ma, w);
-    let near_b = |w| rel32 * near(b, mb, rel32.inverse_transform_point(w));
-    // The gap along the direction of a point pair (from ∈ A, to ∈ B, |to − from| = d), often
-    // nearer the true direction than GJK's on a curved part (any direction's gap is a lower
-    // bound).
-    let along = |from: Vector, to: Vector, d: f32, gap: f64| {
+
+    /// The point of a part closest to w (its frame): the mesh's triangles (its surface, as the
+    /// exact query judges it), or the solid primitive.
+    fn near(
+        s: &dyn rp::Shape,
+        m: Option<&bevy_rapier3d::parry::shape::TriMesh>,
+        w: bevy_rapier3d::rapier::math::Vector,
+    ) -> bevy_rapier3d::rapier::math::Vector {
+        use bevy_rapier3d::parry::query::PointQuery;
+        match m {
+            Some(m) => m.project_local_point(w, false).point,
+            None => s.project_local_point(w, true).point,
+        }
+    }
+
+    /// The point of A closest to `w` (A's frame).
+    fn near_a(
+        &self,
+        w: bevy_rapier3d::rapier::math::Vector,
+    ) -> bevy_rapier3d::rapier::math::Vector {
+        Self::near(self.a, self.ma, w)
+    }
+
+    /// The point of B closest to `w` (both in A's frame).
+    fn near_b(
+        &self,
+        w: bevy_rapier3d::rapier::math::Vector,
+    ) -> bevy_rapier3d::rapier::math::Vector {
+        let rel32 = self.rel32;
+        rel32 * Self::near(self.b, self.mb, rel32.inverse_transform_point(w))
+    }
+
+    /// The gap along the direction of a point pair (from ∈ A, to ∈ B, |to − from| = d), often
+    /// nearer the true direction than GJK's on a curved part (any direction's gap is a lower
+    /// bound): the larger of it and `gap`, m.
+    fn along(
+        &self,
+        from: bevy_rapier3d::rapier::math::Vector,
+        to: bevy_rapier3d::rapier::math::Vector,
+        d: f32,
+        gap: f64,
+    ) -> f64 {
         let n = (to - from) / d;
         if d > 0.0 && n.is_finite() {
-            gap.max(gap_along(n))
+            gap.max(self.gap_along(n))
         } else {
             gap
         }
-    };
-    // Done once the bracket is down to the rounding (as exact as parry's own f32 queries).
-    let settled = |upper: f32, gap: f64| f64::from(upper) - gap <= eps;
-    let q1 = on(ma, p1);
-    let r2 = near_b(q1);
-    let (mut upper, mut from, mut to) = ((r2 - q1).length(), q1, r2);
-    let mut gap = if settled(upper, gap) {
-        gap
-    } else {
-        along(from, to, upper, gap)
-    };
-    if !settled(upper, gap) {
-        let q2 = rel32 * on(mb, p2);
-        let r1 = near_a(q2);
-        let d2 = (q2 - r1).length();
-        if d2 < upper {
-            (upper, from, to) = (d2, r1, q2);
-            gap = along(from, to, upper, gap);
-        }
-        // Alternating projections (x ← the point of A nearest y, y ← the point of B nearest
-        // x) never increase |x − y| and walk a witness that GJK left off the true closest
-        // point (on a curved part) towards it: a few, while they gain.
-        for _ in 0..HULL_UPPER_SWEEPS {
-            if settled(upper, gap) {
-                break;
-            }
-            let x = near_a(to);
-            let y = near_b(x);
-            let d = (y - x).length();
-            let gains = d < upper * (1.0 - 1e-7);
-            if d < upper {
-                (upper, from, to) = (d, x, y);
-                gap = along(from, to, upper, gap);
-            }
-            if !gains {
-                break;
-            }
-        }
     }
-    if !upper.is_finite() {
-        return HullEval::None;
+
+    /// Done once the bracket is down to the rounding (as exact as parry's own f32 queries).
+    fn settled(&self, upper: f32, gap: f64) -> bool {
+        f64::from(upper) - gap <= self.eps
     }
-    let upper = f64::from(upper).min(shell_upper);
-    let lower = (gap - eps).max(0.0);
-    HullEval::Bracket {
-        lower: lower.min(upper),
-        upper,
+
+    /// The hull tier's upper bound from GJK's hull witnesses `p1` (A's frame) and `p2` (B's):
+    /// each side's point near its witness ([`Self::on`]), its distance to the other part, the
+    /// smaller, then up to [`HULL_UPPER_SWEEPS`] alternating projections while they gain;
+    /// with the lower bound `gap`, m, raised along each better point pair ([`Self::along`]).
+    /// Returns (upper bound, m; gap, m).
+    fn upper_bound(
+        &self,
+        p1: bevy_rapier3d::rapier::math::Vector,
+        p2: bevy_rapier3d::rapier::math::Vector,
+        gap: f64,
+    ) -> (f32, f64) {
+        let q1 = Self::on(self.ma, p1);
+        let r2 = self.near_b(q1);
+        let (mut upper, mut from, mut to) = ((r2 - q1).length(), q1, r2);
+        let mut gap = if self.settled(upper, gap) {
+            gap
+        } else {
+            self.along(from, to, upper, gap)
+        };
+        if !self.settled(upper, gap) {
+            let q2 = self.rel32 * Self::on(self.mb, p2);
+            let r1 = self.near_a(q2);
+            let d2 = (q2 - r1).length();
+            if d2 < upper {
+                (upper, from, to) = (d2, r1, q2);
+                gap = self.along(from, to, upper, gap);
+            }
+            // Alternating projections (x ← the point of A nearest y, y ← the point of B nearest
+            // x) never increase |x − y| and walk a witness that GJK left off the true closest
+            // point (on a curved part) towards it: a few, while they gain.
+            for _ in 0..HULL_UPPER_SWEEPS {
+                if self.settled(upper, gap) {
+                    break;
+                }
+                let x = self.near_a(to);
+                let y = self.near_b(x);
+                let d = (y - x).length();
+                let gains = d < upper * (1.0 - 1e-7);
+                if d < upper {
+                    (upper, from, to) = (d, x, y);
+                    gap = self.along(from, to, upper, gap);
+                }
+                if !gains {
+                    break;
+                }
+            }
+        }
+        (upper, gap)
     }
 }
 
@@ -1154,6 +1267,10 @@ pub fn part_bracket(
 /// part a, part b).
 pub type Evaluated = (f64, f64, usize, usize);
 
+/// [`closest_parts`], and with `lows` (when given) every part pair's lower bound, row-major
+/// (part a of body i by part b of body j), m: its bounding-sphere gap ([`sphere_lows`]), raised
+/// to the certified bound of a pair that a hull cleared. The certified lower bound of the
+/// closest pair, with `certify`, is [`certified_lower`]'s.
 #[allow(clippy::too_many_arguments)]
 fn closest_parts_inner(
     geo: &MonitorGeometry,
@@ -1169,15 +1286,9 @@ fn closest_parts_inner(
     count: &mut QueryCount,
     lows: &mut Option<&mut Vec<f64>>,
 ) -> PartPairHit {
-    let (si, sj) = (&geo.shapes[i], &geo.shapes[j]);
     let nj = pj.len();
     if let Some(l) = lows.as_deref_mut() {
-        l.clear();
-        for (pa, ra) in pi {
-            for (pb, rb) in pj {
-                l.push((pa.translation.vector - pb.translation.vector).norm() - ra - rb);
-            }
-        }
+        sphere_lows(pi, pj, l);
     }
     // A pair a hull cleared: its certified bound joins the lows.
     let cleared = |a: usize, b: usize, l: f64, lows: &mut Option<&mut Vec<f64>>| {
@@ -1244,6 +1355,43 @@ fn closest_parts_inner(
             b: bb,
         };
     }
+    let lower = certified_lower(geo, (i, pi), (j, pj), evaluated, (ba, bb), count);
+    PartPairHit {
+        d: Bracket {
+            value: best,
+            lower: lower.min(best),
+        },
+        a: ba,
+        b: bb,
+    }
+}
+
+/// Every part pair's bounding-sphere gap |c_a − c_b| − r_a − r_b, m, into `l` (cleared first),
+/// row-major: part a of `pi` by part b of `pj` (world poses and bounding radii, m).
+fn sphere_lows(pi: &[(Isometry3<f64>, f64)], pj: &[(Isometry3<f64>, f64)], l: &mut Vec<f64>) {
+    l.clear();
+    for (pa, ra) in pi {
+        for (pb, rb) in pj {
+            l.push((pa.translation.vector - pb.translation.vector).norm() - ra - rb);
+        }
+    }
+}
+
+/// The certified lower bound, m, of the distance of bodies i and j (their parts' world poses
+/// and bounding radii `pi`, `pj`) whose closest evaluated part pair is (`ba`, `bb`): that
+/// pair's certified bound, lowered to any other evaluated pair's whose value less its GJK and
+/// f32 tolerances could be below it (see [`closest_parts`]). A pair's certified bound is the
+/// one its evaluation gave (mesh pairs), else its [`shape_bracket`]'s lower bound (one more
+/// exact query in `count`).
+fn certified_lower(
+    geo: &MonitorGeometry,
+    (i, pi): (usize, &[(Isometry3<f64>, f64)]),
+    (j, pj): (usize, &[(Isometry3<f64>, f64)]),
+    evaluated: &[Evaluated],
+    (ba, bb): (usize, usize),
+    count: &mut QueryCount,
+) -> f64 {
+    let (si, sj) = (&geo.shapes[i], &geo.shapes[j]);
     // A pair's certified lower bound: the one its evaluation gave (mesh pairs), else its
     // certified bracket.
     let mut certified = |e: &Evaluated| {
@@ -1273,14 +1421,7 @@ fn closest_parts_inner(
             lower = lower.min(certified(e));
         }
     }
-    PartPairHit {
-        d: Bracket {
-            value: best,
-            lower: lower.min(best),
-        },
-        a: ba,
-        b: bb,
-    }
+    lower
 }
 
 /// World poses and bounding radii of one body's parts.
@@ -1633,6 +1774,11 @@ pub fn touch_time(
 /// that body. Each pair's impulse is the mean of the two bodies' attributions (equal when the
 /// pair is the only contact). The compliant model's pairs ([`super::contact_model`]) come with
 /// their exact impulses and sub-step peak forces.
+///
+/// Its steps, in order, are in `sim/monitor/contact_steps.rs`: rapier's touching part pairs
+/// and their contact points, each body's raw normal impulse, the compliant model's pairs, the
+/// contacts that ended, and per pair in contact its impulse, its start (with the time of first
+/// touch, [`touch_time`]) and its totals.
 #[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it uses
 pub fn contacts(
     phys: Res<super::Physics>,
@@ -1651,209 +1797,27 @@ pub fn contacts(
     cs.points.clear();
     cs.step_pairs.clear();
     // (pair key) → (docking, body a, body b, rapier's raw normal impulse)
-    let mut now: BTreeMap<(String, String), (bool, usize, usize, f64)> = BTreeMap::new();
+    let mut now = contact_steps::NowPairs::new();
     // (pair key) → (body, part) of each side, for the time of first touch.
     let mut who: BTreeMap<(String, String), ContactSides> = BTreeMap::new();
-    // When rapier did not step (nothing near), its contact pairs are an older step's.
-    let pairs = phys
-        .world
-        .narrow_phase
-        .contact_pairs()
-        .filter(|_| sync.stepped);
-    for pair in pairs {
-        if !touching(pair) {
-            continue;
-        }
-        let (Some(a), Some(b)) = (
-            cs.colliders.get(&pair.collider1),
-            cs.colliders.get(&pair.collider2),
-        ) else {
-            continue;
-        };
-        if a.body == b.body {
-            continue;
-        }
-        let raw: f64 = pair
-            .manifolds
-            .iter()
-            .flat_map(|m| m.points.iter())
-            .map(|p| p.data.impulse.max(0.0) as f64)
-            .sum();
-        let docking = a.docking && b.docking;
-        let swapped = (a.body, &a.full_name) > (b.body, &b.full_name);
-        let (key, ba, bb, sides) = if !swapped {
-            (
-                (a.full_name.clone(), b.full_name.clone()),
-                a.body,
-                b.body,
-                ((a.body, a.part), (b.body, b.part)),
-            )
-        } else {
-            (
-                (b.full_name.clone(), a.full_name.clone()),
-                b.body,
-                a.body,
-                ((b.body, b.part), (a.body, a.part)),
-            )
-        };
-        who.insert(key.clone(), sides);
-        // rapier's normal points from collider 1 to collider 2 and pushes collider 2 along it.
-        let sign = if swapped { -1.0 } else { 1.0 };
-        if let (Some(c1), Some(c2)) = (
-            phys.world.colliders.get(pair.collider1),
-            phys.world.colliders.get(pair.collider2),
-        ) {
-            for m in pair.solver_manifolds() {
-                let n = conv::na(m.data.normal) * sign;
-                for p in &m.points {
-                    if !(p.dist <= 0.0 || p.data.impulse > 0.0) {
-                        continue;
-                    }
-                    let p1 = conv::na(c1.position().transform_point(p.local_p1));
-                    let p2 = conv::na(c2.position().transform_point(p.local_p2));
-                    let j = f64::from(p.data.impulse.max(0.0));
-                    cs.points.push(PointRow {
-                        t_s: t,
-                        a: key.0.clone(),
-                        b: key.1.clone(),
-                        compliant: false,
-                        point_m: (p1 + p2) * 0.5,
-                        normal_on_b: n,
-                        depth_m: -f64::from(p.dist),
-                        normal_force_n: j / dt,
-                        normal_impulse_ns: j,
-                        force_on_b_n: n * (j / dt),
-                    });
-                }
-            }
-        }
-        let e = now.entry(key).or_insert((docking, ba, bb, 0.0));
-        e.3 += raw;
-    }
-    let mut raw_per_body = vec![0.0; cs.body_impulse.len()];
-    for (_, ba, bb, raw) in now.values() {
-        raw_per_body[*ba] += raw;
-        raw_per_body[*bb] += raw;
-    }
+    contact_steps::rapier_pairs(&phys, sync.stepped, cs, (t, dt), &mut now, &mut who);
+    let raw_per_body = contact_steps::raw_per_body(&now, cs.body_impulse.len());
     // The compliant model's pairs: (impulse on b, peak force) per key.
-    let mut given: BTreeMap<(String, String), (nalgebra::Vector3<f64>, f64)> = BTreeMap::new();
+    let mut given = contact_steps::GivenPairs::new();
     if let Some(cc) = &compliant {
-        for st in &cc.step {
-            let p = &cc.pairs[st.pair];
-            now.entry(p.names.clone())
-                .or_insert((true, cc.indices.0, cc.indices.1, 0.0));
-            given.insert(p.names.clone(), (st.impulse_on_b_ns, st.peak_force_n));
-        }
-        let t0 = t - dt;
-        for smp in &cc.samples {
-            let p = &cc.pairs[smp.pair];
-            cs.points.push(PointRow {
-                t_s: t0 + smp.t_in_step_s,
-                a: p.names.0.clone(),
-                b: p.names.1.clone(),
-                compliant: true,
-                point_m: smp.point_m,
-                normal_on_b: smp.normal_on_b,
-                depth_m: smp.depth_m,
-                normal_force_n: smp.normal_force_n,
-                normal_impulse_ns: smp.normal_force_n * smp.h_s,
-                force_on_b_n: smp.force_on_b_n,
-            });
-        }
+        contact_steps::compliant_pairs(cc, (t, dt), &mut now, &mut given, &mut cs.points);
     }
-    let share = |body: usize, raw: f64, cs: &ContactState| {
-        if raw_per_body[body] > 0.0 {
-            cs.body_impulse[body].norm() * raw / raw_per_body[body]
-        } else {
-            0.0
-        }
-    };
     // Ended contacts.
-    let ended: Vec<(String, String)> = cs
-        .active
-        .keys()
-        .filter(|k| !now.contains_key(*k))
-        .cloned()
-        .collect();
-    for k in ended {
-        let c = cs.active.remove(&k).expect("active");
-        log.push(
-            t,
-            "contact_end",
-            serde_json::json!({"a": k.0, "b": k.1, "docking": c.docking,
-                "duration_s": t - c.start_s, "peak_force_n": c.peak_force_n, "impulse_ns": c.impulse_ns}),
-        );
-    }
+    contact_steps::end_contacts(cs, &now, &mut log, t);
     for (k, (docking, ba, bb, raw)) in now {
-        // Impulse magnitude, peak force, and the impulse vectors on the two parts.
-        let (impulse, force, on_a, on_b) = match given.get(&k) {
-            Some((j, peak)) => (j.norm(), *peak, -j, *j),
-            None => {
-                let impulse = 0.5 * (share(ba, raw, cs) + share(bb, raw, cs));
-                let on = |body: usize| {
-                    if raw_per_body[body] > 0.0 {
-                        cs.body_impulse[body] * (raw / raw_per_body[body])
-                    } else {
-                        nalgebra::Vector3::zeros()
-                    }
-                };
-                (impulse, impulse / dt, on(ba), on(bb))
-            }
-        };
+        let imp = contact_steps::pair_impulse(&k, (ba, bb, raw), &given, &raw_per_body, cs, dt);
         if !cs.active.contains_key(&k) {
-            cs.first_contact_s.get_or_insert(t);
-            let (t_touch, t_tol) = match (motion.ready, who.get(&k)) {
+            let touch = match (motion.ready, who.get(&k)) {
                 (true, Some(&(sa, sb))) => touch_time(&geo, &motion, sa, sb, &mut scratch),
                 _ => (t, 0.0),
             };
-            cs.first_touch_s.get_or_insert(t_touch);
-            log.push(
-                t,
-                "contact_start",
-                serde_json::json!({"a": k.0, "b": k.1, "docking": docking,
-                    "t_contact_s": t_touch, "t_tol_s": t_tol}),
-            );
-            if !docking {
-                cs.first_collision_s.get_or_insert(t);
-                cs.collisions.push((t, k.0.clone(), k.1.clone()));
-                log.push(t, "collision", serde_json::json!({"a": k.0, "b": k.1}));
-            }
-            cs.active.insert(
-                k.clone(),
-                ActiveContact {
-                    start_s: t,
-                    docking,
-                    peak_force_n: 0.0,
-                    impulse_ns: 0.0,
-                },
-            );
+            contact_steps::start_contact(cs, &mut log, &k, docking, t, touch);
         }
-        let c = cs.active.get_mut(&k).expect("active");
-        c.peak_force_n = c.peak_force_n.max(force);
-        c.impulse_ns += impulse;
-        let cum = cs
-            .cumulative_impulse_ns
-            .entry(k.clone())
-            .or_insert_with(|| CumulativeImpulse {
-                docking,
-                ..Default::default()
-            });
-        cum.magnitude_ns += impulse;
-        cum.on_b_ns += on_b;
-        for (name, vec) in [(&k.0, on_a), (&k.1, on_b)] {
-            let s = cs.per_part.entry(name.clone()).or_default();
-            s.peak_force_n = s.peak_force_n.max(force);
-            s.total_impulse_ns += impulse;
-            for (n, v) in s.net_impulse_ns.iter_mut().zip(vec.iter()) {
-                *n += v;
-            }
-        }
-        cs.step_pairs.push(StepPair {
-            key: k,
-            docking,
-            bodies: (ba, bb),
-            impulse_on_b_ns: on_b,
-            peak_force_n: force,
-        });
+        contact_steps::accumulate(cs, k, docking, (ba, bb), &imp);
     }
 }

@@ -276,19 +276,98 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
         return Err("first step");
     }
     // 1. Features with per-step state.
+    let n = p.roster.bodies.len();
+    per_step_features(p, n)?;
+    // 2. The schedule.
+    let (k_max, force_n, torque_nm) = schedule(p, mr, n)?;
+    if k_max <= 1 {
+        return Ok(1);
+    }
+    // 3. Contact and the mechanism.
+    contact_idle(p)?;
+    // 4. Guarantees judged at samples only keep the fixed step.
+    let g = &*p.guarantees;
+    if g.last_rate.len() != g.list.len() || g.last.len() != g.list.len() {
+        return Err("first step");
+    }
+    if g.last_rate.iter().any(Option::is_none) {
+        return Err("guarantee judged at samples only");
+    }
+    // Per-body bounds at t₀.
+    let orbit = match p.env.orbit() {
+        Some(o) => {
+            let (r, v) = o.reference.state();
+            let mu = MU_EARTH_M3_S2;
+            (Some(mu), v.norm(), r.norm())
+        }
+        None => (None, 0.0, f64::INFINITY),
+    };
+    let bb = body_bounds(p, &force_n, &torque_nm)?;
+    let docking = docking_reach(p)?;
+    let centres: Vec<nalgebra::Vector3<f64>> = p
+        .roster
+        .bodies
+        .iter()
+        .map(|e| p.bodies.get(*e).map(|(_, s)| s.pos_m))
+        .collect::<Result<_, _>>()
+        .map_err(|_| "first step")?;
+    let fit = Fit {
+        mr,
+        bb,
+        centres,
+        docking,
+        orbit,
+        mon: &p.mon,
+        g,
+        max_turn: mr.max_turn_rad(),
+        dt: clock.dt_s,
+        t0: clock.t_s(),
+    };
+    // Bisection for the longest span that fits (every condition tightens as h grows).
+    fit.fits(2)?;
+    if fit.fits(k_max).is_ok() {
+        return Ok(k_max);
+    }
+    let (mut lo, mut hi) = (2, k_max);
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if fit.fits(mid).is_ok() {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Ok(lo)
+}
+
+/// Condition 1 of the module documentation, the features with per-step state the planner
+/// sees in the world: no air-bearing table, no L2 frame, at most [`MAX_BODIES`] bodies (`n`).
+fn per_step_features(p: &PlanInputs, n: usize) -> Result<(), &'static str> {
     if p.table.is_some() {
         return Err("air-bearing table");
     }
     if p.env.l2_centre().is_some() {
         return Err("L2 frame");
     }
-    let n = p.roster.bodies.len();
     if n > MAX_BODIES {
         return Err("more bodies than multirate::MAX_BODIES");
     }
+    Ok(())
+}
+
+/// Condition 2 of the module documentation (and condition 1's controller features): the
+/// longest span the schedule allows (the requested maximum, the run's end, the next
+/// trajectory row and every controller's next call), and per body (`n` bodies) the norms of
+/// the held forces and torques after the actuators, N and N·m; an error for a disturbance, a
+/// sensor or navigation filter, or an actuator with per-step state.
+fn schedule(
+    p: &PlanInputs,
+    mr: &MultiRate,
+    n: usize,
+) -> Result<(u64, Vec<f64>, Vec<f64>), &'static str> {
+    let clock = &*p.clock;
     let mut force_n = vec![0.0; n];
     let mut torque_nm = vec![0.0; n];
-    // 2. The schedule.
     let mut k_max = mr.max_span.min(p.cap.0.max(1));
     let every = u64::from(p.rec.every.max(1));
     k_max = k_max.min(every - clock.step % every);
@@ -312,10 +391,12 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
             k_max = k_max.min(period - clock.step % period);
         }
     }
-    if k_max <= 1 {
-        return Ok(1);
-    }
-    // 3. Contact and the mechanism.
+    Ok((k_max, force_n, torque_nm))
+}
+
+/// Condition 3's state at t₀: rapier not stepped every step, no body touching or jointed, the
+/// compliant contact idle, the docking mechanism `FREE` with its magnet off.
+fn contact_idle(p: &PlanInputs) -> Result<(), &'static str> {
     if p.sync.every_step {
         return Err("rapier every step (monitor.rapier_every_step)");
     }
@@ -337,24 +418,17 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
     {
         return Err("docking mechanism active");
     }
-    // 4. Guarantees judged at samples only keep the fixed step.
-    let g = &*p.guarantees;
-    if g.last_rate.len() != g.list.len() || g.last.len() != g.list.len() {
-        return Err("first step");
-    }
-    if g.last_rate.iter().any(Option::is_none) {
-        return Err("guarantee judged at samples only");
-    }
-    // Per-body bounds at t₀.
-    let (g_grad, ref_speed_m_s, ref_r_m) = match p.env.orbit() {
-        Some(o) => {
-            let (r, v) = o.reference.state();
-            let mu = MU_EARTH_M3_S2;
-            (Some(mu), v.norm(), r.norm())
-        }
-        None => (None, 0.0, f64::INFINITY),
-    };
-    let mut bb = Vec::with_capacity(n);
+    Ok(())
+}
+
+/// Every body's bounds at t₀ ([`BodyBound`]), in roster order, with the held force and torque
+/// norms `force_n`, N, and `torque_nm`, N·m, per body.
+fn body_bounds(
+    p: &PlanInputs,
+    force_n: &[f64],
+    torque_nm: &[f64],
+) -> Result<Vec<BodyBound>, &'static str> {
+    let mut bb = Vec::with_capacity(p.roster.bodies.len());
     for (k, e) in p.roster.bodies.iter().enumerate() {
         let (b, s) = p.bodies.get(*e).map_err(|_| "first step")?;
         let a_g = p
@@ -376,7 +450,17 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
             extent_m: p.geo.extent_m.get(k).copied().unwrap_or(f64::INFINITY),
         });
     }
-    let docking = match p.docking.as_deref() {
+    Ok(bb)
+}
+
+/// The docking ports at t₀, when the scene has a docking mechanism: ((chaser index, its port's
+/// lever about its centre of mass, m), (target index, lever, m), the ports' gap, m, the
+/// magnet's activation distance, m).
+type DockReach = ((usize, f64), (usize, f64), f64, f64);
+
+/// The docking ports' [`DockReach`] at t₀, `None` without a docking mechanism.
+fn docking_reach(p: &PlanInputs) -> Result<Option<DockReach>, &'static str> {
+    Ok(match p.docking.as_deref() {
         Some(d) => {
             let (ce, te) = d.bodies;
             let (cb, cs) = p.bodies.get(ce).map_err(|_| "first step")?;
@@ -390,22 +474,61 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
             ))
         }
         None => None,
-    };
-    let centres: Vec<nalgebra::Vector3<f64>> = p
-        .roster
-        .bodies
-        .iter()
-        .map(|e| p.bodies.get(*e).map(|(_, s)| s.pos_m))
-        .collect::<Result<_, _>>()
-        .map_err(|_| "first step")?;
-    let max_turn = mr.max_turn_rad();
-    let dt = clock.dt_s;
-    let t0 = clock.t_s();
-    // Whether a step of k fixed steps meets 3–5; the reason it does not.
-    let fits = |k: u64| -> Result<(), &'static str> {
-        let h = k as f64 * dt;
-        let mut omega = Vec::with_capacity(n);
-        for b in &bb {
+    })
+}
+
+/// What the check of one candidate span reads: the request and the bounds at t₀.
+struct Fit<'a> {
+    /// The scene's request.
+    mr: &'a MultiRate,
+    /// Per body, roster order.
+    bb: Vec<BodyBound>,
+    /// Per body: centre of mass, world, m.
+    centres: Vec<nalgebra::Vector3<f64>>,
+    /// The docking ports, if any.
+    docking: Option<DockReach>,
+    /// The reference orbit: (μ, m³/s², when there is gravity; |v_ref|, m/s; |r_ref|, m).
+    orbit: (Option<f64>, f64, f64),
+    /// The monitor (its certified pair distances at t₀).
+    mon: &'a MonitorState,
+    /// The guarantees (their last margins and rate bounds).
+    g: &'a Guarantees,
+    /// Largest turn per step, rad ([`MultiRate::max_turn_rad`]).
+    max_turn: f64,
+    /// Fixed step, s.
+    dt: f64,
+    /// Time now, s.
+    t0: f64,
+}
+
+impl Fit<'_> {
+    /// Whether a step of k fixed steps meets 3–5; the reason it does not.
+    fn fits(&self, k: u64) -> Result<(), &'static str> {
+        let h = k as f64 * self.dt;
+        let omega = self.body_rates(h)?;
+        self.pairs_clear(&omega, h)?;
+        if let Some(((c, lc), (t, lt), gap, act)) = self.docking {
+            let travel = (omega[c].0 + omega[c].1 * lc + omega[t].0 + omega[t].1 * lt) * h;
+            if act > 0.0 && !above(gap - travel, act) {
+                return Err("docking magnet range");
+            }
+        }
+        for (last, rate) in self.g.last.iter().zip(&self.g.last_rate) {
+            let r = rate.unwrap_or(f64::INFINITY);
+            if !above(last.lower, 2.0 * r * h) {
+                return Err("guarantee near its threshold");
+            }
+        }
+        Ok(())
+    }
+
+    /// Condition 5 over a step of `h`, s: per body, (u, speed bound over the step, m/s; Ω,
+    /// turn rate bound, rad/s), or an error when a body's position or attitude integration
+    /// error would pass the tolerances.
+    fn body_rates(&self, h: f64) -> Result<Vec<(f64, f64)>, &'static str> {
+        let (g_grad, ref_speed_m_s, ref_r_m) = self.orbit;
+        let mut omega = Vec::with_capacity(self.bb.len());
+        for b in &self.bb {
             let u = b.speed_m_s + b.accel_m_s2 * h;
             // G: the gravity-gradient tensor's norm bound at the closest the body comes to
             // Earth's centre over the step; the jerk bound G·(u + 5|v_ref|/r·|x|).
@@ -420,7 +543,7 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
                 }
                 None => (0.0, 0.0),
             };
-            if !above(mr.tol_m, jerk * h * h * h / 6.0 - f64::MIN_POSITIVE) {
+            if !above(self.mr.tol_m, jerk * h * h * h / 6.0 - f64::MIN_POSITIVE) {
                 return Err("integration tolerance");
             }
             let tau = b.torque_nm + g_tensor * (b.lambda.1 - b.lambda.0);
@@ -429,11 +552,19 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
             } else {
                 f64::INFINITY
             };
-            if !above(max_turn, om * h - f64::MIN_POSITIVE) {
+            if !above(self.max_turn, om * h - f64::MIN_POSITIVE) {
                 return Err("integration tolerance");
             }
             omega.push((u, om));
         }
+        Ok(omega)
+    }
+
+    /// Condition 3 over a step of `h`, s, for every pair of bodies with the rates `omega`
+    /// ([`Self::body_rates`]): out of rapier's reach, or, within it, the monitor's certified
+    /// distance at t₀ less the sweep clear by [`NEAR_CLEAR_M`].
+    fn pairs_clear(&self, omega: &[(f64, f64)], h: f64) -> Result<(), &'static str> {
+        let (bb, centres, n) = (&self.bb, &self.centres, self.bb.len());
         for i in 0..n {
             for j in i + 1..n {
                 let d = (centres[i] - centres[j]).norm() - bb[i].aabb_m - bb[j].aabb_m;
@@ -443,12 +574,12 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
                 }
                 // Within rapier's reach: the monitor's certified distance at t₀ between the
                 // parts, less what any point of either body can travel, must stay clear.
-                let lower = p
+                let lower = self
                     .mon
                     .pair_index
                     .get(&(i, j))
-                    .map(|k| &p.mon.pairs[*k])
-                    .filter(|q| q.t_s == t0)
+                    .map(|k| &self.mon.pairs[*k])
+                    .filter(|q| q.t_s == self.t0)
                     .map_or(f64::NEG_INFINITY, |q| q.lower_m);
                 let sweep = (omega[i].0
                     + omega[i].1 * bb[i].extent_m
@@ -460,33 +591,6 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
                 }
             }
         }
-        if let Some(((c, lc), (t, lt), gap, act)) = docking {
-            let travel = (omega[c].0 + omega[c].1 * lc + omega[t].0 + omega[t].1 * lt) * h;
-            if act > 0.0 && !above(gap - travel, act) {
-                return Err("docking magnet range");
-            }
-        }
-        for (last, rate) in g.last.iter().zip(&g.last_rate) {
-            let r = rate.unwrap_or(f64::INFINITY);
-            if !above(last.lower, 2.0 * r * h) {
-                return Err("guarantee near its threshold");
-            }
-        }
         Ok(())
-    };
-    // Bisection for the longest span that fits (every condition tightens as h grows).
-    fits(2)?;
-    if fits(k_max).is_ok() {
-        return Ok(k_max);
     }
-    let (mut lo, mut hi) = (2, k_max);
-    while hi - lo > 1 {
-        let mid = lo + (hi - lo) / 2;
-        if fits(mid).is_ok() {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    Ok(lo)
 }
