@@ -625,6 +625,9 @@ impl Surfaces {
     }
 }
 
+/// Spawns the scene at start-up: the bodies ([`spawn_bodies`]), the constraint surfaces
+/// ([`spawn_surfaces`]), the air-bearing table ([`spawn_table`]), the light and camera
+/// ([`spawn_light_and_camera`]) and the panel's text, in that order.
 #[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 fn setup(
     mut commands: Commands,
@@ -638,6 +641,48 @@ fn setup(
     mut model_status: ResMut<ModelStatus>,
     run: Res<Run>,
     mut images: ResMut<Assets<Image>>,
+) {
+    spawn_bodies(
+        &mut commands,
+        &geom,
+        &mut meshes,
+        &mut materials,
+        &asset_server,
+        &mut model_status,
+    );
+    spawn_surfaces(
+        &mut commands,
+        &surfaces,
+        &layers,
+        &mut meshes,
+        &mut materials,
+    );
+    spawn_table(&mut commands, &table, &mut meshes, &mut materials);
+    spawn_light_and_camera(&mut commands, &run, &mut images);
+    commands.spawn((
+        Text::new(""),
+        TextFont::from_font_size(13.0),
+        TextColor(Color::srgb(0.9, 0.92, 0.95)),
+        Node {
+            position_type: PositionType::Absolute,
+            top: Val::Px(6.0),
+            left: Val::Px(8.0),
+            ..default()
+        },
+        PanelText,
+    ));
+}
+
+/// Spawns each body (a [`BodyMarker`] entity) with its parts as children: a part with a glTF
+/// model, the model (counted in `model_status`, built later by `spawn_models`); any other
+/// part, its primitive mesh.
+fn spawn_bodies(
+    commands: &mut Commands,
+    geom: &SceneGeom,
+    meshes: &mut Assets<Mesh>,
+    materials: &mut Assets<StandardMaterial>,
+    asset_server: &AssetServer,
+    model_status: &mut ModelStatus,
 ) {
     for (i, b) in geom.bodies.iter().enumerate() {
         commands
@@ -684,6 +729,17 @@ fn setup(
                 }
             });
     }
+}
+
+/// Spawns the laws' and guarantees' constraint surfaces, shown when the `surfaces` layer is on;
+/// a surface about a body gets a [`SurfaceOf`] so that it follows that body.
+fn spawn_surfaces(
+    commands: &mut Commands,
+    surfaces: &Surfaces,
+    layers: &Layers,
+    meshes: &mut Assets<Mesh>,
+    materials: &mut Assets<StandardMaterial>,
+) {
     // The laws' and guarantees' constraint surfaces (semi-transparent; a depth bias keeps a
     // surface that coincides with a collider, such as the Xu 2019 obstacle, in front of it).
     // Spheres about a body show their inner (far) side only: one layer of tint whether the
@@ -721,6 +777,15 @@ fn setup(
             }
         }
     }
+}
+
+/// Spawns an air-bearing scene's table (nothing for other scenes).
+fn spawn_table(
+    commands: &mut Commands,
+    table: &Table,
+    meshes: &mut Assets<Mesh>,
+    materials: &mut Assets<StandardMaterial>,
+) {
     // The air-bearing table: its top at z = 0 (lab frame, z up).
     if let Some((corner, size, thick)) = table.0 {
         commands.spawn((
@@ -743,6 +808,12 @@ fn setup(
             ),
         ));
     }
+}
+
+/// Spawns the directional light and the 3-D camera; below a render scale of 1, also the image
+/// the camera renders to, the 2-D camera and the full-window node that show it stretched, and
+/// the [`ScaledView`] resource.
+fn spawn_light_and_camera(commands: &mut Commands, run: &Run, images: &mut Assets<Image>) {
     commands.spawn((
         DirectionalLight {
             illuminance: 8000.0,
@@ -789,18 +860,6 @@ fn setup(
         ));
         commands.insert_resource(ScaledView(image));
     }
-    commands.spawn((
-        Text::new(""),
-        TextFont::from_font_size(13.0),
-        TextColor(Color::srgb(0.9, 0.92, 0.95)),
-        Node {
-            position_type: PositionType::Absolute,
-            top: Val::Px(6.0),
-            left: Val::Px(8.0),
-            ..default()
-        },
-        PanelText,
-    ));
 }
 
 /// The glTF assets a model is built from.
