@@ -1844,22 +1844,13 @@ const MAX_SHOT_RETRIES: u32 = 60;
 
 /// Counts frames; prints the frame rate; takes the screenshot (with a sidecar JSON giving each
 /// body's projected centre, for tests) and exits when asked.
-#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 fn frames_and_screenshot(
     mut commands: Commands,
     mut run: ResMut<Run>,
     time: Res<Time<Real>>,
     cur: Res<Current>,
-    geom: Res<SceneGeom>,
-    camera: Query<(&Camera, &Transform), With<Camera3d>>,
-    window: Query<&Window, With<PrimaryWindow>>,
     waiting: Res<PipelinesWaiting>,
-    drawn: Res<DrawnArrows>,
-    drawn_lines: Res<DrawnLines>,
-    forces: Option<Res<ContactForces>>,
-    models: Res<ModelStatus>,
-    surfaces: Res<Surfaces>,
-    layers: Res<Layers>,
+    shot: ShotView,
     mut exit: MessageWriter<AppExit>,
 ) {
     run.frame += 1;
@@ -1884,7 +1875,7 @@ fn frames_and_screenshot(
     }
     if let Some(path) = run.opts.screenshot.clone() {
         // Wait (within reason) until no render pipeline is still compiling.
-        let models_pending = models.ready.len() < models.expected;
+        let models_pending = shot.models.ready.len() < shot.models.expected;
         if !run.shot_requested
             && (run.ready_streak < READY_FRAMES || models_pending)
             && run.frame < n + MAX_READY_WAIT_FRAMES
@@ -1893,126 +1884,50 @@ fn frames_and_screenshot(
         }
         if !run.shot_requested {
             run.shot_requested = true;
-            if let (Ok((cam, tf)), Ok(w)) = (camera.single(), window.single()) {
-                let gt = GlobalTransform::from(*tf);
-                // Viewport → window pixels (the scaled view's image is smaller than the window).
-                let k = cam
-                    .logical_viewport_size()
-                    .map_or(1.0, |v| w.physical_width() as f32 / v.x.max(1.0));
-                let project = |p: Vec3| cam.world_to_viewport(&gt, p).ok().map(|v| v * k);
-                let bodies: Vec<_> = geom
-                    .bodies
-                    .iter()
-                    .zip(&cur.snap.bodies)
-                    .map(|(b, (p, _))| {
-                        let c = v3(p);
-                        let px = project(c);
-                        // Projected radius of a 0.5 m sphere about the centre of mass.
-                        let right = tf.right().as_vec3();
-                        let r_px =
-                            px.and_then(|p0| project(c + right * 0.5).map(|p1| (p1 - p0).length()));
-                        serde_json::json!({
-                            "name": b.name,
-                            "centre_world_m": [p.x, p.y, p.z],
-                            "centre_px": px.map(|p| [p.x, p.y]),
-                            "half_metre_px": r_px,
-                        })
-                    })
-                    .collect();
-                let px = |p: Vec3| project(p).map(|p| [p.x, p.y]);
-                let arrows: Vec<_> = drawn
-                    .0
-                    .iter()
-                    .map(|(a, b, f, p0, p1)| {
-                        serde_json::json!({
-                            "a": a,
-                            "b": b,
-                            "force_n": f,
-                            "length_m": (*p1 - *p0).length(),
-                            "start_px": px(*p0),
-                            "end_px": px(*p1),
-                        })
-                    })
-                    .collect();
-                // Each constraint surface's centroid (mean vertex), world, projected.
-                let shown_surfaces: Vec<_> = surfaces
-                    .list
-                    .iter()
-                    .zip(&surfaces.legend)
-                    .filter_map(|(sf, legend)| {
-                        let m = &sf.mesh.positions_m;
-                        let mean = m.iter().fold(Vector3::zeros(), |a, p| a + p) / m.len() as f64;
-                        let origin = match sf.anchor {
-                            super::surfaces::Anchor::World(o) => o,
-                            super::surfaces::Anchor::BodyCom(i) => cur.snap.bodies.get(i)?.0,
-                        };
-                        let c = origin + mean;
-                        Some(serde_json::json!({
-                            "legend": legend,
-                            "rgba": sf.rgba,
-                            "centroid_world_m": [c.x, c.y, c.z],
-                            "centroid_px": px(v3(&c)),
-                        }))
-                    })
-                    .collect();
-                let side = serde_json::json!({
-                    "layers": {
-                        "ports": layers.ports, "lvlh": layers.lvlh, "trails": layers.trails,
-                        "closest": layers.closest, "contacts": layers.contacts,
-                        "surfaces": layers.surfaces, "panel": layers.panel,
-                    },
-                    "surfaces": shown_surfaces,
-                    "width_px": w.physical_width(),
-                    "height_px": w.physical_height(),
-                    "scale_factor": w.scale_factor(),
-                    "t_s": cur.snap.t_s,
-                    "bodies": bodies,
-                    "force_arrows": arrows,
-                    "lines": drawn_lines.0.iter().map(|(what, c, a, b)| {
-                        let c = c.to_srgba();
-                        serde_json::json!({
-                            "what": what,
-                            "srgb": [c.red, c.green, c.blue],
-                            "start_px": px(*a),
-                            "end_px": px(*b),
-                        })
-                    }).collect::<Vec<_>>(),
-                    "models": models.ready.iter().map(|(part, path, n)| serde_json::json!({
-                        "part": part, "path": path, "meshes": n,
-                    })).collect::<Vec<_>>(),
-                    "models_expected": models.expected,
-                    "arrow_scale_n_per_m": forces.as_ref().and_then(|f| f.scale_n_per_m),
-                });
+            if let (Ok((cam, tf)), Ok(w)) = (shot.camera.single(), shot.window.single()) {
+                let side = shot.sidecar(cam, tf, w, &cur.snap);
                 let _ = std::fs::write(
                     path.with_extension("json"),
                     serde_json::to_string_pretty(&side).unwrap_or_default(),
                 );
             }
-            commands
-                .spawn(Screenshot::primary_window())
-                .observe(save_to_disk(path))
-                .observe(|cap: On<ScreenshotCaptured>, mut run: ResMut<Run>| {
-                    // A frame of one colour means the render pipelines were still compiling
-                    // (the software renderer takes a while): take another a little later.
-                    let uniform = cap
-                        .image
-                        .data
-                        .as_deref()
-                        .is_none_or(|d| d.chunks_exact(4).all(|p| p == &d[..4]));
-                    if uniform && run.retries < MAX_SHOT_RETRIES {
-                        run.retries += 1;
-                        run.shot_requested = false;
-                        let next = run.frame + 10;
-                        run.opts.frames = Some(next);
-                    } else {
-                        run.shot_done = true;
-                    }
-                });
+            request_screenshot(&mut commands, path);
         }
         if !run.shot_done {
             return;
         }
     }
+    print_rates(&run, now, &cur.snap);
+    exit.write(AppExit::Success);
+}
+
+/// Asks for a screenshot of the window, saved to `path`; a frame of one colour is retaken
+/// 10 frames later (at most [`MAX_SHOT_RETRIES`] times), otherwise the shot is done.
+fn request_screenshot(commands: &mut Commands, path: PathBuf) {
+    commands
+        .spawn(Screenshot::primary_window())
+        .observe(save_to_disk(path))
+        .observe(|cap: On<ScreenshotCaptured>, mut run: ResMut<Run>| {
+            // A frame of one colour means the render pipelines were still compiling
+            // (the software renderer takes a while): take another a little later.
+            let uniform = cap
+                .image
+                .data
+                .as_deref()
+                .is_none_or(|d| d.chunks_exact(4).all(|p| p == &d[..4]));
+            if uniform && run.retries < MAX_SHOT_RETRIES {
+                run.retries += 1;
+                run.shot_requested = false;
+                let next = run.frame + 10;
+                run.opts.frames = Some(next);
+            } else {
+                run.shot_done = true;
+            }
+        });
+}
+
+/// Prints the frame rate and the simulated time's rate over the frames after warm-up.
+fn print_rates(run: &Run, now: f64, snap: &Snapshot) {
     if let Some(t0) = run.t_first {
         let frames = run.frames_since_first;
         let dt = now - t0;
@@ -2022,7 +1937,7 @@ fn frames_and_screenshot(
                 run.frame,
                 f64::from(frames) / dt
             );
-            let sim = cur.snap.t_s - run.sim_first_s;
+            let sim = snap.t_s - run.sim_first_s;
             println!(
                 "simulated time advanced {sim:.3} s in those {dt:.2} s = {:.2}x real time \
                  (asked {}x{})",
@@ -2032,7 +1947,147 @@ fn frames_and_screenshot(
             );
         }
     }
-    exit.write(AppExit::Success);
+}
+
+/// What the screenshot's sidecar JSON describes: the 3-D camera and the window (to project
+/// world points to window pixels), the bodies, the force arrows and lines the overlays drew
+/// this frame, the glTF models, the constraint surfaces, the layers and the arrow scale.
+#[derive(bevy::ecs::system::SystemParam)]
+struct ShotView<'w, 's> {
+    camera: Query<'w, 's, (&'static Camera, &'static Transform), With<Camera3d>>,
+    window: Query<'w, 's, &'static Window, With<PrimaryWindow>>,
+    geom: Res<'w, SceneGeom>,
+    drawn: Res<'w, DrawnArrows>,
+    drawn_lines: Res<'w, DrawnLines>,
+    forces: Option<Res<'w, ContactForces>>,
+    models: Res<'w, ModelStatus>,
+    surfaces: Res<'w, Surfaces>,
+    layers: Res<'w, Layers>,
+}
+
+impl ShotView<'_, '_> {
+    /// The sidecar JSON for the snapshot `snap` seen by camera `cam` at `tf` in window `w`.
+    fn sidecar(
+        &self,
+        cam: &Camera,
+        tf: &Transform,
+        w: &Window,
+        snap: &Snapshot,
+    ) -> serde_json::Value {
+        let (drawn_lines, models, layers) = (&self.drawn_lines, &self.models, &self.layers);
+        let gt = GlobalTransform::from(*tf);
+        // Viewport → window pixels (the scaled view's image is smaller than the window).
+        let k = cam
+            .logical_viewport_size()
+            .map_or(1.0, |v| w.physical_width() as f32 / v.x.max(1.0));
+        let project = |p: Vec3| cam.world_to_viewport(&gt, p).ok().map(|v| v * k);
+        let bodies = self.bodies_json(tf, snap, &project);
+        let px = |p: Vec3| project(p).map(|p| [p.x, p.y]);
+        let arrows = self.arrows_json(&px);
+        let shown_surfaces = self.surfaces_json(snap, &px);
+        serde_json::json!({
+            "layers": {
+                "ports": layers.ports, "lvlh": layers.lvlh, "trails": layers.trails,
+                "closest": layers.closest, "contacts": layers.contacts,
+                "surfaces": layers.surfaces, "panel": layers.panel,
+            },
+            "surfaces": shown_surfaces,
+            "width_px": w.physical_width(),
+            "height_px": w.physical_height(),
+            "scale_factor": w.scale_factor(),
+            "t_s": snap.t_s,
+            "bodies": bodies,
+            "force_arrows": arrows,
+            "lines": drawn_lines.0.iter().map(|(what, c, a, b)| {
+                let c = c.to_srgba();
+                serde_json::json!({
+                    "what": what,
+                    "srgb": [c.red, c.green, c.blue],
+                    "start_px": px(*a),
+                    "end_px": px(*b),
+                })
+            }).collect::<Vec<_>>(),
+            "models": models.ready.iter().map(|(part, path, n)| serde_json::json!({
+                "part": part, "path": path, "meshes": n,
+            })).collect::<Vec<_>>(),
+            "models_expected": models.expected,
+            "arrow_scale_n_per_m": self.forces.as_ref().and_then(|f| f.scale_n_per_m),
+        })
+    }
+
+    /// Each body's name, centre of mass (world, m) and its projection, and the projected
+    /// radius of a 0.5 m sphere about it, px.
+    fn bodies_json(
+        &self,
+        tf: &Transform,
+        snap: &Snapshot,
+        project: &impl Fn(Vec3) -> Option<Vec2>,
+    ) -> Vec<serde_json::Value> {
+        self.geom
+            .bodies
+            .iter()
+            .zip(&snap.bodies)
+            .map(|(b, (p, _))| {
+                let c = v3(p);
+                let px = project(c);
+                // Projected radius of a 0.5 m sphere about the centre of mass.
+                let right = tf.right().as_vec3();
+                let r_px = px.and_then(|p0| project(c + right * 0.5).map(|p1| (p1 - p0).length()));
+                serde_json::json!({
+                    "name": b.name,
+                    "centre_world_m": [p.x, p.y, p.z],
+                    "centre_px": px.map(|p| [p.x, p.y]),
+                    "half_metre_px": r_px,
+                })
+            })
+            .collect()
+    }
+
+    /// The force arrows drawn this frame: parts, force (N), length (m) and projected ends.
+    fn arrows_json(&self, px: &impl Fn(Vec3) -> Option<[f32; 2]>) -> Vec<serde_json::Value> {
+        self.drawn
+            .0
+            .iter()
+            .map(|(a, b, f, p0, p1)| {
+                serde_json::json!({
+                    "a": a,
+                    "b": b,
+                    "force_n": f,
+                    "length_m": (*p1 - *p0).length(),
+                    "start_px": px(*p0),
+                    "end_px": px(*p1),
+                })
+            })
+            .collect()
+    }
+
+    /// Each constraint surface's legend, colour and centroid (mean vertex), world and projected.
+    fn surfaces_json(
+        &self,
+        snap: &Snapshot,
+        px: &impl Fn(Vec3) -> Option<[f32; 2]>,
+    ) -> Vec<serde_json::Value> {
+        self.surfaces
+            .list
+            .iter()
+            .zip(&self.surfaces.legend)
+            .filter_map(|(sf, legend)| {
+                let m = &sf.mesh.positions_m;
+                let mean = m.iter().fold(Vector3::zeros(), |a, p| a + p) / m.len() as f64;
+                let origin = match sf.anchor {
+                    super::surfaces::Anchor::World(o) => o,
+                    super::surfaces::Anchor::BodyCom(i) => snap.bodies.get(i)?.0,
+                };
+                let c = origin + mean;
+                Some(serde_json::json!({
+                    "legend": legend,
+                    "rgba": sf.rgba,
+                    "centroid_world_m": [c.x, c.y, c.z],
+                    "centroid_px": px(v3(&c)),
+                }))
+            })
+            .collect()
+    }
 }
 
 #[cfg(test)]
