@@ -1502,6 +1502,9 @@ fn camera_system(
     tf.translation += rig.pan;
 }
 
+/// Draws the overlays of the layers that are on ([`draw_surface_curves`], [`draw_ports`],
+/// [`draw_lvlh`], [`draw_trails`], [`draw_contacts`], [`draw_closest`], in that order), noting
+/// the force arrows and lines drawn this frame for the screenshot's sidecar.
 #[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 fn overlays(
     cur: Res<Current>,
@@ -1520,133 +1523,198 @@ fn overlays(
     arrows.0.clear();
     lines.0.clear();
 
-    let bodies = &cur.snap.bodies;
     if layers.surfaces {
-        // The table curves the laws keep the chaser's centre of mass out of, at its height.
-        let z = surfaces
-            .curve_body
-            .and_then(|i| bodies.get(i))
-            .map_or(0.0, |(p, _)| p.z as f32);
-        for s in &surfaces.list {
-            if s.curve_lab_m.is_empty() {
-                continue;
-            }
-            let [r, g, b, _] = s.rgba;
-            let pts = s
-                .curve_lab_m
-                .iter()
-                .chain(s.curve_lab_m.first())
-                .map(|p| Vec3::new(p.x as f32, p.y as f32, z));
-            gizmos.linestrip(pts, Color::srgb(r, g, b));
-        }
+        draw_surface_curves(&mut gizmos, &surfaces, &cur.snap);
     }
     if layers.ports {
-        for (i, b) in geom.bodies.iter().enumerate() {
-            let Some((p, a)) = bodies.get(i) else {
-                continue;
-            };
-            let pose = b.body_pose(p, a);
-            for (name, o, ax) in &b.ports {
-                let origin = v3(&(pose * nalgebra::Point3::from(*o)).coords);
-                let axw = a * ax;
-                let (u, v) = crate::scene::parts::perpendicular_basis(&axw);
-                for (k, dir, len, c, arrow) in [
-                    ("axis", axw, 0.6, Color::srgb(1.0, 0.3, 0.3), true),
-                    ("u", u, 0.3, Color::srgb(0.3, 1.0, 0.3), false),
-                    ("v", v, 0.3, Color::srgb(0.3, 0.5, 1.0), false),
-                ] {
-                    let what = format!("port {}/{name} {k}", b.name);
-                    let end = origin + v3(&dir) * len;
-                    line(&mut front, &mut lines, what, (origin, end), c, arrow);
-                }
-            }
-        }
+        draw_ports(&mut front, &mut lines, &geom, &cur.snap);
     }
     if layers.lvlh
         && let Some((r, v)) = cur.reference
     {
-        // LVLH (Hill) axes at the reference origin: x radial out, y along-track, z normal.
-        let x = r.normalize();
-        let z = r.cross(&v).normalize();
-        let y = z.cross(&x);
-        let len = 4.0;
-        let o = Vec3::ZERO;
-        for (name, axis, c) in [
-            ("LVLH x", x, Color::srgb(1.0, 0.2, 0.2)),
-            ("LVLH y", y, Color::srgb(0.2, 1.0, 0.2)),
-            ("LVLH z", z, Color::srgb(0.3, 0.4, 1.0)),
-        ] {
-            let end = v3(&axis) * len;
-            line(&mut front, &mut lines, name.into(), (o, end), c, true);
-        }
-        // Direction to the Earth's centre.
-        let earth = -v3(&x) * 2.5 * len;
-        line(
-            &mut front,
-            &mut lines,
-            "Earth".into(),
-            (o, earth),
-            Color::srgb(0.2, 0.9, 1.0),
-            true,
-        );
+        draw_lvlh(&mut front, &mut lines, r, v);
     }
     if layers.trails {
-        let colors = [Color::srgb(0.9, 0.7, 0.3), Color::srgb(0.6, 0.8, 1.0)];
-        if let (Some(rp), Some(order)) = (replay.as_ref(), order.as_ref()) {
-            let upto = rp.rec.row_at(rp.timeline.t_s) + 1;
-            for (k, &col) in order.0.iter().enumerate() {
-                let tr = rp.rec.track(col);
-                let stride = (upto / 3000).max(1);
-                let pts = tr[..upto.min(tr.len())].iter().step_by(stride).map(v3);
-                gizmos.linestrip(pts, colors[k % 2]);
-            }
-        } else {
-            for (k, tr) in trails.0.iter().enumerate() {
-                gizmos.linestrip(tr.iter().copied(), colors[k % 2]);
+        draw_trails(&mut gizmos, replay.as_deref(), order.as_deref(), &trails);
+    }
+    if layers.contacts {
+        draw_contacts(&mut front, &mut arrows, &geom, &cur.snap, forces.as_deref());
+    }
+    if layers.closest {
+        draw_closest(&mut gizmos, &mut front, &mut lines, &geom, &cur.snap);
+    }
+}
+
+/// The table curves the laws keep the chaser's centre of mass out of, at its height.
+fn draw_surface_curves(gizmos: &mut Gizmos, surfaces: &Surfaces, snap: &Snapshot) {
+    let bodies = &snap.bodies;
+    let z = surfaces
+        .curve_body
+        .and_then(|i| bodies.get(i))
+        .map_or(0.0, |(p, _)| p.z as f32);
+    for s in &surfaces.list {
+        if s.curve_lab_m.is_empty() {
+            continue;
+        }
+        let [r, g, b, _] = s.rgba;
+        let pts = s
+            .curve_lab_m
+            .iter()
+            .chain(s.curve_lab_m.first())
+            .map(|p| Vec3::new(p.x as f32, p.y as f32, z));
+        gizmos.linestrip(pts, Color::srgb(r, g, b));
+    }
+}
+
+/// Each docking port's axis (red arrow, 0.6 m) and its perpendicular u, v axes (green, blue;
+/// 0.3 m).
+fn draw_ports(
+    front: &mut Gizmos<FrontGizmos>,
+    lines: &mut DrawnLines,
+    geom: &SceneGeom,
+    snap: &Snapshot,
+) {
+    let bodies = &snap.bodies;
+    for (i, b) in geom.bodies.iter().enumerate() {
+        let Some((p, a)) = bodies.get(i) else {
+            continue;
+        };
+        let pose = b.body_pose(p, a);
+        for (name, o, ax) in &b.ports {
+            let origin = v3(&(pose * nalgebra::Point3::from(*o)).coords);
+            let axw = a * ax;
+            let (u, v) = crate::scene::parts::perpendicular_basis(&axw);
+            for (k, dir, len, c, arrow) in [
+                ("axis", axw, 0.6, Color::srgb(1.0, 0.3, 0.3), true),
+                ("u", u, 0.3, Color::srgb(0.3, 1.0, 0.3), false),
+                ("v", v, 0.3, Color::srgb(0.3, 0.5, 1.0), false),
+            ] {
+                let what = format!("port {}/{name} {k}", b.name);
+                let end = origin + v3(&dir) * len;
+                line(front, lines, what, (origin, end), c, arrow);
             }
         }
     }
-    if layers.contacts {
-        // Contact points (on the first part), from the parts' geometry at the drawn poses,
-        // and the force arrow (orange): the contact's normal force (live: over the last
-        // frame's steps; replay: `contacts.csv`'s row interval) along the normal from the
-        // first part to the second, at the panel's scale; a contact without a recorded force:
-        // the unit normal (yellow, 0.3 m).
-        for (a, b) in &cur.snap.contacts {
-            if let (Some(pa), Some(pb)) = (geom.find_part(a), geom.find_part(b))
-                && let Some((p, n)) = geom.contact(pa, pb, bodies)
-            {
-                let p = v3(&p);
-                let c = Color::srgb(1.0, 0.9, 0.1);
-                front.sphere(Isometry3d::from_translation(p), 0.03, c);
-                let force = forces.as_ref().and_then(|f| {
-                    let fn_ = *cur.snap.contact_force_n.get(&(a.clone(), b.clone()))?;
-                    Some((fn_, fn_ / f.scale_n_per_m?)).filter(|(_, l)| *l > 0.0)
-                });
-                match force {
-                    Some((f_n, len_m)) => {
-                        let end = p + v3(&n) * len_m as f32;
-                        front.arrow(p, end, ARROW_COLOR);
-                        arrows.0.push((a.clone(), b.clone(), f_n, p, end));
-                    }
-                    None => {
-                        front.arrow(p, p + v3(&n) * 0.3, c);
-                    }
+}
+
+/// The LVLH (Hill) axes at the reference origin, from the reference orbit's ECI position `r`
+/// (m) and velocity `v` (m/s), and the direction to the Earth's centre.
+fn draw_lvlh(
+    front: &mut Gizmos<FrontGizmos>,
+    lines: &mut DrawnLines,
+    r: Vector3<f64>,
+    v: Vector3<f64>,
+) {
+    // LVLH (Hill) axes at the reference origin: x radial out, y along-track, z normal.
+    let x = r.normalize();
+    let z = r.cross(&v).normalize();
+    let y = z.cross(&x);
+    let len = 4.0;
+    let o = Vec3::ZERO;
+    for (name, axis, c) in [
+        ("LVLH x", x, Color::srgb(1.0, 0.2, 0.2)),
+        ("LVLH y", y, Color::srgb(0.2, 1.0, 0.2)),
+        ("LVLH z", z, Color::srgb(0.3, 0.4, 1.0)),
+    ] {
+        let end = v3(&axis) * len;
+        line(front, lines, name.into(), (o, end), c, true);
+    }
+    // Direction to the Earth's centre.
+    let earth = -v3(&x) * 2.5 * len;
+    line(
+        front,
+        lines,
+        "Earth".into(),
+        (o, earth),
+        Color::srgb(0.2, 0.9, 1.0),
+        true,
+    );
+}
+
+/// The bodies' trails: replay, the recorded track up to now (at most about 3000 points each);
+/// live, the trails gathered so far.
+fn draw_trails(
+    gizmos: &mut Gizmos,
+    replay: Option<&Replay>,
+    order: Option<&ReplayOrder>,
+    trails: &Trails,
+) {
+    let colors = [Color::srgb(0.9, 0.7, 0.3), Color::srgb(0.6, 0.8, 1.0)];
+    if let (Some(rp), Some(order)) = (replay, order) {
+        let upto = rp.rec.row_at(rp.timeline.t_s) + 1;
+        for (k, &col) in order.0.iter().enumerate() {
+            let tr = rp.rec.track(col);
+            let stride = (upto / 3000).max(1);
+            let pts = tr[..upto.min(tr.len())].iter().step_by(stride).map(v3);
+            gizmos.linestrip(pts, colors[k % 2]);
+        }
+    } else {
+        for (k, tr) in trails.0.iter().enumerate() {
+            gizmos.linestrip(tr.iter().copied(), colors[k % 2]);
+        }
+    }
+}
+
+/// Each contact's point and its force arrow (noted in `arrows`), or its unit normal when it
+/// has no recorded force.
+fn draw_contacts(
+    front: &mut Gizmos<FrontGizmos>,
+    arrows: &mut DrawnArrows,
+    geom: &SceneGeom,
+    snap: &Snapshot,
+    forces: Option<&ContactForces>,
+) {
+    let bodies = &snap.bodies;
+    // Contact points (on the first part), from the parts' geometry at the drawn poses,
+    // and the force arrow (orange): the contact's normal force (live: over the last
+    // frame's steps; replay: `contacts.csv`'s row interval) along the normal from the
+    // first part to the second, at the panel's scale; a contact without a recorded force:
+    // the unit normal (yellow, 0.3 m).
+    for (a, b) in &snap.contacts {
+        if let (Some(pa), Some(pb)) = (geom.find_part(a), geom.find_part(b))
+            && let Some((p, n)) = geom.contact(pa, pb, bodies)
+        {
+            let p = v3(&p);
+            let c = Color::srgb(1.0, 0.9, 0.1);
+            front.sphere(Isometry3d::from_translation(p), 0.03, c);
+            let force = forces.as_ref().and_then(|f| {
+                let fn_ = *snap.contact_force_n.get(&(a.clone(), b.clone()))?;
+                Some((fn_, fn_ / f.scale_n_per_m?)).filter(|(_, l)| *l > 0.0)
+            });
+            match force {
+                Some((f_n, len_m)) => {
+                    let end = p + v3(&n) * len_m as f32;
+                    front.arrow(p, end, ARROW_COLOR);
+                    arrows.0.push((a.clone(), b.clone(), f_n, p, end));
+                }
+                None => {
+                    front.arrow(p, p + v3(&n) * 0.3, c);
                 }
             }
         }
     }
-    if layers.closest
-        && let Some((a, b)) = &cur.snap.closest_parts
+}
+
+/// The closest points of the closest pair of parts, joined by a line coloured by the smallest
+/// guarantee margin ([`margin_color`]); touching, a red sphere at the first part.
+fn draw_closest(
+    gizmos: &mut Gizmos,
+    front: &mut Gizmos<FrontGizmos>,
+    lines: &mut DrawnLines,
+    geom: &SceneGeom,
+    snap: &Snapshot,
+) {
+    let bodies = &snap.bodies;
+    if let Some((a, b)) = &snap.closest_parts
         && let (Some(pa), Some(pb)) = (geom.find_part(a), geom.find_part(b))
     {
-        let margin = margin_m(&cur.snap);
-        let color = margin_color(margin, cur.snap.min_distance_m);
+        let margin = margin_m(snap);
+        let color = margin_color(margin, snap.min_distance_m);
         match geom.closest_points(pa, pb, bodies) {
             Some((p1, p2)) => {
                 line(
-                    &mut front,
-                    &mut lines,
+                    front,
+                    lines,
                     "closest".into(),
                     (v3(&p1), v3(&p2)),
                     color,
