@@ -1764,6 +1764,10 @@ fn margin_color(margin: f64, distance: f64) -> Color {
     }
 }
 
+/// Writes the read-out panel: the run's status ([`panel_status`]), the snapshot's read-outs
+/// ([`panel_readouts`]), the surfaces' legend, the last events (replay, which also fills the
+/// scrubber) and the camera, layers and keys ([`panel_keys`]); hides panel and scrubber when
+/// the `panel` layer is off.
 #[allow(clippy::too_many_arguments)]
 fn panel(
     cur: Res<Current>,
@@ -1794,8 +1798,46 @@ fn panel(
         return;
     }
     use std::fmt::Write;
-    let s = &cur.snap;
     let mut o = String::new();
+    panel_status(
+        &mut o,
+        &cur,
+        replay.as_deref(),
+        live_ctl.as_deref(),
+        live.as_deref(),
+        &diagnostics,
+    );
+    panel_readouts(&mut o, &cur.snap, &layers, forces.as_deref());
+    if layers.surfaces {
+        for l in &surfaces.legend {
+            let _ = writeln!(o, "surface: {l}");
+        }
+    }
+    if let Some(r) = &replay {
+        let past: Vec<_> = r.timeline.past_markers().collect();
+        for m in past.iter().rev().take(4).rev() {
+            let _ = writeln!(o, "event t = {:.2} s: {}", m.t_s, m.label);
+        }
+        if let Ok(mut f) = fill.single_mut() {
+            f.width = Val::Percent((100.0 * r.timeline.fraction()) as f32);
+        }
+    }
+    panel_keys(&mut o, &rig, &layers);
+    text.0 = o;
+}
+
+/// The panel's first lines: live or replay, scene, time (of the end, replay), play state,
+/// speed and frame rate; live, the simulation rate achieved.
+fn panel_status(
+    o: &mut String,
+    cur: &Current,
+    replay: Option<&Replay>,
+    live_ctl: Option<&LiveCtl>,
+    live: Option<&Live>,
+    diagnostics: &DiagnosticsStore,
+) {
+    use std::fmt::Write;
+    let s = &cur.snap;
     let fps = diagnostics
         .get(&FrameTimeDiagnosticsPlugin::FPS)
         .and_then(|d| d.smoothed())
@@ -1823,6 +1865,13 @@ fn panel(
     if let Some(l) = &live {
         let _ = writeln!(o, "simulation rate achieved: {:.1}x real time", l.achieved);
     }
+}
+
+/// The snapshot's read-outs: minimum distance and closest parts, guarantee margins, docking
+/// state, contacts and their normal forces, the force-arrow scale (contacts layer on) and the
+/// first 12 diagnostics.
+fn panel_readouts(o: &mut String, s: &Snapshot, layers: &Layers, forces: Option<&ContactForces>) {
+    use std::fmt::Write;
     let _ = writeln!(
         o,
         "min distance {:.4} m   {}",
@@ -1870,20 +1919,11 @@ fn panel(
             let _ = writeln!(o, "{n} = {v:.5}");
         }
     }
-    if layers.surfaces {
-        for l in &surfaces.legend {
-            let _ = writeln!(o, "surface: {l}");
-        }
-    }
-    if let Some(r) = &replay {
-        let past: Vec<_> = r.timeline.past_markers().collect();
-        for m in past.iter().rev().take(4).rev() {
-            let _ = writeln!(o, "event t = {:.2} s: {}", m.t_s, m.label);
-        }
-        if let Ok(mut f) = fill.single_mut() {
-            f.width = Val::Percent((100.0 * r.timeline.fraction()) as f32);
-        }
-    }
+}
+
+/// The panel's last lines: the camera preset, which layers are on, and the keys.
+fn panel_keys(o: &mut String, rig: &CameraRig, layers: &Layers) {
+    use std::fmt::Write;
     let _ = writeln!(
         o,
         "camera: {:?}   layers: ports {} | LVLH/Earth {} | trails {} | closest {} | contacts {} | surfaces {}",
@@ -1900,7 +1940,6 @@ fn panel(
         "keys: Space play/pause | . , step | + - speed | Left/Right seek | [ ] events | \
          0-3 camera | P L T C K S H layers | right-drag rotate | middle-drag pan | wheel zoom"
     );
-    text.0 = o;
 }
 
 fn on(b: bool) -> &'static str {
