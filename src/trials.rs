@@ -664,32 +664,7 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
         guarantee_judged: Vec::new(),
         soft_capture: false,
     };
-    // Checked now rather than in every worker, the same way whatever the order of the grid
-    // values or the seed: every grid value (each with the other parameters at their
-    // representative values: a grid's first value, a draw's centre) must make a valid scene —
-    // a grid value is the user's explicit choice, an invalid one a mistake; a random draw
-    // that makes an invalid scene is that trial's `INVALID` outcome. The representative
-    // trial must build (paths, references).
-    let repr = c.spec.representative();
-    for (i, p) in c.spec.parameters.iter().enumerate() {
-        let Parameter::Grid { values, .. } = p else {
-            continue;
-        };
-        for (j, v) in values.iter().enumerate() {
-            let mut vals = repr.clone();
-            vals[i] = *v;
-            if let Err(e) = load_scene_file(&c.scene_path, &overrides_of(&c.spec, &vals)) {
-                let at = format!("parameters.{i}.values.{j}");
-                return Err(located(
-                    &text,
-                    &file,
-                    &at,
-                    at.clone(),
-                    format!("grid value {v:?} makes an invalid scene: {e}"),
-                ));
-            }
-        }
-    }
+    let repr = check_grid_values(&c, &text, &file)?;
     let loaded = load_scene_file(&c.scene_path, &overrides_of(&c.spec, &repr))?;
     if let Some(d) = c.spec.duration_s {
         crate::scene::validate::check_steps("duration_s", d, loaded.scene.dt_s)
@@ -717,16 +692,64 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
         .iter()
         .map(|g| g.judged.to_string())
         .collect();
+    check_color_by(&c, &text, &file)?;
+    let dock_end = loaded
+        .scene
+        .docking
+        .as_ref()
+        .map(|d| crate::sim::docking::DockState::docked_end_state(&d.mechanism));
+    if let Err((p, m)) = c.spec.success.check("success", &c.guarantees, dock_end) {
+        return Err(located(&text, &file, &p, p.clone(), m));
+    }
+    Ok(c)
+}
+
+/// [`load`]'s check of every grid value: each (with the other parameters at their
+/// representative values) must make a valid scene, else an error located at it in the trials
+/// file (`text`, named `file`). Returns the representative values.
+fn check_grid_values(c: &Campaign, text: &str, file: &str) -> Result<Vec<f64>, SceneError> {
+    // Checked now rather than in every worker, the same way whatever the order of the grid
+    // values or the seed: every grid value (each with the other parameters at their
+    // representative values: a grid's first value, a draw's centre) must make a valid scene —
+    // a grid value is the user's explicit choice, an invalid one a mistake; a random draw
+    // that makes an invalid scene is that trial's `INVALID` outcome. The representative
+    // trial must build (paths, references).
+    let repr = c.spec.representative();
+    for (i, p) in c.spec.parameters.iter().enumerate() {
+        let Parameter::Grid { values, .. } = p else {
+            continue;
+        };
+        for (j, v) in values.iter().enumerate() {
+            let mut vals = repr.clone();
+            vals[i] = *v;
+            if let Err(e) = load_scene_file(&c.scene_path, &overrides_of(&c.spec, &vals)) {
+                let at = format!("parameters.{i}.values.{j}");
+                return Err(located(
+                    text,
+                    file,
+                    &at,
+                    at.clone(),
+                    format!("grid value {v:?} makes an invalid scene: {e}"),
+                ));
+            }
+        }
+    }
+    Ok(repr)
+}
+
+/// [`load`]'s check of `plot.color_by`: a `trials.csv` column other than `index`, `reason`
+/// and `campaign_id`, else an error located at it in the trials file (`text`, named `file`).
+fn check_color_by(c: &Campaign, text: &str, file: &str) -> Result<(), SceneError> {
     if let Some(col) = &c.spec.plot.color_by {
-        let cols = header(&c);
+        let cols = header(c);
         let allowed: Vec<&String> = cols
             .iter()
             .filter(|h| !matches!(h.as_str(), "index" | "reason" | "campaign_id"))
             .collect();
         if !allowed.contains(&col) {
             return Err(located(
-                &text,
-                &file,
+                text,
+                file,
                 "plot.color_by",
                 "plot.color_by",
                 format!(
@@ -740,15 +763,7 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
             ));
         }
     }
-    let dock_end = loaded
-        .scene
-        .docking
-        .as_ref()
-        .map(|d| crate::sim::docking::DockState::docked_end_state(&d.mechanism));
-    if let Err((p, m)) = c.spec.success.check("success", &c.guarantees, dock_end) {
-        return Err(located(&text, &file, &p, p.clone(), m));
-    }
-    Ok(c)
+    Ok(())
 }
 
 fn overrides(c: &Campaign, k: usize) -> Vec<String> {
