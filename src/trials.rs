@@ -423,84 +423,100 @@ impl TrialsSpec {
         }
         let mut cells: usize = 1;
         for (i, p) in self.parameters.iter().enumerate() {
-            let at = format!("parameters.{i}");
-            if self.parameters[..i].iter().any(|o| o.path() == p.path()) {
-                return Err(err(
-                    &format!("{at}.path"),
-                    format!("`{}` is varied twice", p.path()),
-                ));
+            self.validate_parameter(i, p, &mut cells, &err)?;
+        }
+        Ok(())
+    }
+
+    /// Checks parameter `i` (`p`) of [`Self::validate`]: its path (not varied before; letters,
+    /// digits, _ - . [ ], at most 256), its label (at most 200 characters, no control
+    /// characters) and its values: a grid's 1 to [`MAX_GRID_VALUES`] finite values (their count
+    /// multiplied into `cells`, the grids' cells together, at most [`MAX_GRID_CELLS`]), a
+    /// uniform's finite min ≤ max, a normal's finite mean and sd ≥ 0. `err` locates an error.
+    fn validate_parameter(
+        &self,
+        i: usize,
+        p: &Parameter,
+        cells: &mut usize,
+        err: &impl Fn(&str, String) -> SceneError,
+    ) -> Result<(), SceneError> {
+        let at = format!("parameters.{i}");
+        if self.parameters[..i].iter().any(|o| o.path() == p.path()) {
+            return Err(err(
+                &format!("{at}.path"),
+                format!("`{}` is varied twice", p.path()),
+            ));
+        }
+        let path_ok = !p.path().is_empty()
+            && p.path().len() <= 256
+            && p.path()
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.' | '[' | ']'));
+        if !path_ok {
+            return Err(err(
+                &format!("{at}.path"),
+                format!(
+                    "a scene field path (letters, digits, _ - . [ ], at most 256), got {:?}",
+                    p.path()
+                ),
+            ));
+        }
+        if let Some(l) = p.label_override()
+            && (l.chars().count() > 200 || l.chars().any(char::is_control))
+        {
+            return Err(err(
+                &format!("{at}.label"),
+                "a label is at most 200 characters without control characters".into(),
+            ));
+        }
+        match p {
+            Parameter::Grid { values, .. } => {
+                if values.is_empty() || values.len() > MAX_GRID_VALUES {
+                    return Err(err(
+                        &format!("{at}.values"),
+                        format!(
+                            "a grid needs 1 to {MAX_GRID_VALUES} values, got {}",
+                            values.len()
+                        ),
+                    ));
+                }
+                if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+                    return Err(err(
+                        &format!("{at}.values.{k}"),
+                        "grid values must be finite".into(),
+                    ));
+                }
+                *cells = cells.saturating_mul(values.len());
+                if *cells > MAX_GRID_CELLS {
+                    return Err(err(
+                        &format!("{at}.values"),
+                        format!("the grids have more than {MAX_GRID_CELLS} cells together"),
+                    ));
+                }
             }
-            let path_ok = !p.path().is_empty()
-                && p.path().len() <= 256
-                && p.path()
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.' | '[' | ']'));
-            if !path_ok {
-                return Err(err(
-                    &format!("{at}.path"),
-                    format!(
-                        "a scene field path (letters, digits, _ - . [ ], at most 256), got {:?}",
-                        p.path()
-                    ),
-                ));
-            }
-            if let Some(l) = p.label_override()
-                && (l.chars().count() > 200 || l.chars().any(char::is_control))
+            Parameter::Uniform { min, max, .. }
+                if !(min.is_finite()
+                    && max.is_finite()
+                    && min <= max
+                    && (max - min).is_finite()) =>
             {
                 return Err(err(
-                    &format!("{at}.label"),
-                    "a label is at most 200 characters without control characters".into(),
+                    &format!("{at}.max"),
+                    format!("need finite min ≤ max, got [{min}, {max}]"),
                 ));
             }
-            match p {
-                Parameter::Grid { values, .. } => {
-                    if values.is_empty() || values.len() > MAX_GRID_VALUES {
-                        return Err(err(
-                            &format!("{at}.values"),
-                            format!(
-                                "a grid needs 1 to {MAX_GRID_VALUES} values, got {}",
-                                values.len()
-                            ),
-                        ));
-                    }
-                    if let Some(k) = values.iter().position(|v| !v.is_finite()) {
-                        return Err(err(
-                            &format!("{at}.values.{k}"),
-                            "grid values must be finite".into(),
-                        ));
-                    }
-                    cells = cells.saturating_mul(values.len());
-                    if cells > MAX_GRID_CELLS {
-                        return Err(err(
-                            &format!("{at}.values"),
-                            format!("the grids have more than {MAX_GRID_CELLS} cells together"),
-                        ));
-                    }
-                }
-                Parameter::Uniform { min, max, .. }
-                    if !(min.is_finite()
-                        && max.is_finite()
-                        && min <= max
-                        && (max - min).is_finite()) =>
-                {
-                    return Err(err(
-                        &format!("{at}.max"),
-                        format!("need finite min ≤ max, got [{min}, {max}]"),
-                    ));
-                }
-                Parameter::Normal { mean, sd, .. }
-                    if !(mean.is_finite()
-                        && sd.is_finite()
-                        && *sd >= 0.0
-                        && (mean.abs() + 40.0 * sd).is_finite()) =>
-                {
-                    return Err(err(
-                        &format!("{at}.sd"),
-                        format!("need a finite mean and a finite sd ≥ 0, got mean {mean}, sd {sd}"),
-                    ));
-                }
-                _ => {}
+            Parameter::Normal { mean, sd, .. }
+                if !(mean.is_finite()
+                    && sd.is_finite()
+                    && *sd >= 0.0
+                    && (mean.abs() + 40.0 * sd).is_finite()) =>
+            {
+                return Err(err(
+                    &format!("{at}.sd"),
+                    format!("need a finite mean and a finite sd ≥ 0, got mean {mean}, sd {sd}"),
+                ));
             }
+            _ => {}
         }
         Ok(())
     }
@@ -648,32 +664,7 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
         guarantee_judged: Vec::new(),
         soft_capture: false,
     };
-    // Checked now rather than in every worker, the same way whatever the order of the grid
-    // values or the seed: every grid value (each with the other parameters at their
-    // representative values: a grid's first value, a draw's centre) must make a valid scene —
-    // a grid value is the user's explicit choice, an invalid one a mistake; a random draw
-    // that makes an invalid scene is that trial's `INVALID` outcome. The representative
-    // trial must build (paths, references).
-    let repr = c.spec.representative();
-    for (i, p) in c.spec.parameters.iter().enumerate() {
-        let Parameter::Grid { values, .. } = p else {
-            continue;
-        };
-        for (j, v) in values.iter().enumerate() {
-            let mut vals = repr.clone();
-            vals[i] = *v;
-            if let Err(e) = load_scene_file(&c.scene_path, &overrides_of(&c.spec, &vals)) {
-                let at = format!("parameters.{i}.values.{j}");
-                return Err(located(
-                    &text,
-                    &file,
-                    &at,
-                    at.clone(),
-                    format!("grid value {v:?} makes an invalid scene: {e}"),
-                ));
-            }
-        }
-    }
+    let repr = check_grid_values(&c, &text, &file)?;
     let loaded = load_scene_file(&c.scene_path, &overrides_of(&c.spec, &repr))?;
     if let Some(d) = c.spec.duration_s {
         crate::scene::validate::check_steps("duration_s", d, loaded.scene.dt_s)
@@ -701,16 +692,64 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
         .iter()
         .map(|g| g.judged.to_string())
         .collect();
+    check_color_by(&c, &text, &file)?;
+    let dock_end = loaded
+        .scene
+        .docking
+        .as_ref()
+        .map(|d| crate::sim::docking::DockState::docked_end_state(&d.mechanism));
+    if let Err((p, m)) = c.spec.success.check("success", &c.guarantees, dock_end) {
+        return Err(located(&text, &file, &p, p.clone(), m));
+    }
+    Ok(c)
+}
+
+/// [`load`]'s check of every grid value: each (with the other parameters at their
+/// representative values) must make a valid scene, else an error located at it in the trials
+/// file (`text`, named `file`). Returns the representative values.
+fn check_grid_values(c: &Campaign, text: &str, file: &str) -> Result<Vec<f64>, SceneError> {
+    // Checked now rather than in every worker, the same way whatever the order of the grid
+    // values or the seed: every grid value (each with the other parameters at their
+    // representative values: a grid's first value, a draw's centre) must make a valid scene —
+    // a grid value is the user's explicit choice, an invalid one a mistake; a random draw
+    // that makes an invalid scene is that trial's `INVALID` outcome. The representative
+    // trial must build (paths, references).
+    let repr = c.spec.representative();
+    for (i, p) in c.spec.parameters.iter().enumerate() {
+        let Parameter::Grid { values, .. } = p else {
+            continue;
+        };
+        for (j, v) in values.iter().enumerate() {
+            let mut vals = repr.clone();
+            vals[i] = *v;
+            if let Err(e) = load_scene_file(&c.scene_path, &overrides_of(&c.spec, &vals)) {
+                let at = format!("parameters.{i}.values.{j}");
+                return Err(located(
+                    text,
+                    file,
+                    &at,
+                    at.clone(),
+                    format!("grid value {v:?} makes an invalid scene: {e}"),
+                ));
+            }
+        }
+    }
+    Ok(repr)
+}
+
+/// [`load`]'s check of `plot.color_by`: a `trials.csv` column other than `index`, `reason`
+/// and `campaign_id`, else an error located at it in the trials file (`text`, named `file`).
+fn check_color_by(c: &Campaign, text: &str, file: &str) -> Result<(), SceneError> {
     if let Some(col) = &c.spec.plot.color_by {
-        let cols = header(&c);
+        let cols = header(c);
         let allowed: Vec<&String> = cols
             .iter()
             .filter(|h| !matches!(h.as_str(), "index" | "reason" | "campaign_id"))
             .collect();
         if !allowed.contains(&col) {
             return Err(located(
-                &text,
-                &file,
+                text,
+                file,
                 "plot.color_by",
                 "plot.color_by",
                 format!(
@@ -724,15 +763,7 @@ pub fn load(path: &Path) -> Result<Campaign, SceneError> {
             ));
         }
     }
-    let dock_end = loaded
-        .scene
-        .docking
-        .as_ref()
-        .map(|d| crate::sim::docking::DockState::docked_end_state(&d.mechanism));
-    if let Err((p, m)) = c.spec.success.check("success", &c.guarantees, dock_end) {
-        return Err(located(&text, &file, &p, p.clone(), m));
-    }
-    Ok(c)
+    Ok(())
 }
 
 fn overrides(c: &Campaign, k: usize) -> Vec<String> {
@@ -1145,19 +1176,9 @@ pub fn read_checked(
     let header = header(c);
     let mut rows = Vec::new();
     let mut seen = std::collections::HashSet::new();
-    let np = c.spec.parameters.len();
     for (n, line) in body.lines().enumerate() {
         let lineno = n + 1;
-        let cells: Vec<String> = match csv::ReaderBuilder::new()
-            .has_headers(false)
-            .from_reader(line.as_bytes())
-            .records()
-            .next()
-        {
-            Some(Ok(r)) => r.iter().map(str::to_string).collect(),
-            Some(Err(e)) => return Err(at(lineno, format!("not a CSV row ({e})"))),
-            None => return Err(at(lineno, "an empty line".into())),
-        };
+        let cells = csv_cells(line).map_err(|why| at(lineno, why))?;
         if n == 0 {
             if cells != header {
                 return Err(TrialsError::Refused(format!(
@@ -1168,101 +1189,126 @@ pub fn read_checked(
             }
             continue;
         }
-        if cells.len() != header.len() {
-            return Err(at(
-                lineno,
-                format!("{} cells, the header has {}", cells.len(), header.len()),
-            ));
-        }
-        let id = cells.last().map(String::as_str).unwrap_or("");
-        if id != c.fingerprint.campaign_id {
-            return Err(at(
-                lineno,
-                format!(
-                    "the row belongs to campaign {id:?}, not to this one ({}): the base scene, \
-                     the trials file, the seed or the rpod version differ",
-                    c.fingerprint.campaign_id
-                ),
-            ));
-        }
-        let k: usize = cells[0]
-            .parse()
-            .map_err(|_| at(lineno, format!("index {:?} is not a number", cells[0])))?;
-        if k >= c.spec.count {
-            return Err(at(
-                lineno,
-                format!("index {k} is out of range (count {})", c.spec.count),
-            ));
-        }
-        if let Some((i, m)) = shard
-            && k % m != i
-        {
-            return Err(at(lineno, format!("trial {k} is not in shard {i}/{m}")));
-        }
-        if !seen.insert(k) {
-            return Err(at(lineno, format!("trial {k} appears twice")));
-        }
-        let expect = c.spec.values(k);
-        for (j, v) in expect.iter().enumerate() {
-            if cells[1 + j] != format!("{v}") {
-                return Err(at(
-                    lineno,
-                    format!(
-                        "trial {k}'s `{}` is {:?}, the campaign gives it {v}",
-                        header[1 + j],
-                        cells[1 + j]
-                    ),
-                ));
-            }
-        }
-        let outcome = cells[np + 1].clone();
-        if outcome.is_empty() || !outcome.bytes().all(|b| b.is_ascii_uppercase() || b == b'_') {
-            return Err(at(lineno, format!("outcome {outcome:?} is not an outcome")));
-        }
-        let success = match cells[np + 2].as_str() {
-            "true" => true,
-            "false" => false,
-            other => {
-                return Err(at(
-                    lineno,
-                    format!("success {other:?} is not true or false"),
-                ));
-            }
-        };
-        // The numeric result columns (empty = none) and `steps`.
-        for j in np + 3..header.len() - 2 {
-            let cell = &cells[j];
-            let ok = if header[j] == "steps" {
-                cell.parse::<u64>().is_ok()
-            } else if header[j].ends_with(".verdict") {
-                matches!(cell.as_str(), "" | "held" | "violated" | "unresolved")
-            } else {
-                cell.is_empty() || cell.parse::<f64>().is_ok_and(f64::is_finite)
-            };
-            if !ok {
-                return Err(at(
-                    lineno,
-                    format!(
-                        "`{}` is {cell:?}, not {}",
-                        header[j],
-                        if header[j].ends_with(".verdict") {
-                            "a verdict (held, violated, unresolved or empty)"
-                        } else {
-                            "a number"
-                        }
-                    ),
-                ));
-            }
-        }
-        rows.push(Row {
-            index: k,
-            values: expect,
-            outcome,
-            success,
-            cells,
-        });
+        let row = check_row(c, &header, shard, &mut seen, cells).map_err(|why| at(lineno, why))?;
+        rows.push(row);
     }
     Ok((rows, accepted))
+}
+
+/// The cells of one line of a `trials.csv`, or why it is not a CSV row.
+fn csv_cells(line: &str) -> Result<Vec<String>, String> {
+    match csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(line.as_bytes())
+        .records()
+        .next()
+    {
+        Some(Ok(r)) => Ok(r.iter().map(str::to_string).collect()),
+        Some(Err(e)) => Err(format!("not a CSV row ({e})")),
+        None => Err("an empty line".into()),
+    }
+}
+
+/// Checks one data row of a `trials.csv` (its `cells`, under `header`) as [`read_checked`]
+/// describes, noting its index in `seen`; returns the row, or why it is refused.
+fn check_row(
+    c: &Campaign,
+    header: &[String],
+    shard: Option<(usize, usize)>,
+    seen: &mut std::collections::HashSet<usize>,
+    cells: Vec<String>,
+) -> Result<Row, String> {
+    let np = c.spec.parameters.len();
+    if cells.len() != header.len() {
+        return Err(format!(
+            "{} cells, the header has {}",
+            cells.len(),
+            header.len()
+        ));
+    }
+    let id = cells.last().map(String::as_str).unwrap_or("");
+    if id != c.fingerprint.campaign_id {
+        return Err(format!(
+            "the row belongs to campaign {id:?}, not to this one ({}): the base scene, \
+             the trials file, the seed or the rpod version differ",
+            c.fingerprint.campaign_id
+        ));
+    }
+    let k: usize = cells[0]
+        .parse()
+        .map_err(|_| format!("index {:?} is not a number", cells[0]))?;
+    if k >= c.spec.count {
+        return Err(format!(
+            "index {k} is out of range (count {})",
+            c.spec.count
+        ));
+    }
+    if let Some((i, m)) = shard
+        && k % m != i
+    {
+        return Err(format!("trial {k} is not in shard {i}/{m}"));
+    }
+    if !seen.insert(k) {
+        return Err(format!("trial {k} appears twice"));
+    }
+    let expect = c.spec.values(k);
+    for (j, v) in expect.iter().enumerate() {
+        if cells[1 + j] != format!("{v}") {
+            return Err(format!(
+                "trial {k}'s `{}` is {:?}, the campaign gives it {v}",
+                header[1 + j],
+                cells[1 + j]
+            ));
+        }
+    }
+    let outcome = cells[np + 1].clone();
+    if outcome.is_empty() || !outcome.bytes().all(|b| b.is_ascii_uppercase() || b == b'_') {
+        return Err(format!("outcome {outcome:?} is not an outcome"));
+    }
+    let success = match cells[np + 2].as_str() {
+        "true" => true,
+        "false" => false,
+        other => {
+            return Err(format!("success {other:?} is not true or false"));
+        }
+    };
+    check_result_cells(header, &cells, np)?;
+    Ok(Row {
+        index: k,
+        values: expect,
+        outcome,
+        success,
+        cells,
+    })
+}
+
+/// Checks a row's numeric result columns (empty = none), its verdicts and `steps` (the
+/// columns after the `np` parameters, the outcome and the success, up to the last two);
+/// returns why a cell is refused.
+fn check_result_cells(header: &[String], cells: &[String], np: usize) -> Result<(), String> {
+    // The numeric result columns (empty = none) and `steps`.
+    for j in np + 3..header.len() - 2 {
+        let cell = &cells[j];
+        let ok = if header[j] == "steps" {
+            cell.parse::<u64>().is_ok()
+        } else if header[j].ends_with(".verdict") {
+            matches!(cell.as_str(), "" | "held" | "violated" | "unresolved")
+        } else {
+            cell.is_empty() || cell.parse::<f64>().is_ok_and(f64::is_finite)
+        };
+        if !ok {
+            return Err(format!(
+                "`{}` is {cell:?}, not {}",
+                header[j],
+                if header[j].ends_with(".verdict") {
+                    "a verdict (held, violated, unresolved or empty)"
+                } else {
+                    "a number"
+                }
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Writes the campaign's fingerprint as `campaign.json` in `dir`.

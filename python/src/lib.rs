@@ -682,6 +682,38 @@ impl PySimulation {
     fn body_index(&self, name: &str) -> PyResult<usize> {
         self.with(|sim| body_index_in(sim, name))
     }
+    /// `add_controller`'s ports (body's port, target's port): `ports` when given, else the
+    /// docking mechanism's, when it joins `body` and its `target` (as a scene's controller
+    /// entry).
+    fn controller_ports(
+        &self,
+        ports: Option<(String, String)>,
+        body: &str,
+        target: Option<&str>,
+    ) -> PyResult<Option<(String, String)>> {
+        // Default ports: the docking mechanism's, when it joins this body and its target (as a
+        // scene's controller entry).
+        Ok(match (ports, target) {
+            (Some(p), _) => Some(p),
+            (None, Some(t)) => self.with(|sim| {
+                Ok(sim
+                    .app
+                    .world()
+                    .get_resource::<rpod::sim::docking::Docking>()
+                    .and_then(|k| {
+                        let s = &k.spec;
+                        if s.chaser == body && s.target == t {
+                            Some((s.chaser_port.clone(), s.target_port.clone()))
+                        } else if s.target == body && s.chaser == t {
+                            Some((s.target_port.clone(), s.chaser_port.clone()))
+                        } else {
+                            None
+                        }
+                    }))
+            })?,
+            (None, None) => None,
+        })
+    }
     fn start_recording(&mut self) -> PyResult<()> {
         if self.recording.is_some() || !self.record {
             return Ok(());
@@ -836,6 +868,74 @@ fn override_value(v: &Bound<'_, PyAny>, key: &str) -> PyResult<String> {
     Err(PyTypeError::new_err(format!(
         "set[{key:?}]: a value must be a str (a RON value), a number or a bool"
     )))
+}
+
+/// `add_controller`'s period as a number of scene steps of `dt` s: `period_s` must be a whole
+/// number of them, 1 to 10^12 (to 1e-9 relative).
+fn controller_period_steps(period_s: f64, dt: f64) -> PyResult<f64> {
+    let ratio = period_s / dt;
+    let n = ratio.round();
+    if !period_s.is_finite() || !(1.0..=1e12).contains(&n) || (ratio - n).abs() > 1e-9 * ratio {
+        return Err(PyValueError::new_err(format!(
+            "add_controller: period_s must be a whole number (≥ 1) of scene steps dt_s = {dt} s, got {period_s:?} s"
+        )));
+    }
+    Ok(n)
+}
+
+/// `add_controller`'s `actuator` (RON, as in a scene; None: ideal), parsed and validated.
+fn controller_actuator(actuator: Option<&str>) -> PyResult<ActuatorSpec> {
+    let actuator: ActuatorSpec = match actuator {
+        None => ActuatorSpec::Ideal,
+        Some(s) => ron::from_str(s)
+            .map_err(|e| PyValueError::new_err(format!("add_controller: actuator: {e}")))?,
+    };
+    actuator
+        .validate()
+        .map_err(|(f, m)| PyValueError::new_err(format!("add_controller: actuator.{f}: {m}")))?;
+    Ok(actuator)
+}
+
+/// `add_controller`'s `sensor` (RON, as in a scene; None: none), parsed and validated, its
+/// period against the scene step `dt` s.
+fn controller_sensor(sensor: Option<&str>, dt: f64) -> PyResult<Option<SensorSpec>> {
+    Ok(match sensor {
+        None => None,
+        Some(s) => {
+            let spec: SensorSpec = ron::from_str(s)
+                .map_err(|e| PyValueError::new_err(format!("add_controller: sensor: {e}")))?;
+            spec.validate()
+                .and_then(|_| spec.check_period(dt))
+                .map_err(|(f, m)| {
+                    PyValueError::new_err(format!("add_controller: sensor.{f}: {m}"))
+                })?;
+            Some(spec)
+        }
+    })
+}
+
+/// `add_controller`'s diagnostic `columns` (None: none): at most 1000, each 1 to 128 of
+/// A-Z a-z 0-9 _ - .
+fn controller_columns(columns: Option<Vec<String>>) -> PyResult<Vec<String>> {
+    let columns = columns.unwrap_or_default();
+    if columns.len() > 1000 {
+        return Err(PyValueError::new_err(
+            "add_controller: at most 1000 columns",
+        ));
+    }
+    for c in &columns {
+        if c.is_empty()
+            || c.len() > 128
+            || !c
+                .chars()
+                .all(|ch| ch.is_ascii_alphanumeric() || "_-.".contains(ch))
+        {
+            return Err(PyValueError::new_err(format!(
+                "add_controller: column {c:?}: 1 to 128 of A-Z a-z 0-9 _ - ."
+            )));
+        }
+    }
+    Ok(columns)
 }
 
 #[pymethods]
@@ -1152,74 +1252,11 @@ impl PySimulation {
         let b = self.body_index(body)?;
         let t = target.map(|t| self.body_index(t)).transpose()?;
         let dt = self.with(|s| Ok(s.scene.dt_s))?;
-        let ratio = period_s / dt;
-        let n = ratio.round();
-        if !period_s.is_finite() || !(1.0..=1e12).contains(&n) || (ratio - n).abs() > 1e-9 * ratio {
-            return Err(PyValueError::new_err(format!(
-                "add_controller: period_s must be a whole number (≥ 1) of scene steps dt_s = {dt} s, got {period_s:?} s"
-            )));
-        }
-        let actuator: ActuatorSpec = match actuator {
-            None => ActuatorSpec::Ideal,
-            Some(s) => ron::from_str(s)
-                .map_err(|e| PyValueError::new_err(format!("add_controller: actuator: {e}")))?,
-        };
-        actuator.validate().map_err(|(f, m)| {
-            PyValueError::new_err(format!("add_controller: actuator.{f}: {m}"))
-        })?;
-        let sensor: Option<SensorSpec> = match sensor {
-            None => None,
-            Some(s) => {
-                let spec: SensorSpec = ron::from_str(s)
-                    .map_err(|e| PyValueError::new_err(format!("add_controller: sensor: {e}")))?;
-                spec.validate()
-                    .and_then(|_| spec.check_period(dt))
-                    .map_err(|(f, m)| {
-                        PyValueError::new_err(format!("add_controller: sensor.{f}: {m}"))
-                    })?;
-                Some(spec)
-            }
-        };
-        // Default ports: the docking mechanism's, when it joins this body and its target (as a
-        // scene's controller entry).
-        let ports = match (ports, target) {
-            (Some(p), _) => Some(p),
-            (None, Some(t)) => self.with(|sim| {
-                Ok(sim
-                    .app
-                    .world()
-                    .get_resource::<rpod::sim::docking::Docking>()
-                    .and_then(|k| {
-                        let s = &k.spec;
-                        if s.chaser == body && s.target == t {
-                            Some((s.chaser_port.clone(), s.target_port.clone()))
-                        } else if s.target == body && s.chaser == t {
-                            Some((s.target_port.clone(), s.chaser_port.clone()))
-                        } else {
-                            None
-                        }
-                    }))
-            })?,
-            (None, None) => None,
-        };
-        let columns = columns.unwrap_or_default();
-        if columns.len() > 1000 {
-            return Err(PyValueError::new_err(
-                "add_controller: at most 1000 columns",
-            ));
-        }
-        for c in &columns {
-            if c.is_empty()
-                || c.len() > 128
-                || !c
-                    .chars()
-                    .all(|ch| ch.is_ascii_alphanumeric() || "_-.".contains(ch))
-            {
-                return Err(PyValueError::new_err(format!(
-                    "add_controller: column {c:?}: 1 to 128 of A-Z a-z 0-9 _ - ."
-                )));
-            }
-        }
+        let n = controller_period_steps(period_s, dt)?;
+        let actuator = controller_actuator(actuator)?;
+        let sensor = controller_sensor(sensor, dt)?;
+        let ports = self.controller_ports(ports, body, target)?;
+        let columns = controller_columns(columns)?;
         let law = PyLaw {
             func: func.unbind(),
             body: body.to_string(),

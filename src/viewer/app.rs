@@ -625,6 +625,9 @@ impl Surfaces {
     }
 }
 
+/// Spawns the scene at start-up: the bodies ([`spawn_bodies`]), the constraint surfaces
+/// ([`spawn_surfaces`]), the air-bearing table ([`spawn_table`]), the light and camera
+/// ([`spawn_light_and_camera`]) and the panel's text, in that order.
 #[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 fn setup(
     mut commands: Commands,
@@ -638,6 +641,48 @@ fn setup(
     mut model_status: ResMut<ModelStatus>,
     run: Res<Run>,
     mut images: ResMut<Assets<Image>>,
+) {
+    spawn_bodies(
+        &mut commands,
+        &geom,
+        &mut meshes,
+        &mut materials,
+        &asset_server,
+        &mut model_status,
+    );
+    spawn_surfaces(
+        &mut commands,
+        &surfaces,
+        &layers,
+        &mut meshes,
+        &mut materials,
+    );
+    spawn_table(&mut commands, &table, &mut meshes, &mut materials);
+    spawn_light_and_camera(&mut commands, &run, &mut images);
+    commands.spawn((
+        Text::new(""),
+        TextFont::from_font_size(13.0),
+        TextColor(Color::srgb(0.9, 0.92, 0.95)),
+        Node {
+            position_type: PositionType::Absolute,
+            top: Val::Px(6.0),
+            left: Val::Px(8.0),
+            ..default()
+        },
+        PanelText,
+    ));
+}
+
+/// Spawns each body (a [`BodyMarker`] entity) with its parts as children: a part with a glTF
+/// model, the model (counted in `model_status`, built later by `spawn_models`); any other
+/// part, its primitive mesh.
+fn spawn_bodies(
+    commands: &mut Commands,
+    geom: &SceneGeom,
+    meshes: &mut Assets<Mesh>,
+    materials: &mut Assets<StandardMaterial>,
+    asset_server: &AssetServer,
+    model_status: &mut ModelStatus,
 ) {
     for (i, b) in geom.bodies.iter().enumerate() {
         commands
@@ -684,6 +729,17 @@ fn setup(
                 }
             });
     }
+}
+
+/// Spawns the laws' and guarantees' constraint surfaces, shown when the `surfaces` layer is on;
+/// a surface about a body gets a [`SurfaceOf`] so that it follows that body.
+fn spawn_surfaces(
+    commands: &mut Commands,
+    surfaces: &Surfaces,
+    layers: &Layers,
+    meshes: &mut Assets<Mesh>,
+    materials: &mut Assets<StandardMaterial>,
+) {
     // The laws' and guarantees' constraint surfaces (semi-transparent; a depth bias keeps a
     // surface that coincides with a collider, such as the Xu 2019 obstacle, in front of it).
     // Spheres about a body show their inner (far) side only: one layer of tint whether the
@@ -721,6 +777,15 @@ fn setup(
             }
         }
     }
+}
+
+/// Spawns an air-bearing scene's table (nothing for other scenes).
+fn spawn_table(
+    commands: &mut Commands,
+    table: &Table,
+    meshes: &mut Assets<Mesh>,
+    materials: &mut Assets<StandardMaterial>,
+) {
     // The air-bearing table: its top at z = 0 (lab frame, z up).
     if let Some((corner, size, thick)) = table.0 {
         commands.spawn((
@@ -743,6 +808,12 @@ fn setup(
             ),
         ));
     }
+}
+
+/// Spawns the directional light and the 3-D camera; below a render scale of 1, also the image
+/// the camera renders to, the 2-D camera and the full-window node that show it stretched, and
+/// the [`ScaledView`] resource.
+fn spawn_light_and_camera(commands: &mut Commands, run: &Run, images: &mut Assets<Image>) {
     commands.spawn((
         DirectionalLight {
             illuminance: 8000.0,
@@ -789,18 +860,6 @@ fn setup(
         ));
         commands.insert_resource(ScaledView(image));
     }
-    commands.spawn((
-        Text::new(""),
-        TextFont::from_font_size(13.0),
-        TextColor(Color::srgb(0.9, 0.92, 0.95)),
-        Node {
-            position_type: PositionType::Absolute,
-            top: Val::Px(6.0),
-            left: Val::Px(8.0),
-            ..default()
-        },
-        PanelText,
-    ));
 }
 
 /// The glTF assets a model is built from.
@@ -1443,6 +1502,9 @@ fn camera_system(
     tf.translation += rig.pan;
 }
 
+/// Draws the overlays of the layers that are on ([`draw_surface_curves`], [`draw_ports`],
+/// [`draw_lvlh`], [`draw_trails`], [`draw_contacts`], [`draw_closest`], in that order), noting
+/// the force arrows and lines drawn this frame for the screenshot's sidecar.
 #[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 fn overlays(
     cur: Res<Current>,
@@ -1461,133 +1523,198 @@ fn overlays(
     arrows.0.clear();
     lines.0.clear();
 
-    let bodies = &cur.snap.bodies;
     if layers.surfaces {
-        // The table curves the laws keep the chaser's centre of mass out of, at its height.
-        let z = surfaces
-            .curve_body
-            .and_then(|i| bodies.get(i))
-            .map_or(0.0, |(p, _)| p.z as f32);
-        for s in &surfaces.list {
-            if s.curve_lab_m.is_empty() {
-                continue;
-            }
-            let [r, g, b, _] = s.rgba;
-            let pts = s
-                .curve_lab_m
-                .iter()
-                .chain(s.curve_lab_m.first())
-                .map(|p| Vec3::new(p.x as f32, p.y as f32, z));
-            gizmos.linestrip(pts, Color::srgb(r, g, b));
-        }
+        draw_surface_curves(&mut gizmos, &surfaces, &cur.snap);
     }
     if layers.ports {
-        for (i, b) in geom.bodies.iter().enumerate() {
-            let Some((p, a)) = bodies.get(i) else {
-                continue;
-            };
-            let pose = b.body_pose(p, a);
-            for (name, o, ax) in &b.ports {
-                let origin = v3(&(pose * nalgebra::Point3::from(*o)).coords);
-                let axw = a * ax;
-                let (u, v) = crate::scene::parts::perpendicular_basis(&axw);
-                for (k, dir, len, c, arrow) in [
-                    ("axis", axw, 0.6, Color::srgb(1.0, 0.3, 0.3), true),
-                    ("u", u, 0.3, Color::srgb(0.3, 1.0, 0.3), false),
-                    ("v", v, 0.3, Color::srgb(0.3, 0.5, 1.0), false),
-                ] {
-                    let what = format!("port {}/{name} {k}", b.name);
-                    let end = origin + v3(&dir) * len;
-                    line(&mut front, &mut lines, what, (origin, end), c, arrow);
-                }
-            }
-        }
+        draw_ports(&mut front, &mut lines, &geom, &cur.snap);
     }
     if layers.lvlh
         && let Some((r, v)) = cur.reference
     {
-        // LVLH (Hill) axes at the reference origin: x radial out, y along-track, z normal.
-        let x = r.normalize();
-        let z = r.cross(&v).normalize();
-        let y = z.cross(&x);
-        let len = 4.0;
-        let o = Vec3::ZERO;
-        for (name, axis, c) in [
-            ("LVLH x", x, Color::srgb(1.0, 0.2, 0.2)),
-            ("LVLH y", y, Color::srgb(0.2, 1.0, 0.2)),
-            ("LVLH z", z, Color::srgb(0.3, 0.4, 1.0)),
-        ] {
-            let end = v3(&axis) * len;
-            line(&mut front, &mut lines, name.into(), (o, end), c, true);
-        }
-        // Direction to the Earth's centre.
-        let earth = -v3(&x) * 2.5 * len;
-        line(
-            &mut front,
-            &mut lines,
-            "Earth".into(),
-            (o, earth),
-            Color::srgb(0.2, 0.9, 1.0),
-            true,
-        );
+        draw_lvlh(&mut front, &mut lines, r, v);
     }
     if layers.trails {
-        let colors = [Color::srgb(0.9, 0.7, 0.3), Color::srgb(0.6, 0.8, 1.0)];
-        if let (Some(rp), Some(order)) = (replay.as_ref(), order.as_ref()) {
-            let upto = rp.rec.row_at(rp.timeline.t_s) + 1;
-            for (k, &col) in order.0.iter().enumerate() {
-                let tr = rp.rec.track(col);
-                let stride = (upto / 3000).max(1);
-                let pts = tr[..upto.min(tr.len())].iter().step_by(stride).map(v3);
-                gizmos.linestrip(pts, colors[k % 2]);
-            }
-        } else {
-            for (k, tr) in trails.0.iter().enumerate() {
-                gizmos.linestrip(tr.iter().copied(), colors[k % 2]);
+        draw_trails(&mut gizmos, replay.as_deref(), order.as_deref(), &trails);
+    }
+    if layers.contacts {
+        draw_contacts(&mut front, &mut arrows, &geom, &cur.snap, forces.as_deref());
+    }
+    if layers.closest {
+        draw_closest(&mut gizmos, &mut front, &mut lines, &geom, &cur.snap);
+    }
+}
+
+/// The table curves the laws keep the chaser's centre of mass out of, at its height.
+fn draw_surface_curves(gizmos: &mut Gizmos, surfaces: &Surfaces, snap: &Snapshot) {
+    let bodies = &snap.bodies;
+    let z = surfaces
+        .curve_body
+        .and_then(|i| bodies.get(i))
+        .map_or(0.0, |(p, _)| p.z as f32);
+    for s in &surfaces.list {
+        if s.curve_lab_m.is_empty() {
+            continue;
+        }
+        let [r, g, b, _] = s.rgba;
+        let pts = s
+            .curve_lab_m
+            .iter()
+            .chain(s.curve_lab_m.first())
+            .map(|p| Vec3::new(p.x as f32, p.y as f32, z));
+        gizmos.linestrip(pts, Color::srgb(r, g, b));
+    }
+}
+
+/// Each docking port's axis (red arrow, 0.6 m) and its perpendicular u, v axes (green, blue;
+/// 0.3 m).
+fn draw_ports(
+    front: &mut Gizmos<FrontGizmos>,
+    lines: &mut DrawnLines,
+    geom: &SceneGeom,
+    snap: &Snapshot,
+) {
+    let bodies = &snap.bodies;
+    for (i, b) in geom.bodies.iter().enumerate() {
+        let Some((p, a)) = bodies.get(i) else {
+            continue;
+        };
+        let pose = b.body_pose(p, a);
+        for (name, o, ax) in &b.ports {
+            let origin = v3(&(pose * nalgebra::Point3::from(*o)).coords);
+            let axw = a * ax;
+            let (u, v) = crate::scene::parts::perpendicular_basis(&axw);
+            for (k, dir, len, c, arrow) in [
+                ("axis", axw, 0.6, Color::srgb(1.0, 0.3, 0.3), true),
+                ("u", u, 0.3, Color::srgb(0.3, 1.0, 0.3), false),
+                ("v", v, 0.3, Color::srgb(0.3, 0.5, 1.0), false),
+            ] {
+                let what = format!("port {}/{name} {k}", b.name);
+                let end = origin + v3(&dir) * len;
+                line(front, lines, what, (origin, end), c, arrow);
             }
         }
     }
-    if layers.contacts {
-        // Contact points (on the first part), from the parts' geometry at the drawn poses,
-        // and the force arrow (orange): the contact's normal force (live: over the last
-        // frame's steps; replay: `contacts.csv`'s row interval) along the normal from the
-        // first part to the second, at the panel's scale; a contact without a recorded force:
-        // the unit normal (yellow, 0.3 m).
-        for (a, b) in &cur.snap.contacts {
-            if let (Some(pa), Some(pb)) = (geom.find_part(a), geom.find_part(b))
-                && let Some((p, n)) = geom.contact(pa, pb, bodies)
-            {
-                let p = v3(&p);
-                let c = Color::srgb(1.0, 0.9, 0.1);
-                front.sphere(Isometry3d::from_translation(p), 0.03, c);
-                let force = forces.as_ref().and_then(|f| {
-                    let fn_ = *cur.snap.contact_force_n.get(&(a.clone(), b.clone()))?;
-                    Some((fn_, fn_ / f.scale_n_per_m?)).filter(|(_, l)| *l > 0.0)
-                });
-                match force {
-                    Some((f_n, len_m)) => {
-                        let end = p + v3(&n) * len_m as f32;
-                        front.arrow(p, end, ARROW_COLOR);
-                        arrows.0.push((a.clone(), b.clone(), f_n, p, end));
-                    }
-                    None => {
-                        front.arrow(p, p + v3(&n) * 0.3, c);
-                    }
+}
+
+/// The LVLH (Hill) axes at the reference origin, from the reference orbit's ECI position `r`
+/// (m) and velocity `v` (m/s), and the direction to the Earth's centre.
+fn draw_lvlh(
+    front: &mut Gizmos<FrontGizmos>,
+    lines: &mut DrawnLines,
+    r: Vector3<f64>,
+    v: Vector3<f64>,
+) {
+    // LVLH (Hill) axes at the reference origin: x radial out, y along-track, z normal.
+    let x = r.normalize();
+    let z = r.cross(&v).normalize();
+    let y = z.cross(&x);
+    let len = 4.0;
+    let o = Vec3::ZERO;
+    for (name, axis, c) in [
+        ("LVLH x", x, Color::srgb(1.0, 0.2, 0.2)),
+        ("LVLH y", y, Color::srgb(0.2, 1.0, 0.2)),
+        ("LVLH z", z, Color::srgb(0.3, 0.4, 1.0)),
+    ] {
+        let end = v3(&axis) * len;
+        line(front, lines, name.into(), (o, end), c, true);
+    }
+    // Direction to the Earth's centre.
+    let earth = -v3(&x) * 2.5 * len;
+    line(
+        front,
+        lines,
+        "Earth".into(),
+        (o, earth),
+        Color::srgb(0.2, 0.9, 1.0),
+        true,
+    );
+}
+
+/// The bodies' trails: replay, the recorded track up to now (at most about 3000 points each);
+/// live, the trails gathered so far.
+fn draw_trails(
+    gizmos: &mut Gizmos,
+    replay: Option<&Replay>,
+    order: Option<&ReplayOrder>,
+    trails: &Trails,
+) {
+    let colors = [Color::srgb(0.9, 0.7, 0.3), Color::srgb(0.6, 0.8, 1.0)];
+    if let (Some(rp), Some(order)) = (replay, order) {
+        let upto = rp.rec.row_at(rp.timeline.t_s) + 1;
+        for (k, &col) in order.0.iter().enumerate() {
+            let tr = rp.rec.track(col);
+            let stride = (upto / 3000).max(1);
+            let pts = tr[..upto.min(tr.len())].iter().step_by(stride).map(v3);
+            gizmos.linestrip(pts, colors[k % 2]);
+        }
+    } else {
+        for (k, tr) in trails.0.iter().enumerate() {
+            gizmos.linestrip(tr.iter().copied(), colors[k % 2]);
+        }
+    }
+}
+
+/// Each contact's point and its force arrow (noted in `arrows`), or its unit normal when it
+/// has no recorded force.
+fn draw_contacts(
+    front: &mut Gizmos<FrontGizmos>,
+    arrows: &mut DrawnArrows,
+    geom: &SceneGeom,
+    snap: &Snapshot,
+    forces: Option<&ContactForces>,
+) {
+    let bodies = &snap.bodies;
+    // Contact points (on the first part), from the parts' geometry at the drawn poses,
+    // and the force arrow (orange): the contact's normal force (live: over the last
+    // frame's steps; replay: `contacts.csv`'s row interval) along the normal from the
+    // first part to the second, at the panel's scale; a contact without a recorded force:
+    // the unit normal (yellow, 0.3 m).
+    for (a, b) in &snap.contacts {
+        if let (Some(pa), Some(pb)) = (geom.find_part(a), geom.find_part(b))
+            && let Some((p, n)) = geom.contact(pa, pb, bodies)
+        {
+            let p = v3(&p);
+            let c = Color::srgb(1.0, 0.9, 0.1);
+            front.sphere(Isometry3d::from_translation(p), 0.03, c);
+            let force = forces.as_ref().and_then(|f| {
+                let fn_ = *snap.contact_force_n.get(&(a.clone(), b.clone()))?;
+                Some((fn_, fn_ / f.scale_n_per_m?)).filter(|(_, l)| *l > 0.0)
+            });
+            match force {
+                Some((f_n, len_m)) => {
+                    let end = p + v3(&n) * len_m as f32;
+                    front.arrow(p, end, ARROW_COLOR);
+                    arrows.0.push((a.clone(), b.clone(), f_n, p, end));
+                }
+                None => {
+                    front.arrow(p, p + v3(&n) * 0.3, c);
                 }
             }
         }
     }
-    if layers.closest
-        && let Some((a, b)) = &cur.snap.closest_parts
+}
+
+/// The closest points of the closest pair of parts, joined by a line coloured by the smallest
+/// guarantee margin ([`margin_color`]); touching, a red sphere at the first part.
+fn draw_closest(
+    gizmos: &mut Gizmos,
+    front: &mut Gizmos<FrontGizmos>,
+    lines: &mut DrawnLines,
+    geom: &SceneGeom,
+    snap: &Snapshot,
+) {
+    let bodies = &snap.bodies;
+    if let Some((a, b)) = &snap.closest_parts
         && let (Some(pa), Some(pb)) = (geom.find_part(a), geom.find_part(b))
     {
-        let margin = margin_m(&cur.snap);
-        let color = margin_color(margin, cur.snap.min_distance_m);
+        let margin = margin_m(snap);
+        let color = margin_color(margin, snap.min_distance_m);
         match geom.closest_points(pa, pb, bodies) {
             Some((p1, p2)) => {
                 line(
-                    &mut front,
-                    &mut lines,
+                    front,
+                    lines,
                     "closest".into(),
                     (v3(&p1), v3(&p2)),
                     color,
@@ -1637,6 +1764,10 @@ fn margin_color(margin: f64, distance: f64) -> Color {
     }
 }
 
+/// Writes the read-out panel: the run's status ([`panel_status`]), the snapshot's read-outs
+/// ([`panel_readouts`]), the surfaces' legend, the last events (replay, which also fills the
+/// scrubber) and the camera, layers and keys ([`panel_keys`]); hides panel and scrubber when
+/// the `panel` layer is off.
 #[allow(clippy::too_many_arguments)]
 fn panel(
     cur: Res<Current>,
@@ -1667,8 +1798,46 @@ fn panel(
         return;
     }
     use std::fmt::Write;
-    let s = &cur.snap;
     let mut o = String::new();
+    panel_status(
+        &mut o,
+        &cur,
+        replay.as_deref(),
+        live_ctl.as_deref(),
+        live.as_deref(),
+        &diagnostics,
+    );
+    panel_readouts(&mut o, &cur.snap, &layers, forces.as_deref());
+    if layers.surfaces {
+        for l in &surfaces.legend {
+            let _ = writeln!(o, "surface: {l}");
+        }
+    }
+    if let Some(r) = &replay {
+        let past: Vec<_> = r.timeline.past_markers().collect();
+        for m in past.iter().rev().take(4).rev() {
+            let _ = writeln!(o, "event t = {:.2} s: {}", m.t_s, m.label);
+        }
+        if let Ok(mut f) = fill.single_mut() {
+            f.width = Val::Percent((100.0 * r.timeline.fraction()) as f32);
+        }
+    }
+    panel_keys(&mut o, &rig, &layers);
+    text.0 = o;
+}
+
+/// The panel's first lines: live or replay, scene, time (of the end, replay), play state,
+/// speed and frame rate; live, the simulation rate achieved.
+fn panel_status(
+    o: &mut String,
+    cur: &Current,
+    replay: Option<&Replay>,
+    live_ctl: Option<&LiveCtl>,
+    live: Option<&Live>,
+    diagnostics: &DiagnosticsStore,
+) {
+    use std::fmt::Write;
+    let s = &cur.snap;
     let fps = diagnostics
         .get(&FrameTimeDiagnosticsPlugin::FPS)
         .and_then(|d| d.smoothed())
@@ -1696,6 +1865,13 @@ fn panel(
     if let Some(l) = &live {
         let _ = writeln!(o, "simulation rate achieved: {:.1}x real time", l.achieved);
     }
+}
+
+/// The snapshot's read-outs: minimum distance and closest parts, guarantee margins, docking
+/// state, contacts and their normal forces, the force-arrow scale (contacts layer on) and the
+/// first 12 diagnostics.
+fn panel_readouts(o: &mut String, s: &Snapshot, layers: &Layers, forces: Option<&ContactForces>) {
+    use std::fmt::Write;
     let _ = writeln!(
         o,
         "min distance {:.4} m   {}",
@@ -1743,20 +1919,11 @@ fn panel(
             let _ = writeln!(o, "{n} = {v:.5}");
         }
     }
-    if layers.surfaces {
-        for l in &surfaces.legend {
-            let _ = writeln!(o, "surface: {l}");
-        }
-    }
-    if let Some(r) = &replay {
-        let past: Vec<_> = r.timeline.past_markers().collect();
-        for m in past.iter().rev().take(4).rev() {
-            let _ = writeln!(o, "event t = {:.2} s: {}", m.t_s, m.label);
-        }
-        if let Ok(mut f) = fill.single_mut() {
-            f.width = Val::Percent((100.0 * r.timeline.fraction()) as f32);
-        }
-    }
+}
+
+/// The panel's last lines: the camera preset, which layers are on, and the keys.
+fn panel_keys(o: &mut String, rig: &CameraRig, layers: &Layers) {
+    use std::fmt::Write;
     let _ = writeln!(
         o,
         "camera: {:?}   layers: ports {} | LVLH/Earth {} | trails {} | closest {} | contacts {} | surfaces {}",
@@ -1773,7 +1940,6 @@ fn panel(
         "keys: Space play/pause | . , step | + - speed | Left/Right seek | [ ] events | \
          0-3 camera | P L T C K S H layers | right-drag rotate | middle-drag pan | wheel zoom"
     );
-    text.0 = o;
 }
 
 fn on(b: bool) -> &'static str {
@@ -1785,22 +1951,13 @@ const MAX_SHOT_RETRIES: u32 = 60;
 
 /// Counts frames; prints the frame rate; takes the screenshot (with a sidecar JSON giving each
 /// body's projected centre, for tests) and exits when asked.
-#[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 fn frames_and_screenshot(
     mut commands: Commands,
     mut run: ResMut<Run>,
     time: Res<Time<Real>>,
     cur: Res<Current>,
-    geom: Res<SceneGeom>,
-    camera: Query<(&Camera, &Transform), With<Camera3d>>,
-    window: Query<&Window, With<PrimaryWindow>>,
     waiting: Res<PipelinesWaiting>,
-    drawn: Res<DrawnArrows>,
-    drawn_lines: Res<DrawnLines>,
-    forces: Option<Res<ContactForces>>,
-    models: Res<ModelStatus>,
-    surfaces: Res<Surfaces>,
-    layers: Res<Layers>,
+    shot: ShotView,
     mut exit: MessageWriter<AppExit>,
 ) {
     run.frame += 1;
@@ -1825,7 +1982,7 @@ fn frames_and_screenshot(
     }
     if let Some(path) = run.opts.screenshot.clone() {
         // Wait (within reason) until no render pipeline is still compiling.
-        let models_pending = models.ready.len() < models.expected;
+        let models_pending = shot.models.ready.len() < shot.models.expected;
         if !run.shot_requested
             && (run.ready_streak < READY_FRAMES || models_pending)
             && run.frame < n + MAX_READY_WAIT_FRAMES
@@ -1834,126 +1991,50 @@ fn frames_and_screenshot(
         }
         if !run.shot_requested {
             run.shot_requested = true;
-            if let (Ok((cam, tf)), Ok(w)) = (camera.single(), window.single()) {
-                let gt = GlobalTransform::from(*tf);
-                // Viewport → window pixels (the scaled view's image is smaller than the window).
-                let k = cam
-                    .logical_viewport_size()
-                    .map_or(1.0, |v| w.physical_width() as f32 / v.x.max(1.0));
-                let project = |p: Vec3| cam.world_to_viewport(&gt, p).ok().map(|v| v * k);
-                let bodies: Vec<_> = geom
-                    .bodies
-                    .iter()
-                    .zip(&cur.snap.bodies)
-                    .map(|(b, (p, _))| {
-                        let c = v3(p);
-                        let px = project(c);
-                        // Projected radius of a 0.5 m sphere about the centre of mass.
-                        let right = tf.right().as_vec3();
-                        let r_px =
-                            px.and_then(|p0| project(c + right * 0.5).map(|p1| (p1 - p0).length()));
-                        serde_json::json!({
-                            "name": b.name,
-                            "centre_world_m": [p.x, p.y, p.z],
-                            "centre_px": px.map(|p| [p.x, p.y]),
-                            "half_metre_px": r_px,
-                        })
-                    })
-                    .collect();
-                let px = |p: Vec3| project(p).map(|p| [p.x, p.y]);
-                let arrows: Vec<_> = drawn
-                    .0
-                    .iter()
-                    .map(|(a, b, f, p0, p1)| {
-                        serde_json::json!({
-                            "a": a,
-                            "b": b,
-                            "force_n": f,
-                            "length_m": (*p1 - *p0).length(),
-                            "start_px": px(*p0),
-                            "end_px": px(*p1),
-                        })
-                    })
-                    .collect();
-                // Each constraint surface's centroid (mean vertex), world, projected.
-                let shown_surfaces: Vec<_> = surfaces
-                    .list
-                    .iter()
-                    .zip(&surfaces.legend)
-                    .filter_map(|(sf, legend)| {
-                        let m = &sf.mesh.positions_m;
-                        let mean = m.iter().fold(Vector3::zeros(), |a, p| a + p) / m.len() as f64;
-                        let origin = match sf.anchor {
-                            super::surfaces::Anchor::World(o) => o,
-                            super::surfaces::Anchor::BodyCom(i) => cur.snap.bodies.get(i)?.0,
-                        };
-                        let c = origin + mean;
-                        Some(serde_json::json!({
-                            "legend": legend,
-                            "rgba": sf.rgba,
-                            "centroid_world_m": [c.x, c.y, c.z],
-                            "centroid_px": px(v3(&c)),
-                        }))
-                    })
-                    .collect();
-                let side = serde_json::json!({
-                    "layers": {
-                        "ports": layers.ports, "lvlh": layers.lvlh, "trails": layers.trails,
-                        "closest": layers.closest, "contacts": layers.contacts,
-                        "surfaces": layers.surfaces, "panel": layers.panel,
-                    },
-                    "surfaces": shown_surfaces,
-                    "width_px": w.physical_width(),
-                    "height_px": w.physical_height(),
-                    "scale_factor": w.scale_factor(),
-                    "t_s": cur.snap.t_s,
-                    "bodies": bodies,
-                    "force_arrows": arrows,
-                    "lines": drawn_lines.0.iter().map(|(what, c, a, b)| {
-                        let c = c.to_srgba();
-                        serde_json::json!({
-                            "what": what,
-                            "srgb": [c.red, c.green, c.blue],
-                            "start_px": px(*a),
-                            "end_px": px(*b),
-                        })
-                    }).collect::<Vec<_>>(),
-                    "models": models.ready.iter().map(|(part, path, n)| serde_json::json!({
-                        "part": part, "path": path, "meshes": n,
-                    })).collect::<Vec<_>>(),
-                    "models_expected": models.expected,
-                    "arrow_scale_n_per_m": forces.as_ref().and_then(|f| f.scale_n_per_m),
-                });
+            if let (Ok((cam, tf)), Ok(w)) = (shot.camera.single(), shot.window.single()) {
+                let side = shot.sidecar(cam, tf, w, &cur.snap);
                 let _ = std::fs::write(
                     path.with_extension("json"),
                     serde_json::to_string_pretty(&side).unwrap_or_default(),
                 );
             }
-            commands
-                .spawn(Screenshot::primary_window())
-                .observe(save_to_disk(path))
-                .observe(|cap: On<ScreenshotCaptured>, mut run: ResMut<Run>| {
-                    // A frame of one colour means the render pipelines were still compiling
-                    // (the software renderer takes a while): take another a little later.
-                    let uniform = cap
-                        .image
-                        .data
-                        .as_deref()
-                        .is_none_or(|d| d.chunks_exact(4).all(|p| p == &d[..4]));
-                    if uniform && run.retries < MAX_SHOT_RETRIES {
-                        run.retries += 1;
-                        run.shot_requested = false;
-                        let next = run.frame + 10;
-                        run.opts.frames = Some(next);
-                    } else {
-                        run.shot_done = true;
-                    }
-                });
+            request_screenshot(&mut commands, path);
         }
         if !run.shot_done {
             return;
         }
     }
+    print_rates(&run, now, &cur.snap);
+    exit.write(AppExit::Success);
+}
+
+/// Asks for a screenshot of the window, saved to `path`; a frame of one colour is retaken
+/// 10 frames later (at most [`MAX_SHOT_RETRIES`] times), otherwise the shot is done.
+fn request_screenshot(commands: &mut Commands, path: PathBuf) {
+    commands
+        .spawn(Screenshot::primary_window())
+        .observe(save_to_disk(path))
+        .observe(|cap: On<ScreenshotCaptured>, mut run: ResMut<Run>| {
+            // A frame of one colour means the render pipelines were still compiling
+            // (the software renderer takes a while): take another a little later.
+            let uniform = cap
+                .image
+                .data
+                .as_deref()
+                .is_none_or(|d| d.chunks_exact(4).all(|p| p == &d[..4]));
+            if uniform && run.retries < MAX_SHOT_RETRIES {
+                run.retries += 1;
+                run.shot_requested = false;
+                let next = run.frame + 10;
+                run.opts.frames = Some(next);
+            } else {
+                run.shot_done = true;
+            }
+        });
+}
+
+/// Prints the frame rate and the simulated time's rate over the frames after warm-up.
+fn print_rates(run: &Run, now: f64, snap: &Snapshot) {
     if let Some(t0) = run.t_first {
         let frames = run.frames_since_first;
         let dt = now - t0;
@@ -1963,7 +2044,7 @@ fn frames_and_screenshot(
                 run.frame,
                 f64::from(frames) / dt
             );
-            let sim = cur.snap.t_s - run.sim_first_s;
+            let sim = snap.t_s - run.sim_first_s;
             println!(
                 "simulated time advanced {sim:.3} s in those {dt:.2} s = {:.2}x real time \
                  (asked {}x{})",
@@ -1973,7 +2054,147 @@ fn frames_and_screenshot(
             );
         }
     }
-    exit.write(AppExit::Success);
+}
+
+/// What the screenshot's sidecar JSON describes: the 3-D camera and the window (to project
+/// world points to window pixels), the bodies, the force arrows and lines the overlays drew
+/// this frame, the glTF models, the constraint surfaces, the layers and the arrow scale.
+#[derive(bevy::ecs::system::SystemParam)]
+struct ShotView<'w, 's> {
+    camera: Query<'w, 's, (&'static Camera, &'static Transform), With<Camera3d>>,
+    window: Query<'w, 's, &'static Window, With<PrimaryWindow>>,
+    geom: Res<'w, SceneGeom>,
+    drawn: Res<'w, DrawnArrows>,
+    drawn_lines: Res<'w, DrawnLines>,
+    forces: Option<Res<'w, ContactForces>>,
+    models: Res<'w, ModelStatus>,
+    surfaces: Res<'w, Surfaces>,
+    layers: Res<'w, Layers>,
+}
+
+impl ShotView<'_, '_> {
+    /// The sidecar JSON for the snapshot `snap` seen by camera `cam` at `tf` in window `w`.
+    fn sidecar(
+        &self,
+        cam: &Camera,
+        tf: &Transform,
+        w: &Window,
+        snap: &Snapshot,
+    ) -> serde_json::Value {
+        let (drawn_lines, models, layers) = (&self.drawn_lines, &self.models, &self.layers);
+        let gt = GlobalTransform::from(*tf);
+        // Viewport → window pixels (the scaled view's image is smaller than the window).
+        let k = cam
+            .logical_viewport_size()
+            .map_or(1.0, |v| w.physical_width() as f32 / v.x.max(1.0));
+        let project = |p: Vec3| cam.world_to_viewport(&gt, p).ok().map(|v| v * k);
+        let bodies = self.bodies_json(tf, snap, &project);
+        let px = |p: Vec3| project(p).map(|p| [p.x, p.y]);
+        let arrows = self.arrows_json(&px);
+        let shown_surfaces = self.surfaces_json(snap, &px);
+        serde_json::json!({
+            "layers": {
+                "ports": layers.ports, "lvlh": layers.lvlh, "trails": layers.trails,
+                "closest": layers.closest, "contacts": layers.contacts,
+                "surfaces": layers.surfaces, "panel": layers.panel,
+            },
+            "surfaces": shown_surfaces,
+            "width_px": w.physical_width(),
+            "height_px": w.physical_height(),
+            "scale_factor": w.scale_factor(),
+            "t_s": snap.t_s,
+            "bodies": bodies,
+            "force_arrows": arrows,
+            "lines": drawn_lines.0.iter().map(|(what, c, a, b)| {
+                let c = c.to_srgba();
+                serde_json::json!({
+                    "what": what,
+                    "srgb": [c.red, c.green, c.blue],
+                    "start_px": px(*a),
+                    "end_px": px(*b),
+                })
+            }).collect::<Vec<_>>(),
+            "models": models.ready.iter().map(|(part, path, n)| serde_json::json!({
+                "part": part, "path": path, "meshes": n,
+            })).collect::<Vec<_>>(),
+            "models_expected": models.expected,
+            "arrow_scale_n_per_m": self.forces.as_ref().and_then(|f| f.scale_n_per_m),
+        })
+    }
+
+    /// Each body's name, centre of mass (world, m) and its projection, and the projected
+    /// radius of a 0.5 m sphere about it, px.
+    fn bodies_json(
+        &self,
+        tf: &Transform,
+        snap: &Snapshot,
+        project: &impl Fn(Vec3) -> Option<Vec2>,
+    ) -> Vec<serde_json::Value> {
+        self.geom
+            .bodies
+            .iter()
+            .zip(&snap.bodies)
+            .map(|(b, (p, _))| {
+                let c = v3(p);
+                let px = project(c);
+                // Projected radius of a 0.5 m sphere about the centre of mass.
+                let right = tf.right().as_vec3();
+                let r_px = px.and_then(|p0| project(c + right * 0.5).map(|p1| (p1 - p0).length()));
+                serde_json::json!({
+                    "name": b.name,
+                    "centre_world_m": [p.x, p.y, p.z],
+                    "centre_px": px.map(|p| [p.x, p.y]),
+                    "half_metre_px": r_px,
+                })
+            })
+            .collect()
+    }
+
+    /// The force arrows drawn this frame: parts, force (N), length (m) and projected ends.
+    fn arrows_json(&self, px: &impl Fn(Vec3) -> Option<[f32; 2]>) -> Vec<serde_json::Value> {
+        self.drawn
+            .0
+            .iter()
+            .map(|(a, b, f, p0, p1)| {
+                serde_json::json!({
+                    "a": a,
+                    "b": b,
+                    "force_n": f,
+                    "length_m": (*p1 - *p0).length(),
+                    "start_px": px(*p0),
+                    "end_px": px(*p1),
+                })
+            })
+            .collect()
+    }
+
+    /// Each constraint surface's legend, colour and centroid (mean vertex), world and projected.
+    fn surfaces_json(
+        &self,
+        snap: &Snapshot,
+        px: &impl Fn(Vec3) -> Option<[f32; 2]>,
+    ) -> Vec<serde_json::Value> {
+        self.surfaces
+            .list
+            .iter()
+            .zip(&self.surfaces.legend)
+            .filter_map(|(sf, legend)| {
+                let m = &sf.mesh.positions_m;
+                let mean = m.iter().fold(Vector3::zeros(), |a, p| a + p) / m.len() as f64;
+                let origin = match sf.anchor {
+                    super::surfaces::Anchor::World(o) => o,
+                    super::surfaces::Anchor::BodyCom(i) => snap.bodies.get(i)?.0,
+                };
+                let c = origin + mean;
+                Some(serde_json::json!({
+                    "legend": legend,
+                    "rgba": sf.rgba,
+                    "centroid_world_m": [c.x, c.y, c.z],
+                    "centroid_px": px(v3(&c)),
+                }))
+            })
+            .collect()
+    }
 }
 
 #[cfg(test)]

@@ -287,7 +287,7 @@ mod tests {
 
     fn load(name: &str) -> Scene {
         let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("scenes/examples")
+            .join("scenes")
             .join(name);
         crate::scene::load_scene_file(&p, &[])
             .expect("scene loads")
@@ -401,7 +401,7 @@ mod tests {
             }
         }
         // free_drift: its KeepOutSphere guarantee (10 m about the target).
-        let scene = load("free_drift.ron");
+        let scene = load("examples/free_drift.ron");
         let ko: Vec<_> = scene_surfaces(&scene)
             .into_iter()
             .filter(|s| s.legend.starts_with("keep-out "))
@@ -487,7 +487,7 @@ mod tests {
     fn invariant_viewer_draws_a_users_guarantee_through_its_hook() {
         // Reference: the hook's own description — a 45 m sphere about the last body, every
         // vertex at 45 m to 1e-9; a degenerate description (radius 0) draws nothing.
-        let mut scene = load("free_drift.ron");
+        let mut scene = load("examples/free_drift.ron");
         scene
             .guarantees
             .push(crate::guarantee::registry::GuaranteeSpec {
