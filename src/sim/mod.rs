@@ -1743,6 +1743,12 @@ pub struct PipelinePlugin;
 impl Plugin for PipelinePlugin {
     fn build(&self, app: &mut App) {
         let mut schedule = Schedule::new(SimStep);
+        // One thread: the stages are a chain and their systems ordered (no two may run
+        // together), so Bevy's multi-threaded executor, the default when the `viewer` feature
+        // turns on `bevy/multi_threaded`, would only hand each system to a pool thread and park
+        // this one until it is done — measured on free_drift, 5.6× the wall time of this
+        // executor (17 600 against 99 100 steps/s), the same outputs byte for byte.
+        schedule.set_executor(bevy::ecs::schedule::SingleThreadedExecutor::new());
         schedule.configure_sets(
             (
                 Stage::Sense,
