@@ -184,6 +184,13 @@ class DockingEnv(gym.Env):
     - ``obs_scale``: the four divisors of the observation (position m, velocity m/s, attitude
       rad, rate rad/s).
     - reward weights as in the module docs; ``render_mode``: None or ``"rgb_array"``.
+    - ``stepping``: the scene's ``stepping`` for every episode (docs/multirate.md):
+      ``"MultiRate()"`` by default — steps longer than ``dt_s`` only where the monitor proves
+      that no contact can begin and no guarantee margin can change sign, the control period's
+      boundaries kept exact — about 1.8× the environment steps per second of ``"Fixed"`` with
+      random actions, every result within the multi-rate tolerances of the fixed-step run;
+      ``"Fixed"`` for the scene's fixed step everywhere; None for the scene's own setting. A
+      reset's ``options["set"]`` may still override it.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
@@ -209,6 +216,7 @@ class DockingEnv(gym.Env):
         r_latch: float = 10.0,
         r_missed: float = 5.0,
         render_mode: Optional[str] = None,
+        stepping: Optional[str] = "MultiRate()",
     ):
         super().__init__()
         if render_mode == "human":
@@ -254,8 +262,12 @@ class DockingEnv(gym.Env):
             missed=_finite("r_missed", r_missed, -1e6, 1e6),
         )
 
-        # The scene, loaded once here (a SceneError now, not at the first reset).
-        probe = Simulation(self.scene, record=False)
+        if stepping is not None and not isinstance(stepping, str):
+            raise TypeError(f"stepping: a string ('MultiRate()', 'Fixed') or None, got {stepping!r}")
+        self._stepping = {} if stepping is None else {"stepping": stepping}
+        # The scene, loaded once here (a SceneError now, not at the first reset; a bad
+        # `stepping` too).
+        probe = Simulation(self.scene, set=self._stepping, record=False)
         dock = probe.docking()
         if not dock:
             raise ValueError(f"{self.scene}: DockingEnv needs a scene with a docking mechanism")
@@ -408,6 +420,7 @@ class DockingEnv(gym.Env):
         vel = -axis * g["closing_speed_m_s"]
         body = f"bodies.{self._names[0]}"
         overrides = {
+            **self._stepping,
             f"{body}.initial.pos_m": "({!r}, {!r}, {!r})".format(*map(float, com)),
             f"{body}.initial.vel_m_s": "({!r}, {!r}, {!r})".format(*map(float, vel)),
             f"{body}.initial.attitude": (

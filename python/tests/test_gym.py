@@ -119,6 +119,56 @@ def test_a_scripted_approach_latches_and_step_after_it_raises():
     env.step(np.zeros(6))
 
 
+def scripted_track(env, seed):
+    """The scripted episode's chaser port position (target port frame, m) after every step,
+    its end state, and the number of steps."""
+    obs, info = env.reset(seed=seed)
+    params, track = info["params"], []
+    for k in range(env.max_episode_steps):
+        obs, r, term, trunc, info = env.step(scripted_action(info["state"], params))
+        track.append(np.asarray(info["state"]["rel_pos_m"]))
+        if term or trunc:
+            return np.array(track), info, k + 1
+    raise AssertionError("the episode did not end at max_episode_steps")
+
+
+def test_multi_rate_default_is_within_the_multirate_tolerances_of_fixed():
+    # The environment steps with `MultiRate()` by default; the same scripted episodes with
+    # `Fixed` (the scene's every-step run) are the reference. Tolerances: docs/scene-format.md's
+    # for multi-rate against fixed-step runs (positions within 1 mm, the same docking
+    # outcome, the latch within one control period: here the same step or the next).
+    multi, fixed = DockingEnv(), DockingEnv(stepping="Fixed")
+    assert multi.sim is None and fixed.sim is None
+    long_steps, states = 0, []
+    for seed in (1, 4):
+        a, ia, na = scripted_track(multi, seed)
+        long_steps += multi.sim.summary()["stepping"]["long_steps"]
+        b, ib, nb = scripted_track(fixed, seed)
+        assert "stepping" not in fixed.sim.summary()  # a fixed-step run's summary
+        assert ia["docking_state"] == ib["docking_state"], (seed, ia, ib)
+        states.append(ia["docking_state"])
+        assert abs(na - nb) <= 1, (na, nb)
+        n = min(na, nb)
+        err = np.max(np.abs(a[:n] - b[:n]))
+        print(f"seed {seed}: {na} and {nb} steps, largest position difference {err:.3g} m")
+        assert err <= 1e-3, err
+    # Seed 1 latches, seed 4 is still attracting at 40 s (its scripted law is slow there).
+    assert states == ["LATCHED", "ATTRACTING"], states
+    # ... and it did take long steps (else this compares Fixed with itself).
+    assert long_steps > 0
+
+
+def test_stepping_none_keeps_the_scene_s_own_and_bad_values_are_refused():
+    env = DockingEnv(stepping=None)
+    env.reset(seed=0)
+    env.step(np.zeros(6))
+    assert "stepping" not in env.sim.summary()  # docking_aligned's own: Fixed
+    with pytest.raises(TypeError):
+        DockingEnv(stepping=3)
+    with pytest.raises(rpod.SceneError):
+        DockingEnv(stepping="Sometimes()")
+
+
 def test_truncation_at_max_episode_steps_then_step_raises():
     env = DockingEnv(duration_s=2.0, control_period_s=0.5)
     assert env.max_episode_steps == 4
