@@ -1325,12 +1325,20 @@ fn closest_parts_inner(
             }
         }
     }
-    candidates.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
-    for (c, &(lb, a, b)) in candidates.iter().enumerate() {
+    // Nearest bounding-sphere gap first, ties by part indices: a min-heap pops them in the
+    // order a full sort would give, and the search usually stops after a few (every later gap
+    // is at least the best distance found), so most candidates are never ordered.
+    let mut heap = std::collections::BinaryHeap::from(
+        std::mem::take(candidates)
+            .into_iter()
+            .map(NearestFirst)
+            .collect::<Vec<_>>(),
+    );
+    while let Some(NearestFirst((lb, a, b))) = heap.pop() {
         // No distance is below zero: once a touching pair is found, the rest cannot win (and
         // a later zero would not replace it either).
         if lb >= best || best <= 0.0 {
-            count.pruned += (candidates.len() - c) as u64;
+            count.pruned += heap.len() as u64 + 1;
             break;
         }
         count.exact += 1;
@@ -1347,6 +1355,9 @@ fn closest_parts_inner(
             }
         }
     }
+    // The scratch vector back to the caller, its allocation kept.
+    *candidates = heap.into_vec().into_iter().map(|c| c.0).collect();
+    candidates.clear();
     if !certify || !best.is_finite() || best <= 0.0 {
         // (At zero the certified lower bound is zero: 0 ≤ lower ≤ best.)
         return PartPairHit {
@@ -1365,6 +1376,32 @@ fn closest_parts_inner(
         b: bb,
     }
 }
+
+/// A candidate part pair (bounding-sphere gap, m; part a; part b) ordered so that a max-heap
+/// pops the smallest gap first, ties by (a, b): the order of a sort by `total_cmp` then (a, b).
+#[derive(Debug, Clone, Copy)]
+struct NearestFirst((f64, usize, usize));
+
+impl Ord for NearestFirst {
+    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+        let (x, y) = (self.0, o.0);
+        y.0.total_cmp(&x.0).then((y.1, y.2).cmp(&(x.1, x.2)))
+    }
+}
+
+impl PartialOrd for NearestFirst {
+    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(o))
+    }
+}
+
+impl PartialEq for NearestFirst {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o) == std::cmp::Ordering::Equal
+    }
+}
+
+impl Eq for NearestFirst {}
 
 /// Every part pair's bounding-sphere gap |c_a − c_b| − r_a − r_b, m, into `l` (cleared first),
 /// row-major: part a of `pi` by part b of `pj` (world poses and bounding radii, m).
