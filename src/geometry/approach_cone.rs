@@ -133,14 +133,17 @@ impl ApproachCone {
         let band = (range - self.to_range_m).min(self.from_range_m - range);
         let u = around_att * self.axis;
         let (s, c) = self.half_angle_rad.sin_cos();
-        let worst = self
-            .points
-            .iter()
-            .map(|(p, r)| {
-                let w = body_pos_m + body_att * (p - self.body_com_m);
-                cone_h(&apex, &u, s, c, &w) + r
-            })
-            .fold(f64::NEG_INFINITY, f64::max);
+        let mut worst = f64::NEG_INFINITY;
+        for (p, r) in &self.points {
+            let w = body_pos_m + body_att * (p - self.body_com_m);
+            let h = cone_h(&apex, &u, s, c, &w) + r;
+            // One point past `band` makes the margin −band whatever the others are (a latched
+            // or distant body, outside the cone's ranges): the same value, bit for bit.
+            if h > band {
+                return -band;
+            }
+            worst = worst.max(h);
+        }
         (-worst).max(-band)
     }
 
