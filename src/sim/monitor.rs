@@ -1167,11 +1167,12 @@ pub fn pair_eval(
             }
         };
         let rel = pa.0.inv_mul(&pb.0);
-        let quick = e.advance_quick(&rel, pa.1, pb.1);
+        let rel_inv = rel.inverse();
+        let quick = e.advance_quick((&rel, &rel_inv), pa.1, pb.1);
         if let Some(answer) = decide(quick) {
             return answer;
         }
-        if let Some(answer) = decide(e.advance_parts(&rel, (sa, pa.1), (sb, pb.1))) {
+        if let Some(answer) = decide(e.advance_parts((&rel, &rel_inv), (sa, pa.1), (sb, pb.1))) {
             return answer;
         }
     }

@@ -49,6 +49,8 @@ use std::sync::Mutex;
 pub struct ExactEval {
     /// Pose of part b's frame in part a's frame at the evaluation.
     pub rel: Isometry3<f64>,
+    /// Its inverse (a's frame in b's), computed once ([`ExactEval::new`]).
+    pub rel_inv: Isometry3<f64>,
     /// The distance found (the witnesses' distance), m.
     pub value_m: f64,
     /// Certified lower bound of the distance to the triangles, m.
@@ -135,6 +137,25 @@ pub fn displacement_bound_axis_m(
 }
 
 impl ExactEval {
+    /// An evaluation at the relative pose `rel` (b's frame in a's): its value and certified
+    /// lower bound, m, and the witness points (a's in a's frame, b's in b's).
+    pub fn new(
+        rel: Isometry3<f64>,
+        value_m: f64,
+        lower_m: f64,
+        witness_a: Point3<f64>,
+        witness_b: Point3<f64>,
+    ) -> Self {
+        Self {
+            rel,
+            rel_inv: rel.inverse(),
+            value_m,
+            lower_m,
+            witness_a,
+            witness_b,
+        }
+    }
+
     /// The certified bracket (lower, upper) of the pair's distance at the relative pose `rel`
     /// (b's frame in a's), part b within `rb_m` of its origin, m.
     pub fn advance(&self, rel: &Isometry3<f64>, rb_m: f64) -> (f64, f64) {
@@ -145,23 +166,30 @@ impl ExactEval {
     /// a's frame, within `rb_m` of b's origin, or a's in b's, within `ra_m`): no look at the
     /// shapes, a few multiplications. [`Self::advance_parts`] is tighter for a part turning
     /// about an axis of its own.
-    pub fn advance_quick(&self, rel: &Isometry3<f64>, ra_m: f64, rb_m: f64) -> (f64, f64) {
+    /// `rel_inv` is `rel.inverse()` (the caller computes it once for both advances).
+    pub fn advance_quick(
+        &self,
+        (rel, rel_inv): (&Isometry3<f64>, &Isometry3<f64>),
+        ra_m: f64,
+        rb_m: f64,
+    ) -> (f64, f64) {
         let moved_b = displacement_bound_m(&self.rel, rel, rb_m);
-        let moved_a = displacement_bound_m(&self.rel.inverse(), &rel.inverse(), ra_m);
+        let moved_a = displacement_bound_m(&self.rel_inv, rel_inv, ra_m);
         self.advance_by(rel, moved_b.min(moved_a))
     }
 
     /// [`Self::advance`] with the rotation's axis, on whichever side bounds the motion better
     /// (part b's points moving in a's frame, or a's in b's: the distance is the same):
     /// [`displacement_bound_axis_m`].
+    /// `rel_inv` is `rel.inverse()`.
     pub fn advance_parts(
         &self,
-        rel: &Isometry3<f64>,
+        (rel, rel_inv): (&Isometry3<f64>, &Isometry3<f64>),
         a: (&dyn rp::Shape, f64),
         b: (&dyn rp::Shape, f64),
     ) -> (f64, f64) {
         let moved_b = displacement_bound_axis_m(&self.rel, rel, b);
-        let moved_a = displacement_bound_axis_m(&self.rel.inverse(), &rel.inverse(), a);
+        let moved_a = displacement_bound_axis_m(&self.rel_inv, rel_inv, a);
         self.advance_by(rel, moved_b.min(moved_a))
     }
 
@@ -276,13 +304,7 @@ pub fn convex_exact(
     let rel = pa.inv_mul(pb);
     let eps = F32_REL_TOL * (rel.translation.vector.norm() + ra_m + rb_m);
     let rel32 = conv::pose(&rel);
-    let touching = ExactEval {
-        rel,
-        value_m: 0.0,
-        lower_m: 0.0,
-        witness_a: Point3::origin(),
-        witness_b: Point3::origin(),
-    };
+    let touching = ExactEval::new(rel, 0.0, 0.0, Point3::origin(), Point3::origin());
     // Two boxes: parry's own box–box closest points (separating axes, then a projection), the
     // ones its `distance` measures, so that the value is the one `query::distance` gives;
     // every other pair through the dispatcher (GJK, or its closed forms for balls), as there.
@@ -310,13 +332,13 @@ pub fn convex_exact(
             let sb_n = rel32 * sb.local_support_point(rel32.rotation.inverse() * -n);
             let gap = f64::from(n.dot(sb_n - sa_n));
             let value = f64::from(d);
-            Some(ExactEval {
+            Some(ExactEval::new(
                 rel,
-                value_m: value,
-                lower_m: (gap.min(value) - eps).max(0.0),
-                witness_a: Point3::from(conv::na(p1)),
-                witness_b: Point3::from(conv::na(rel32.inverse_transform_point(p2))),
-            })
+                value,
+                (gap.min(value) - eps).max(0.0),
+                Point3::from(conv::na(p1)),
+                Point3::from(conv::na(rel32.inverse_transform_point(p2))),
+            ))
         }
         query::ClosestPoints::Disjoint => None,
     }
@@ -348,13 +370,13 @@ pub fn mesh_exact(
     let lower = (f64::from(lower) - eps).max(0.0).min(value);
     let (wm, ws) = (Point3::from(conv::na(wm)), Point3::from(conv::na(ws)));
     let (witness_a, witness_b) = if mesh_is_a { (wm, ws) } else { (ws, wm) };
-    Some(ExactEval {
-        rel: pa.inv_mul(pb),
-        value_m: value,
-        lower_m: lower,
+    Some(ExactEval::new(
+        pa.inv_mul(pb),
+        value,
+        lower,
         witness_a,
         witness_b,
-    })
+    ))
 }
 
 /// Triangle mesh `m` against the support map `s` (shape `s_shape`) at `rel` (s's frame in m's),
