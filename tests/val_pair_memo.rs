@@ -1,6 +1,7 @@
 //! The monitor's memo for pairs of parts with support maps (`sim::monitor::memo::convex_exact`,
 //! `monitor::pair_eval`; the latched stack's cost): a kept evaluation answers a later pose
-//! only with a certified bracket no wider than a fresh query's, and never near touch.
+//! only with a certified bracket no wider than a fresh query's, and never near touch; it clears
+//! a pair for a caller only with a lower bound that holds the closed form.
 //!
 //! References (independent, closed forms in f64):
 //! * a ball (centre p in a box's frame, radius r) and a box (half extents h): the distance is
@@ -212,6 +213,61 @@ fn val_pair_memo_moving_pair_is_queried_fresh_and_touch_is_parrys() {
                 panic!("nothing clears an infinite level");
             };
             assert_eq!(again.to_bits(), direct.value_m.to_bits());
+        }
+    }
+}
+
+#[test]
+fn val_pair_memo_far_pair_is_cleared_only_by_its_certified_bound() {
+    // The moving, spinning ball of the test above, asked as a caller asks a candidate pair:
+    // with the best distance found so far (`clear_at`) 5 cm under this pair's true distance
+    // (the pair cannot be the closest), the kept evaluation clears it while its advanced lower
+    // bound stays at or above that level — the bound certified against the closed form — and
+    // the pair is queried afresh (bit for bit parry's) when it does not. With `clear_at` 1 mm
+    // above the truth nothing may clear it: a clear there would be a false certificate.
+    let h = Vector3::new(0.4, 0.25, 0.6);
+    let r = 0.07;
+    let parts = [cuboid(h), (rp::SharedShape::ball(r as f32), r)];
+    let pa = Isometry3::identity();
+    for (below_m, expect_clears) in [(0.05, true), (-1e-3, false)] {
+        let g = common::one_part_bodies(&[&parts[0], &parts[1]]);
+        let (mut cleared, mut fresh) = (0, 0);
+        for k in 0..=400 {
+            let gap = 0.5 - 1e-3 * k as f64;
+            let p = Vector3::new(0.05, h.y + r + gap, -0.1);
+            let spin =
+                UnitQuaternion::from_scaled_axis(Vector3::new(0.3, 1.0, 0.2).normalize() * 0.01);
+            let pb = iso(p, spin.powf(k as f64));
+            let truth = ball_box(p, h, r);
+            let clear_at = truth - below_m;
+            let tol = eps(&pa, &pb, parts[0].1, r);
+            match monitor::pair_eval(&g, 0, 0, &(pa, parts[0].1), 1, 0, &(pb, r), clear_at) {
+                PairEval::Clear(l) => {
+                    assert!(l >= clear_at, "step {k}: cleared at {l} under {clear_at}");
+                    assert!(l <= truth, "step {k}: bound {l} above the truth {truth}");
+                    cleared += 1;
+                }
+                PairEval::Value(value, lower) => {
+                    let direct =
+                        memo::convex_exact(&pa, (&*parts[0].0, parts[0].1), &pb, (&*parts[1].0, r))
+                            .expect("support maps");
+                    assert!(lower <= truth, "step {k}: lower {lower} above {truth}");
+                    assert!(
+                        value >= truth - tol,
+                        "step {k}: value {value} under {truth}"
+                    );
+                    fresh += usize::from(value.to_bits() == direct.value_m.to_bits());
+                }
+            }
+        }
+        if expect_clears {
+            // The level falls with the truth (1 mm a step); the bound also loses the spin's
+            // chord, 0.01 rad × 0.07 m = 0.7 mm a step since its evaluation, so the 5 cm last
+            // about 70 steps: a fresh query, then about 70 steps cleared.
+            assert!(cleared > 350, "{cleared} of 401 steps cleared");
+            assert!((4..=10).contains(&fresh), "{fresh} fresh queries");
+        } else {
+            assert_eq!(cleared, 0, "a clear above the truth");
         }
     }
 }
