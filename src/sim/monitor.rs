@@ -981,9 +981,12 @@ pub struct PartPairHit {
 /// Query counters.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct QueryCount {
-    /// Exact parry calls.
+    /// Part pairs evaluated ([`pair_eval`]: parry's exact query, or in its place the memo's
+    /// or a mesh hull's certified bracket).
     pub exact: u64,
-    /// Part pairs skipped by their bounding-sphere bound.
+    /// Part pairs not evaluated: skipped by their bounding-sphere bound, or cleared by a
+    /// certified lower bound (a mesh hull's, or the memo's advanced one) at or above the best
+    /// distance already found.
     pub pruned: u64,
 }
 
