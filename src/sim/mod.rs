@@ -1503,8 +1503,20 @@ impl StepJudge<'_> {
         let (t, dt) = (self.view.t_s, self.motion.dt_s);
         let t0 = t - dt;
         let (m0, m1, rate) = (c.m0, c.m1, c.rate);
-        let abs_tol = c.inv.tolerance();
         let floor = c.inv.margin_floor();
+        // A margin whose samples' certified brackets are wider than the refinement tolerance
+        // (a distance margin of a faceted cone a few centimetres from a slot wall: GJK's
+        // bracket, 1.2e-3 of the distance, against 1e-3 of a sub-millimetre violation) could
+        // never have that tolerance proved: every sub-interval's bound sits below its samples'
+        // values by their width, and the search would spend its whole budget on every such
+        // step. Its tolerance is twice the wider of the step's end brackets, as the closest
+        // approach's is (`monitor::tracked`). Zero, the verdict's threshold, is unchanged.
+        let width = (m0.value - m0.lower).max(m1.value - m1.lower);
+        let abs_tol = if width.is_finite() {
+            c.inv.tolerance().max(2.0 * width)
+        } else {
+            c.inv.tolerance()
+        };
         let thr = |b: f64| {
             let x = w.min(b);
             let t = if x >= 0.0 {
