@@ -1626,8 +1626,9 @@ impl StepJudge<'_> {
 /// With |m′| ≤ L over the step, the margin is at least (m(t₀) + m(t₁) − L·dt)/2 on it. If that
 /// does not clear what the verdict needs — while the worst margin W so far is positive,
 /// max(0, W − max([`Guarantee::tolerance`], [`POSITIVE_MARGIN_REL_TOL`]·W)) (zero proves the
-/// guarantee still holds); once violated, W less max(tolerance, [`NEGATIVE_MARGIN_REL_TOL`]·|W|)
-/// — the step is bisected on the bodies' paths
+/// guarantee still holds); once violated, W less max(tolerance, [`NEGATIVE_MARGIN_REL_TOL`]·|W|);
+/// the tolerance at least twice the width of the step's end brackets (no search could prove
+/// less) — the step is bisected on the bodies' paths
 /// ([`crate::geometry::bounds::minimize`]). A violation found (at the sample or inside) is
 /// then located: the first time the margin is below zero, bracketed to
 /// [`EVENT_TIME_TOL`]·dt ([`crate::geometry::bounds::first_below`]), and, if it holds again by
