@@ -40,6 +40,20 @@ impl Bracket {
     pub fn exact(v: f64) -> Self {
         Self { value: v, lower: v }
     }
+
+    /// value − lower: how far below the value the certified bound may sit.
+    pub fn width(&self) -> f64 {
+        self.value - self.lower
+    }
+}
+
+/// The finest tolerance a search between the end brackets `a` and `b` can be asked to prove:
+/// twice the wider one's width. Every sub-interval's bound sits below its samples' values by
+/// their widths, so a threshold closer to the values than that could never be cleared and the
+/// search would spend its whole budget (the closest approach, `sim::monitor::tracked`; a
+/// guarantee's worst margin, `sim::StepJudge::finding`).
+pub fn provable_tolerance(a: &Bracket, b: &Bracket) -> f64 {
+    2.0 * a.width().max(b.width())
 }
 
 /// The interval lower bound from the ends' lower bounds and the rate bound, over a width `h`:
@@ -315,6 +329,26 @@ mod tests {
     //! Checked against closed forms: the distance |t − t*|·v + d_min of a straight fly-by at
     //! speed v (a V-shaped function with slope exactly v), and sin t.
     use super::*;
+
+    /// f(t) = 1 + 0.2·|t − 0.5| on [0, 1] (minimum 1 at t = 0.5, rate 0.2), every sample
+    /// bracketed 1e-3 wide: a threshold 1e-4 under the minimum (inside
+    /// [`provable_tolerance`], 2e-3) is never cleared and the search spends its whole budget; a
+    /// threshold the provable tolerance under it is cleared within a few evaluations.
+    #[test]
+    fn a_tolerance_finer_than_the_brackets_is_never_proved() {
+        let f = |t: f64| Bracket {
+            value: 1.0 + 0.2 * (t - 0.5).abs(),
+            lower: 1.0 + 0.2 * (t - 0.5).abs() - 1e-3,
+        };
+        let (fa, fb) = (f(0.0), f(1.0));
+        let tol = provable_tolerance(&fa, &fb);
+        assert!((tol - 2e-3).abs() < 1e-12);
+        let fine = minimize(1.0, fa, fb, 0.2, |v| v - 1e-4, 256, 1e-12, f);
+        assert!(fine.exhausted && fine.evals == 256, "{fine:?}");
+        let provable = minimize(1.0, fa, fb, 0.2, |v| v - tol, 256, 1e-12, f);
+        assert!(!provable.exhausted && provable.evals < 16, "{provable:?}");
+        assert!(provable.lower <= 1.0 && provable.value >= 1.0);
+    }
 
     fn vee(t: f64) -> Bracket {
         Bracket::exact((t - 0.37).abs() * 2.0 + 0.5)

@@ -1507,13 +1507,12 @@ impl StepJudge<'_> {
         // A margin whose samples' certified brackets are wider than the refinement tolerance
         // (a distance margin of a faceted cone a few centimetres from a slot wall: GJK's
         // bracket, 1.2e-3 of the distance, against 1e-3 of a sub-millimetre violation) could
-        // never have that tolerance proved: every sub-interval's bound sits below its samples'
-        // values by their width, and the search would spend its whole budget on every such
-        // step. Its tolerance is twice the wider of the step's end brackets, as the closest
-        // approach's is (`monitor::tracked`). Zero, the verdict's threshold, is unchanged.
-        let width = (m0.value - m0.lower).max(m1.value - m1.lower);
-        let abs_tol = if width.is_finite() {
-            c.inv.tolerance().max(2.0 * width)
+        // never have that tolerance proved: its tolerance is at least
+        // [`crate::geometry::bounds::provable_tolerance`] of the step's end brackets, as the
+        // closest approach's is. Zero, the verdict's threshold, is unchanged.
+        let provable = crate::geometry::bounds::provable_tolerance(&m0, &m1);
+        let abs_tol = if provable.is_finite() {
+            c.inv.tolerance().max(provable)
         } else {
             c.inv.tolerance()
         };

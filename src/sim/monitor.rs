@@ -1681,7 +1681,7 @@ pub fn min_distance_tolerance_m(d: f64) -> f64 {
 /// The tolerance of a closest approach recorded at a sample with bracket `d`:
 /// [`min_distance_tolerance_m`], or the bracket's width where that is wider, m.
 pub fn sample_tolerance_m(d: &Bracket) -> f64 {
-    let width = d.value - d.lower;
+    let width = d.width();
     let tol = min_distance_tolerance_m(d.value);
     if width > tol { width } else { tol }
 }

@@ -13,7 +13,9 @@ use super::{
     closest_parts, min_distance_tolerance_m, pair_at, pair_rate_gain, sample_tolerance_m,
     search_parts,
 };
-use crate::geometry::bounds::{Bracket, MinSearch, interval_lower_bound, minimize};
+use crate::geometry::bounds::{
+    Bracket, MinSearch, interval_lower_bound, minimize, provable_tolerance,
+};
 use crate::guarantee::{BodyView, PairDistance};
 use bevy::prelude::*;
 use nalgebra::Vector3;
@@ -248,7 +250,7 @@ fn refine_over_step(
     // and still not prove it. Its tolerance is twice its own bracket's width (the bound
     // stays certified; only how close the recorded closest approach is to the true one
     // changes, by that width, and the summary's `tolerance_m` says so).
-    let slack = 2.0 * (hit.d.value - hit.d.lower).max(d0.value - d0.lower);
+    let slack = provable_tolerance(&hit.d, &d0);
     let thr = |b: f64| {
         let w = w.min(b);
         let t = w - min_distance_tolerance_m(w).max(slack);
