@@ -639,6 +639,7 @@ struct PhysicsStep<'w, 's> {
     geo: Res<'w, monitor::MonitorGeometry>,
     roster: Res<'w, Roster>,
     compliant: Option<ResMut<'w, contact_model::CompliantContact>>,
+    mr: Option<Res<'w, multirate::MultiRate>>,
 }
 
 /// A body has a joint in rapier.
@@ -774,6 +775,61 @@ fn free_flight(
     p.motion.under_resolved_steps += u64::from(under_resolved);
     p.motion.under_resolved = under_resolved;
     p.bp.update(&p.motion);
+}
+
+/// Step 1b of [`physics_step`] under a latched stack's long step (`members`, planned by
+/// [`multirate::plan_step`]): the stack flown as one rigid body ([`crate::math::stack::fly`])
+/// replaces its members' free-flight ends; their paths are the straight line and constant-rate
+/// rotation between their committed poses, as for a step rapier takes; the broad phase follows.
+/// Returns, per member, what held it to the stack over the step: (impulse, N·s; angular
+/// impulse about its centre of mass, N·m·s), for [`commit`]'s caller to record as rapier's
+/// joint impulses are.
+fn stack_flight(
+    p: &mut PhysicsStep,
+    sc: &mut PhysicsScratch,
+    members: [usize; 2],
+    dt: f64,
+) -> Vec<(usize, Vector3<f64>, Vector3<f64>)> {
+    let mut ms = Vec::with_capacity(2);
+    let mut inertia = Vec::with_capacity(2);
+    for k in members {
+        let (b, _, w) = p.q.get(p.roster.bodies[k]).expect("stack member");
+        let s = &sc.start[k];
+        inertia.push(b.inertia_kg_m2);
+        ms.push(crate::math::stack::Member {
+            mass_kg: b.mass_kg,
+            inertia_kg_m2: b.inertia_kg_m2,
+            pos_m: s.pos_m,
+            vel_m_s: s.vel_m_s,
+            att: s.att,
+            omega_rad_s: s.omega_rad_s,
+            force_n: w.force_n,
+            gravity_n: w.gravity_n,
+            torque_nm: w.torque_nm,
+        });
+    }
+    let env = &*p.env;
+    let Some(ends) = crate::math::stack::fly(&ms, |x| env.accel_m_s2(x), dt) else {
+        return Vec::new(); // not reached: the planner built the same composite
+    };
+    let mut held = Vec::with_capacity(2);
+    for ((k, m), (e, j)) in members.iter().zip(&ms).zip(ends.iter().zip(&inertia)) {
+        let end = BodyState {
+            pos_m: e.pos_m,
+            vel_m_s: e.vel_m_s,
+            att: e.att,
+            omega_rad_s: e.omega_rad_s,
+        };
+        let impulse = (end.vel_m_s - m.vel_m_s) * m.mass_kg - (m.force_n + m.gravity_n) * dt;
+        let angular = monitor::angular_momentum(&end.att, j, &end.omega_rad_s)
+            - monitor::angular_momentum(&m.att, j, &m.omega_rad_s)
+            - m.torque_nm * dt;
+        p.motion.paths[*k] = motion::BodyPath::straight(&sc.start[*k], &end, dt);
+        sc.free_end[*k] = end;
+        held.push((*k, impulse, angular));
+    }
+    p.bp.update(&p.motion);
+    held
 }
 
 /// What the swept test found for one pair of bodies in free flight.
@@ -1050,9 +1106,20 @@ fn physics_step(mut p: PhysicsStep, mut scratch: Local<PhysicsScratch>) {
         c.t_step_s = t0;
         c.pre_step(q, &mut phys.world, dt)
     });
-    // 1. f64 free flight of every body, in scene order.
+    // 1. f64 free flight of every body, in scene order; a latched stack on a long step flown
+    // as one rigid body.
     free_flight(&mut p, sc, &substepped, t0, dt);
-    // Bodies touching another or jointed when the step starts: rapier holds them.
+    let stack =
+        p.mr.as_deref()
+            .and_then(|m| m.stack)
+            .filter(|_| p.clock.span > 1);
+    let held = match stack {
+        Some(members) => stack_flight(&mut p, sc, members, dt),
+        None => Vec::new(),
+    };
+    // Bodies touching another or jointed when the step starts: rapier holds them (a stack's
+    // members are held by the stack, and kept out of the swept test: the planner proved every
+    // other body out of rapier's reach of them).
     let attached: Vec<bool> = p
         .roster
         .bodies
@@ -1065,13 +1132,17 @@ fn physics_step(mut p: PhysicsStep, mut scratch: Local<PhysicsScratch>) {
         .collect();
     let any_attached = attached.iter().any(|a| *a);
     // 2. The swept test; rapier keeps stepping while its own broad phase still pairs any
-    // colliders.
+    // colliders (not under a stack's long step, which the planner proved clear of contact).
     let (near, split) = swept_test(&mut p, sc, &attached, &substepped, t0, dt);
-    let engage = p.sync.every_step
-        || any_attached
-        || p.phys.world.impulse_joints.iter().next().is_some()
-        || p.phys.world.narrow_phase.contact_pairs().next().is_some()
-        || near;
+    let engage = if stack.is_some() {
+        near
+    } else {
+        p.sync.every_step
+            || any_attached
+            || p.phys.world.impulse_joints.iter().next().is_some()
+            || p.phys.world.narrow_phase.contact_pairs().next().is_some()
+            || near
+    };
     // 3. rapier.
     let stepped = engage || split.is_some();
     p.sync.last_split_s = None;
@@ -1082,8 +1153,12 @@ fn physics_step(mut p: PhysicsStep, mut scratch: Local<PhysicsScratch>) {
         p.contact.touching.iter_mut().for_each(|t| *t = false);
     }
     p.sync.stepped = stepped;
-    // 4. Commit.
+    // 4. Commit; a stack's members then record what held them, as rapier's joint impulses are.
     commit(&mut p, sc, &attached, &substepped, stepped, t0, dt);
+    for (k, impulse, angular) in held {
+        p.contact.body_impulse[k] = impulse;
+        p.contact.body_angular_impulse[k] = angular;
+    }
     p.clock.step += p.clock.span;
 }
 

@@ -21,8 +21,9 @@
 //! 2. **No scheduled time inside.** The step ends at or before the next call of every
 //!    controller, the next trajectory row, the end of the requested run, and
 //!    `max_step_s`.
-//! 3. **No contact can begin.** No body touches or is jointed, rapier did not step last step,
-//!    the compliant contact is idle and the docking mechanism is `FREE` with its magnet off.
+//! 3. **No contact can begin.** No body touches or is jointed (but a latched stack: below),
+//!    rapier did not step last step, the compliant contact is idle and the docking mechanism is
+//!    `FREE` with its magnet off.
 //!    For every pair of bodies, with u_i = |v_i| + A_i·h a bound on body i's centre-of-mass
 //!    speed over the step (A_i = |a_g(x_i)| + Σ|F|/m_i: gravity at the start plus the held
 //!    forces, after saturation — exactly the acceleration of the free-flight path), the
@@ -50,7 +51,24 @@
 //!    Ω_i = (|Jω| + (|τ| + τ_gg)·h)/λ_min (angular momentum grows at most at the held torque
 //!    plus the gravity-gradient torque bound τ_gg = G·(λ_max − λ_min)).
 //!
-//! The longest span meeting 3–5 is found by bisection (each condition only tightens as h
+//! 6. **A latched stack** (the docking mechanism `LATCHED` by its rigid latch, the world's one
+//!    joint) flies as one rigid body ([`crate::math::stack`]) instead of in rapier's joint, when:
+//!    its first latched step was rapier's (the latch impulse is measured there); no release is
+//!    commanded (the mechanism acts on it at the end of the step); the members' motion relative
+//!    to the rigid stack at t₀ times h is within `tol_m` and `tol_rad` (the stack removes it,
+//!    as a rigid latch would); the latch's load on the chaser, bounded over the step by
+//!    m_c·(A + α·|c_c| + Ω²·|c_c|) + |F_c| + |G_c|, stays below the break force, so the latch
+//!    cannot break inside the step; and every other body is out of rapier's reach of both
+//!    members (conditions 3 and 5 are checked for the stack as one body, its members' speed
+//!    bounds u + Ω·|c_k|). The physics stage then does not step rapier; each member's path is
+//!    the straight line and constant-rate rotation between its committed poses, as for a step
+//!    rapier takes, and what held it (its momentum change less its own forces and torque) is
+//!    recorded as rapier's joint impulse is, so the mechanism measures the latch's load as it
+//!    does after a rapier step. Between two committed poses the rigid stack's members move on
+//!    arcs, not chords: the path departs from them by at most |c_k|·(Ω·h)²/8 (1.6e-9 m for the
+//!    flagship's stack at 0.1 s) — the same interpolation the monitor applies to rapier's steps.
+//!
+//! The longest span meeting 3–6 is found by bisection (each condition only tightens as h
 //! grows). Nothing here changes a run with `stepping: Fixed`: the resource is absent and the
 //! span stays 1 (h = dt_s exactly: [`super::Clock::h_s`]).
 
@@ -103,6 +121,9 @@ pub struct MultiRate {
     pub tol_rad: f64,
     /// What the run did.
     pub stats: MultiRateStats,
+    /// The current pipeline step flies a latched stack as one rigid body: its members (scene
+    /// order; the first member's frame is the stack's), set by [`plan_step`] for a long step.
+    pub stack: Option<[usize; 2]>,
 }
 
 impl MultiRate {
@@ -121,6 +142,7 @@ impl MultiRate {
                 tol_m: *tol_m,
                 tol_rad: *tol_rad,
                 stats: MultiRateStats::default(),
+                stack: None,
             }),
         }
     }
@@ -137,6 +159,7 @@ impl MultiRate {
             "fixed_steps_in_long_steps": self.stats.fixed_steps_in_long_steps,
             "longest_step_s": self.stats.longest_step_s,
             "short_steps_by_reason": self.stats.short_steps_by_reason,
+            "stack_steps": self.stats.stack_steps,
         })
     }
 
@@ -163,6 +186,8 @@ pub struct MultiRateStats {
     pub longest_step_s: f64,
     /// Steps kept at `dt_s`, by the first condition that kept them there.
     pub short_steps_by_reason: BTreeMap<&'static str, u64>,
+    /// Of the long steps, those that flew a latched stack as one rigid body.
+    pub stack_steps: u64,
 }
 
 /// Everything the planner reads.
@@ -183,6 +208,7 @@ pub struct PlanInputs<'w, 's> {
     phys: Res<'w, Physics>,
     compliant: Option<Res<'w, CompliantContact>>,
     docking: Option<Res<'w, Docking>>,
+    dock_cmds: Option<Res<'w, super::docking::DockingCommands>>,
     guarantees: Res<'w, Guarantees>,
     mon: Res<'w, MonitorState>,
     table: Option<Res<'w, super::airbearing::AirBearing>>,
@@ -221,6 +247,7 @@ fn above(x: f64, y: f64) -> bool {
 }
 
 /// One body's bounds over a candidate step.
+#[derive(Debug, Clone)]
 struct BodyBound {
     /// |v₀|, m/s.
     speed_m_s: f64,
@@ -252,24 +279,28 @@ pub fn plan_step(mut p: PlanInputs) {
     let Some(mr) = p.mr.as_deref_mut() else {
         return;
     };
+    mr.stack = None;
     let st = &mut mr.stats;
     st.pipeline_steps += 1;
     match plan {
-        Ok(k) if k > 1 => {
+        Ok((k, stack)) if k > 1 => {
             st.long_steps += 1;
             st.fixed_steps_in_long_steps += k;
             st.longest_step_s = st.longest_step_s.max(k as f64 * step_s);
+            st.stack_steps += u64::from(stack.is_some());
             p.clock.span = k;
+            mr.stack = stack.map(|s| s.members);
         }
         Ok(_) => *st.short_steps_by_reason.entry("schedule").or_default() += 1,
         Err(reason) => *st.short_steps_by_reason.entry(reason).or_default() += 1,
     }
 }
 
-/// The span the conditions allow, or the first reason there is none.
-fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
+/// The span the conditions allow (with the latched stack it flies as one body, if any), or the
+/// first reason there is none.
+fn plan(p: &PlanInputs) -> Result<(u64, Option<StackFit>), &'static str> {
     let Some(mr) = p.mr.as_deref() else {
-        return Ok(1);
+        return Ok((1, None));
     };
     let clock = &*p.clock;
     if clock.step == 0 || !p.motion.ready {
@@ -281,10 +312,10 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
     // 2. The schedule.
     let (k_max, force_n, torque_nm) = schedule(p, mr, n)?;
     if k_max <= 1 {
-        return Ok(1);
+        return Ok((1, None));
     }
     // 3. Contact and the mechanism.
-    contact_idle(p)?;
+    let stack = contact_idle(p)?;
     // 4. Guarantees judged at samples only keep the fixed step.
     let g = &*p.guarantees;
     if g.last_rate.len() != g.list.len() || g.last.len() != g.list.len() {
@@ -303,7 +334,15 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
         None => (None, 0.0, f64::INFINITY),
     };
     let bb = body_bounds(p, &force_n, &torque_nm)?;
-    let docking = docking_reach(p)?;
+    let stack = match stack {
+        Some(m) => Some(stack_fit(p, m, &force_n, &torque_nm)?),
+        None => None,
+    };
+    let docking = if stack.is_some() {
+        None // docked: the magnet is off and the ports are held
+    } else {
+        docking_reach(p)?
+    };
     let centres: Vec<nalgebra::Vector3<f64>> = p
         .roster
         .bodies
@@ -322,11 +361,12 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
         max_turn: mr.max_turn_rad(),
         dt: clock.dt_s,
         t0: clock.t_s(),
+        stack,
     };
     // Bisection for the longest span that fits (every condition tightens as h grows).
     fit.fits(2)?;
     if fit.fits(k_max).is_ok() {
-        return Ok(k_max);
+        return Ok((k_max, fit.stack));
     }
     let (mut lo, mut hi) = (2, k_max);
     while hi - lo > 1 {
@@ -337,7 +377,7 @@ fn plan(p: &PlanInputs) -> Result<u64, &'static str> {
             hi = mid;
         }
     }
-    Ok(lo)
+    Ok((lo, fit.stack))
 }
 
 /// Condition 1 of the module documentation, the features with per-step state the planner
@@ -394,16 +434,21 @@ fn schedule(
     Ok((k_max, force_n, torque_nm))
 }
 
-/// Condition 3's state at t₀: rapier not stepped every step, no body touching or jointed, the
-/// compliant contact idle, the docking mechanism `FREE` with its magnet off.
-fn contact_idle(p: &PlanInputs) -> Result<(), &'static str> {
+/// Condition 3's state at t₀: rapier not stepped every step, no body touching, no joint but a
+/// latched stack's ([`latched_stack`], returned), the compliant contact idle, the docking
+/// mechanism `FREE` with its magnet off (or `LATCHED`, holding the stack).
+fn contact_idle(p: &PlanInputs) -> Result<Option<[usize; 2]>, &'static str> {
     if p.sync.every_step {
         return Err("rapier every step (monitor.rapier_every_step)");
     }
-    if p.contact.touching.iter().any(|t| *t) || p.phys.world.impulse_joints.iter().next().is_some()
-    {
+    if p.contact.touching.iter().any(|t| *t) {
         return Err("contact or joint");
     }
+    let stack = if p.phys.world.impulse_joints.iter().next().is_some() {
+        Some(latched_stack(p)?)
+    } else {
+        None
+    };
     if p.compliant.as_deref().is_some_and(|c| {
         !c.step.is_empty()
             || c.pairs.iter().any(|q| q.in_contact)
@@ -413,12 +458,124 @@ fn contact_idle(p: &PlanInputs) -> Result<(), &'static str> {
     }) {
         return Err("compliant contact");
     }
-    if let Some(d) = p.docking.as_deref()
+    if stack.is_none()
+        && let Some(d) = p.docking.as_deref()
         && (d.state != crate::contact::dock_state::DockState::Free || d.magnet_on)
     {
         return Err("docking mechanism active");
     }
-    Ok(())
+    Ok(stack)
+}
+
+/// Condition 3's latched stack: the world's one joint is the docking mechanism's rigid latch
+/// (`LATCHED`, no compliant interface), its first step — the one that stops the bodies'
+/// relative motion, whose impulse is the latch impulse — was rapier's, and no release command
+/// waits (the mechanism acts on it at the end of this step, which must then be `dt_s`, as in
+/// the fixed-step run). The chaser and the target, scene order.
+fn latched_stack(p: &PlanInputs) -> Result<[usize; 2], &'static str> {
+    let no = "contact or joint";
+    if p.dock_cmds
+        .as_deref()
+        .is_some_and(|c| !c.release.is_empty())
+    {
+        return Err("docking release commanded");
+    }
+    let d = p.docking.as_deref().ok_or(no)?;
+    let joint = d.joint.ok_or(no)?;
+    if d.state != crate::contact::dock_state::DockState::Latched
+        || d.interface.is_some()
+        || d.loads.latch_impulse_ns.is_none()
+        || p.phys.world.impulse_joints.iter().any(|(h, _)| h != joint)
+    {
+        return Err(no);
+    }
+    let (cb, _) = p.bodies.get(d.bodies.0).map_err(|_| no)?;
+    let (tb, _) = p.bodies.get(d.bodies.1).map_err(|_| no)?;
+    let (c, t) = (cb.index, tb.index);
+    Ok(if c < t { [c, t] } else { [t, c] })
+}
+
+/// A latched stack's bounds at t₀, for a long step that flies it as one rigid body
+/// ([`crate::math::stack`]).
+#[derive(Debug, Clone)]
+struct StackFit {
+    /// The members, scene order.
+    members: [usize; 2],
+    /// The stack as one body: |V|, the acceleration bound Σ(|G_k| + |F_k|)/M, |X|, |L|, the
+    /// torque bound Σ(|τ_k| + |c_k|·(|F_k| + |G_k|)) (without the gravity gradient, which
+    /// [`Fit::body_rates`]'s rule adds), the principal moments' range; extents unused.
+    body: BodyBound,
+    /// Per member: |c_k|, m.
+    lever_m: [f64; 2],
+    /// The members' motion relative to the rigid stack at t₀, m/s and rad/s
+    /// ([`crate::math::stack::residual`]).
+    residual: (f64, f64),
+    /// The chaser: (member slot, mass, kg; bound on its own held force and gravity, N).
+    chaser: (usize, f64, f64),
+    /// The latch's break force, N.
+    break_force_n: f64,
+}
+
+/// The latched stack's [`StackFit`] with the held force and torque norms per body (N, N·m).
+fn stack_fit(
+    p: &PlanInputs,
+    members: [usize; 2],
+    force_n: &[f64],
+    torque_nm: &[f64],
+) -> Result<StackFit, &'static str> {
+    let no = "contact or joint";
+    let d = p.docking.as_deref().ok_or(no)?;
+    let mut ms = Vec::with_capacity(2);
+    let mut grav = [0.0; 2];
+    for (slot, k) in members.iter().enumerate() {
+        let e = p.roster.bodies.get(*k).ok_or(no)?;
+        let (b, s) = p.bodies.get(*e).map_err(|_| no)?;
+        grav[slot] = p.env.accel_m_s2(&s.pos_m).norm() * b.mass_kg;
+        ms.push(crate::math::stack::Member {
+            mass_kg: b.mass_kg,
+            inertia_kg_m2: b.inertia_kg_m2,
+            pos_m: s.pos_m,
+            vel_m_s: s.vel_m_s,
+            att: s.att,
+            omega_rad_s: s.omega_rad_s,
+            force_n: nalgebra::Vector3::zeros(),
+            gravity_n: nalgebra::Vector3::zeros(),
+            torque_nm: nalgebra::Vector3::zeros(),
+        });
+    }
+    let c = crate::math::stack::composite(&ms).ok_or(no)?;
+    let residual = crate::math::stack::residual(&ms, &c);
+    let lever_m = [c.offsets_m[0].norm(), c.offsets_m[1].norm()];
+    let lam = super::motion::principal_moments(&c.inertia_kg_m2);
+    let lmin = lam.iter().copied().fold(f64::INFINITY, f64::min);
+    let lmax = lam.iter().copied().fold(0.0, f64::max);
+    let (mut accel, mut torque) = (0.0, 0.0);
+    for (slot, k) in members.iter().enumerate() {
+        let f = force_n.get(*k).copied().unwrap_or(f64::INFINITY);
+        accel += f + grav[slot];
+        torque +=
+            torque_nm.get(*k).copied().unwrap_or(f64::INFINITY) + lever_m[slot] * (f + grav[slot]);
+    }
+    let (cb, _) = p.bodies.get(d.bodies.0).map_err(|_| no)?;
+    let cslot = usize::from(members[1] == cb.index);
+    let cf = force_n.get(cb.index).copied().unwrap_or(f64::INFINITY) + grav[cslot];
+    Ok(StackFit {
+        members,
+        body: BodyBound {
+            speed_m_s: c.vel_m_s.norm(),
+            accel_m_s2: accel / c.mass_kg,
+            offset_m: c.com_m.norm(),
+            momentum_nms: c.momentum_nms.norm(),
+            torque_nm: torque,
+            lambda: (lmin, lmax),
+            aabb_m: 0.0,
+            extent_m: 0.0,
+        },
+        lever_m,
+        residual,
+        chaser: (cslot, ms[cslot].mass_kg, cf),
+        break_force_n: d.spec.latch.break_force_n,
+    })
 }
 
 /// Every body's bounds at t₀ ([`BodyBound`]), in roster order, with the held force and torque
@@ -499,13 +656,18 @@ struct Fit<'a> {
     dt: f64,
     /// Time now, s.
     t0: f64,
+    /// The latched stack this step would fly as one rigid body, if any.
+    stack: Option<StackFit>,
 }
 
 impl Fit<'_> {
-    /// Whether a step of k fixed steps meets 3–5; the reason it does not.
+    /// Whether a step of k fixed steps meets 3–6; the reason it does not.
     fn fits(&self, k: u64) -> Result<(), &'static str> {
         let h = k as f64 * self.dt;
         let omega = self.body_rates(h)?;
+        if let Some(s) = &self.stack {
+            Self::stack_holds(s, omega[s.members[0]].1, h, self.mr)?;
+        }
         self.pairs_clear(&omega, h)?;
         if let Some(((c, lc), (t, lt), gap, act)) = self.docking {
             let travel = (omega[c].0 + omega[c].1 * lc + omega[t].0 + omega[t].1 * lt) * h;
@@ -524,40 +686,81 @@ impl Fit<'_> {
 
     /// Condition 5 over a step of `h`, s: per body, (u, speed bound over the step, m/s; Ω,
     /// turn rate bound, rad/s), or an error when a body's position or attitude integration
-    /// error would pass the tolerances.
+    /// error would pass the tolerances. The members of a latched stack take the stack's turn
+    /// rate and u = the stack's u plus Ω times their lever about its centre of mass.
     fn body_rates(&self, h: f64) -> Result<Vec<(f64, f64)>, &'static str> {
-        let (g_grad, ref_speed_m_s, ref_r_m) = self.orbit;
         let mut omega = Vec::with_capacity(self.bb.len());
-        for b in &self.bb {
-            let u = b.speed_m_s + b.accel_m_s2 * h;
-            // G: the gravity-gradient tensor's norm bound at the closest the body comes to
-            // Earth's centre over the step; the jerk bound G·(u + 5|v_ref|/r·|x|).
-            let (g_tensor, jerk) = match g_grad {
-                Some(mu) => {
-                    let r = ref_r_m - ref_speed_m_s * h - b.offset_m;
-                    if !above(r, 0.0) {
-                        return Err("integration tolerance");
-                    }
-                    let g = 3.0 * mu / (r * r * r) * (1.0 + 10.0 * J2_EARTH);
-                    (g, g * (u + 5.0 * ref_speed_m_s / r * b.offset_m))
-                }
-                None => (0.0, 0.0),
-            };
-            if !above(self.mr.tol_m, jerk * h * h * h / 6.0 - f64::MIN_POSITIVE) {
-                return Err("integration tolerance");
-            }
-            let tau = b.torque_nm + g_tensor * (b.lambda.1 - b.lambda.0);
-            let om = if b.lambda.0 > 0.0 {
-                (b.momentum_nms + tau * h) / b.lambda.0 * RK4_INFLATION
+        for (k, b) in self.bb.iter().enumerate() {
+            if self.stack.as_ref().is_some_and(|s| s.members.contains(&k)) {
+                omega.push((0.0, 0.0)); // filled below
             } else {
-                f64::INFINITY
-            };
-            if !above(self.max_turn, om * h - f64::MIN_POSITIVE) {
-                return Err("integration tolerance");
+                omega.push(self.rate(b, 0.0, h)?);
             }
-            omega.push((u, om));
+        }
+        if let Some(s) = &self.stack {
+            let (_, om) = self.rate(&s.body, s.lever_m[0].max(s.lever_m[1]), h)?;
+            let u_com = s.body.speed_m_s + s.body.accel_m_s2 * h;
+            for (slot, k) in s.members.iter().enumerate() {
+                omega[*k] = (u_com + om * s.lever_m[slot], om);
+            }
         }
         Ok(omega)
+    }
+
+    /// Condition 5 for one body (or a stack, whose points lie within `reach_m` of its centre
+    /// of mass) over a step of `h`: (u, the bound on the speed of its points within `reach_m`
+    /// over the step, m/s; Ω, rad/s).
+    fn rate(&self, b: &BodyBound, reach_m: f64, h: f64) -> Result<(f64, f64), &'static str> {
+        let (g_grad, ref_speed_m_s, ref_r_m) = self.orbit;
+        let offset = b.offset_m + reach_m;
+        // G: the gravity-gradient tensor's norm bound at the closest the body comes to
+        // Earth's centre over the step; the jerk bound G·(u + 5|v_ref|/r·|x|).
+        let g_tensor = match g_grad {
+            Some(mu) => {
+                let r = ref_r_m - ref_speed_m_s * h - offset;
+                if !above(r, 0.0) {
+                    return Err("integration tolerance");
+                }
+                Some((3.0 * mu / (r * r * r) * (1.0 + 10.0 * J2_EARTH), r))
+            }
+            None => None,
+        };
+        let tau = b.torque_nm + g_tensor.map_or(0.0, |g| g.0) * (b.lambda.1 - b.lambda.0);
+        let om = if b.lambda.0 > 0.0 {
+            (b.momentum_nms + tau * h) / b.lambda.0 * RK4_INFLATION
+        } else {
+            f64::INFINITY
+        };
+        if !above(self.max_turn, om * h - f64::MIN_POSITIVE) {
+            return Err("integration tolerance");
+        }
+        let u = b.speed_m_s + b.accel_m_s2 * h + om * reach_m;
+        let jerk = g_tensor.map_or(0.0, |(g, r)| g * (u + 5.0 * ref_speed_m_s / r * offset));
+        if !above(self.mr.tol_m, jerk * h * h * h / 6.0 - f64::MIN_POSITIVE) {
+            return Err("integration tolerance");
+        }
+        Ok((u, om))
+    }
+
+    /// A latched stack over a step of `h` with its turn-rate bound `om`, rad/s: the members'
+    /// relative motion at t₀, which flying them as one body removes, moves them by at most the
+    /// scene's tolerances over the step (m, rad); and the latch's load on the chaser stays
+    /// below the break force throughout: |F| ≤ m_c·(A + α·|c_c| + Ω²·|c_c|) + |F_c| + |G_c|,
+    /// with A the stack's acceleration bound and α ≤ (τ + λ_max·Ω²)/λ_min its angular
+    /// acceleration's (Euler's equations), τ the torque bound.
+    fn stack_holds(s: &StackFit, om: f64, h: f64, mr: &MultiRate) -> Result<(), &'static str> {
+        if !(above(mr.tol_m, s.residual.0 * h) && above(mr.tol_rad, s.residual.1 * h)) {
+            return Err("latched stack not rigid");
+        }
+        let b = &s.body;
+        let alpha = (b.torque_nm + b.lambda.1 * om * om) / b.lambda.0;
+        let lever = s.lever_m[s.chaser.0];
+        let accel = b.accel_m_s2 + (alpha + om * om) * lever;
+        let load = s.chaser.1 * accel + s.chaser.2;
+        if !above(s.break_force_n, load) {
+            return Err("latch load near its break force");
+        }
+        Ok(())
     }
 
     /// Condition 3 over a step of `h`, s, for every pair of bodies with the rates `omega`
@@ -565,12 +768,20 @@ impl Fit<'_> {
     /// distance at t₀ less the sweep clear by [`NEAR_CLEAR_M`].
     fn pairs_clear(&self, omega: &[(f64, f64)], h: f64) -> Result<(), &'static str> {
         let (bb, centres, n) = (&self.bb, &self.centres, self.bb.len());
+        let member = |k: usize| self.stack.as_ref().is_some_and(|s| s.members.contains(&k));
         for i in 0..n {
             for j in i + 1..n {
+                if member(i) && member(j) {
+                    continue; // the latch holds them: flown as one body
+                }
                 let d = (centres[i] - centres[j]).norm() - bb[i].aabb_m - bb[j].aabb_m;
                 let travel = (omega[i].0 + omega[j].0) * h;
                 if above(d - travel, super::RAPIER_ENGAGE_M) {
                     continue;
+                }
+                if member(i) || member(j) {
+                    // rapier does not step under a stack's long step: out of its reach only.
+                    return Err("bodies near");
                 }
                 // Within rapier's reach: the monitor's certified distance at t₀ between the
                 // parts, less what any point of either body can travel, must stay clear.
