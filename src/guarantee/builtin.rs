@@ -188,10 +188,13 @@ impl GuaranteeParams for ApproachConeParams {
             name: self.name.clone(),
             body: b,
             body_com_m: Vector3::from(ctx.scene.bodies[b].com_m),
-            points: ctx.parts[b]
-                .iter()
-                .flat_map(crate::geometry::approach_cone::support_points)
-                .collect(),
+            points: crate::geometry::approach_cone::SupportSet::new(
+                ctx.parts[b]
+                    .iter()
+                    .map(crate::geometry::approach_cone::support_points)
+                    .collect(),
+                &Vector3::from(ctx.scene.bodies[b].com_m),
+            ),
             around: a,
             around_com_m: Vector3::from(ctx.scene.bodies[a].com_m),
             port_m,
