@@ -23,7 +23,7 @@
 //!    `max_step_s`.
 //! 3. **No contact can begin.** No body touches or is jointed (but a latched stack: below),
 //!    rapier did not step last step, the compliant contact is idle and the docking mechanism is
-//!    `FREE` with its magnet off.
+//!    `FREE` with its magnet off (or `RELEASED` with its separation complete).
 //!    For every pair of bodies, with u_i = |v_i| + A_i·h a bound on body i's centre-of-mass
 //!    speed over the step (A_i = |a_g(x_i)| + Σ|F|/m_i: gravity at the start plus the held
 //!    forces, after saturation — exactly the acceleration of the free-flight path), the
@@ -460,11 +460,24 @@ fn contact_idle(p: &PlanInputs) -> Result<Option<[usize; 2]>, &'static str> {
     }
     if stack.is_none()
         && let Some(d) = p.docking.as_deref()
-        && (d.state != crate::contact::dock_state::DockState::Free || d.magnet_on)
+        && !mechanism_idle(d)
     {
         return Err("docking mechanism active");
     }
     Ok(stack)
+}
+
+/// The docking mechanism acts on nothing this step: `FREE` with its magnet off, or `RELEASED`
+/// once the separation springs have reached the end of their stroke (`separation_complete`;
+/// the magnet pulls in no released state, and the mechanism then only watches for the
+/// springs, which are done).
+fn mechanism_idle(d: &Docking) -> bool {
+    use crate::contact::dock_state::DockState;
+    match d.state {
+        DockState::Free => !d.magnet_on,
+        DockState::Released => d.separation_end.is_some(),
+        _ => false,
+    }
 }
 
 /// Condition 3's latched stack: the world's one joint is the docking mechanism's rigid latch
