@@ -777,6 +777,27 @@ fn free_flight(
     p.bp.update(&p.motion);
 }
 
+/// A body as a member of a latched stack ([`crate::math::stack`]) in state `s`, with the
+/// wrench held on it (none: no force, gravity or torque).
+pub(crate) fn stack_member(
+    b: &SimBody,
+    s: &BodyState,
+    w: Option<&Wrench>,
+) -> crate::math::stack::Member {
+    let w = w.cloned().unwrap_or_default();
+    crate::math::stack::Member {
+        mass_kg: b.mass_kg,
+        inertia_kg_m2: b.inertia_kg_m2,
+        pos_m: s.pos_m,
+        vel_m_s: s.vel_m_s,
+        att: s.att,
+        omega_rad_s: s.omega_rad_s,
+        force_n: w.force_n,
+        gravity_n: w.gravity_n,
+        torque_nm: w.torque_nm,
+    }
+}
+
 /// Step 1b of [`physics_step`] under a latched stack's long step (`members`, planned by
 /// [`multirate::plan_step`]): the stack flown as one rigid body ([`crate::math::stack::fly`])
 /// replaces its members' free-flight ends; their paths are the straight line and constant-rate
@@ -796,17 +817,7 @@ fn stack_flight(
         let (b, _, w) = p.q.get(p.roster.bodies[k]).expect("stack member");
         let s = &sc.start[k];
         inertia.push(b.inertia_kg_m2);
-        ms.push(crate::math::stack::Member {
-            mass_kg: b.mass_kg,
-            inertia_kg_m2: b.inertia_kg_m2,
-            pos_m: s.pos_m,
-            vel_m_s: s.vel_m_s,
-            att: s.att,
-            omega_rad_s: s.omega_rad_s,
-            force_n: w.force_n,
-            gravity_n: w.gravity_n,
-            torque_nm: w.torque_nm,
-        });
+        ms.push(stack_member(b, s, Some(w)));
     }
     let env = &*p.env;
     let Some(ends) = crate::math::stack::fly(&ms, |x| env.accel_m_s2(x), dt) else {

@@ -544,17 +544,7 @@ fn stack_fit(
         let e = p.roster.bodies.get(*k).ok_or(no)?;
         let (b, s) = p.bodies.get(*e).map_err(|_| no)?;
         grav[slot] = p.env.accel_m_s2(&s.pos_m).norm() * b.mass_kg;
-        ms.push(crate::math::stack::Member {
-            mass_kg: b.mass_kg,
-            inertia_kg_m2: b.inertia_kg_m2,
-            pos_m: s.pos_m,
-            vel_m_s: s.vel_m_s,
-            att: s.att,
-            omega_rad_s: s.omega_rad_s,
-            force_n: nalgebra::Vector3::zeros(),
-            gravity_n: nalgebra::Vector3::zeros(),
-            torque_nm: nalgebra::Vector3::zeros(),
-        });
+        ms.push(super::stack_member(b, s, None));
     }
     let c = crate::math::stack::composite(&ms).ok_or(no)?;
     let residual = crate::math::stack::residual(&ms, &c);
