@@ -808,3 +808,79 @@ impl Fit<'_> {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! References: the latch's load on a chaser held at a lever arm by a stack spun up from rest
+    //! by a torque (m·α·r with α = τ/λ, the rigid body's own law, so the planner's bound with
+    //! λ_min must cover it), and the residual-motion rule against its stated form |Δv|·h ≤ tol.
+    use super::*;
+
+    fn request() -> MultiRate {
+        MultiRate::from_scene(
+            &crate::scene::Stepping::MultiRate {
+                max_step_s: 10.0,
+                tol_m: 1e-6,
+                tol_rad: 1e-8,
+            },
+            0.01,
+        )
+        .expect("multi-rate")
+    }
+
+    /// A stack at rest: chaser of 300 kg at 1.2 m from the stack's centre of mass, a torque
+    /// bound of 1 N·m, principal moments 1 000 and 2 000 kg·m², no force, no gravity.
+    fn stack(residual: (f64, f64), break_force_n: f64) -> StackFit {
+        StackFit {
+            members: [0, 1],
+            body: BodyBound {
+                speed_m_s: 0.0,
+                accel_m_s2: 0.0,
+                offset_m: 0.0,
+                momentum_nms: 0.0,
+                torque_nm: 1.0,
+                lambda: (1000.0, 2000.0),
+                aabb_m: 0.0,
+                extent_m: 0.0,
+            },
+            lever_m: [0.45, 1.2],
+            residual,
+            chaser: (1, 300.0, 0.0),
+            break_force_n,
+        }
+    }
+
+    #[test]
+    fn latch_load_bound_covers_the_rigid_body_load_and_refuses_near_the_break_force() {
+        let mr = request();
+        let h = 0.1;
+        // From rest, torque 1 N·m about the axis of the smallest moment: α = 1e-3 rad/s², the
+        // chaser at 1.2 m needs 300 × 1e-3 × 1.2 = 0.36 N from the latch (ω stays ~0 over
+        // the step: its centripetal part is 300 × (1e-4)² × 1.2, negligible). The bound is
+        // exactly that here (ω = 0 in it too), so a break force just above holds and just
+        // below refuses.
+        let load = 300.0 * (1.0 / 1000.0) * 1.2;
+        assert!(Fit::stack_holds(&stack((0.0, 0.0), load * 1.001), 0.0, h, &mr).is_ok());
+        assert_eq!(
+            Fit::stack_holds(&stack((0.0, 0.0), load * 0.999), 0.0, h, &mr),
+            Err("latch load near its break force")
+        );
+        // A NaN break force never clears.
+        assert!(Fit::stack_holds(&stack((0.0, 0.0), f64::NAN), 0.0, h, &mr).is_err());
+    }
+
+    #[test]
+    fn residual_motion_is_removed_only_within_the_scene_tolerances() {
+        let mr = request();
+        let h = 0.1;
+        // |Δv|·h against tol_m = 1e-6 m, |Δω|·h against tol_rad = 1e-8 rad.
+        assert!(Fit::stack_holds(&stack((0.99e-5, 0.99e-7), 1e3), 0.0, h, &mr).is_ok());
+        for r in [(1.01e-5, 0.0), (0.0, 1.01e-7), (f64::NAN, 0.0)] {
+            assert_eq!(
+                Fit::stack_holds(&stack(r, 1e3), 0.0, h, &mr),
+                Err("latched stack not rigid"),
+                "{r:?}"
+            );
+        }
+    }
+}
