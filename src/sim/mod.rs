@@ -798,33 +798,36 @@ pub(crate) fn stack_member(
     }
 }
 
+/// What held one member of a latched stack over a step: (body, impulse, N·s; angular impulse
+/// about its centre of mass, N·m·s).
+type HeldBy = (usize, Vector3<f64>, Vector3<f64>);
+
 /// Step 1b of [`physics_step`] under a latched stack's long step (`members`, planned by
 /// [`multirate::plan_step`]): the stack flown as one rigid body ([`crate::math::stack::fly`])
 /// replaces its members' free-flight ends; their paths are the straight line and constant-rate
 /// rotation between their committed poses, as for a step rapier takes; the broad phase follows.
-/// Returns, per member, what held it to the stack over the step: (impulse, N·s; angular
+/// Returns, per member, what held it to the stack over the step: (body, impulse, N·s; angular
 /// impulse about its centre of mass, N·m·s), for [`commit`]'s caller to record as rapier's
-/// joint impulses are.
+/// joint impulses are; `None` (nothing changed) where [`crate::math::stack::fly`] has no
+/// composite.
 fn stack_flight(
     p: &mut PhysicsStep,
     sc: &mut PhysicsScratch,
     members: [usize; 2],
     dt: f64,
-) -> Vec<(usize, Vector3<f64>, Vector3<f64>)> {
-    let mut ms = Vec::with_capacity(2);
-    let mut inertia = Vec::with_capacity(2);
-    for k in members {
+) -> Option<Vec<HeldBy>> {
+    let ms = members.map(|k| {
         let (b, _, w) = p.q.get(p.roster.bodies[k]).expect("stack member");
-        let s = &sc.start[k];
-        inertia.push(b.inertia_kg_m2);
-        ms.push(stack_member(b, s, Some(w)));
-    }
+        stack_member(b, &sc.start[k], Some(w))
+    });
     let env = &*p.env;
-    let Some(ends) = crate::math::stack::fly(&ms, |x| env.accel_m_s2(x), dt) else {
-        return Vec::new(); // not reached: the planner built the same composite
-    };
+    // The planner built the same composite from the same states (positive masses, inertias
+    // positive-definite by validation), so `None` is not expected; if it came, the step would
+    // be rapier's, joint and all, as without a stack.
+    let ends = crate::math::stack::fly(&ms, |x| env.accel_m_s2(x), dt)?;
     let mut held = Vec::with_capacity(2);
-    for ((k, m), (e, j)) in members.iter().zip(&ms).zip(ends.iter().zip(&inertia)) {
+    for ((k, m), e) in members.iter().zip(&ms).zip(&ends) {
+        let j = &m.inertia_kg_m2;
         let end = BodyState {
             pos_m: e.pos_m,
             vel_m_s: e.vel_m_s,
@@ -840,7 +843,7 @@ fn stack_flight(
         held.push((*k, impulse, angular));
     }
     p.bp.update(&p.motion);
-    held
+    Some(held)
 }
 
 /// What the swept test found for one pair of bodies in free flight.
@@ -1120,14 +1123,12 @@ fn physics_step(mut p: PhysicsStep, mut scratch: Local<PhysicsScratch>) {
     // 1. f64 free flight of every body, in scene order; a latched stack on a long step flown
     // as one rigid body.
     free_flight(&mut p, sc, &substepped, t0, dt);
-    let stack =
+    let members =
         p.mr.as_deref()
             .and_then(|m| m.stack)
             .filter(|_| p.clock.span > 1);
-    let held = match stack {
-        Some(members) => stack_flight(&mut p, sc, members, dt),
-        None => Vec::new(),
-    };
+    let held = members.and_then(|m| stack_flight(&mut p, sc, m, dt));
+    let stack = held.is_some();
     // Bodies touching another or jointed when the step starts: rapier holds them (a stack's
     // members are held by the stack, and kept out of the swept test: the planner proved every
     // other body out of rapier's reach of them).
@@ -1145,7 +1146,7 @@ fn physics_step(mut p: PhysicsStep, mut scratch: Local<PhysicsScratch>) {
     // 2. The swept test; rapier keeps stepping while its own broad phase still pairs any
     // colliders (not under a stack's long step, which the planner proved clear of contact).
     let (near, split) = swept_test(&mut p, sc, &attached, &substepped, t0, dt);
-    let engage = if stack.is_some() {
+    let engage = if stack {
         near
     } else {
         p.sync.every_step
@@ -1166,7 +1167,7 @@ fn physics_step(mut p: PhysicsStep, mut scratch: Local<PhysicsScratch>) {
     p.sync.stepped = stepped;
     // 4. Commit; a stack's members then record what held them, as rapier's joint impulses are.
     commit(&mut p, sc, &attached, &substepped, stepped, t0, dt);
-    for (k, impulse, angular) in held {
+    for (k, impulse, angular) in held.into_iter().flatten() {
         p.contact.body_impulse[k] = impulse;
         p.contact.body_angular_impulse[k] = angular;
     }

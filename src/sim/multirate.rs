@@ -637,6 +637,9 @@ fn docking_reach(p: &PlanInputs) -> Result<Option<DockReach>, &'static str> {
     })
 }
 
+/// One body's (u, speed bound over the step, m/s; Ω, turn-rate bound, rad/s).
+type Rates = (f64, f64);
+
 /// What the check of one candidate span reads: the request and the bounds at t₀.
 struct Fit<'a> {
     /// The scene's request.
@@ -667,9 +670,9 @@ impl Fit<'_> {
     /// Whether a step of k fixed steps meets 3–6; the reason it does not.
     fn fits(&self, k: u64) -> Result<(), &'static str> {
         let h = k as f64 * self.dt;
-        let omega = self.body_rates(h)?;
+        let (omega, stack_torque) = self.body_rates(h)?;
         if let Some(s) = &self.stack {
-            Self::stack_holds(s, omega[s.members[0]].1, h, self.mr)?;
+            Self::stack_holds(s, (omega[s.members[0]].1, stack_torque), h, self.mr)?;
         }
         self.pairs_clear(&omega, h)?;
         if let Some(((c, lc), (t, lt), gap, act)) = self.docking {
@@ -690,30 +693,34 @@ impl Fit<'_> {
     /// Condition 5 over a step of `h`, s: per body, (u, speed bound over the step, m/s; Ω,
     /// turn rate bound, rad/s), or an error when a body's position or attitude integration
     /// error would pass the tolerances. The members of a latched stack take the stack's turn
-    /// rate and u = the stack's u plus Ω times their lever about its centre of mass.
-    fn body_rates(&self, h: f64) -> Result<Vec<(f64, f64)>, &'static str> {
+    /// rate and u = the stack's u plus Ω times their lever about its centre of mass. Also the
+    /// stack's torque bound, gravity gradient included, N·m (0 without a stack).
+    fn body_rates(&self, h: f64) -> Result<(Vec<Rates>, f64), &'static str> {
         let mut omega = Vec::with_capacity(self.bb.len());
         for (k, b) in self.bb.iter().enumerate() {
             if self.stack.as_ref().is_some_and(|s| s.members.contains(&k)) {
                 omega.push((0.0, 0.0)); // filled below
             } else {
-                omega.push(self.rate(b, 0.0, h)?);
+                let (u, om, _) = self.rate(b, 0.0, h)?;
+                omega.push((u, om));
             }
         }
+        let mut stack_torque = 0.0;
         if let Some(s) = &self.stack {
-            let (_, om) = self.rate(&s.body, s.lever_m[0].max(s.lever_m[1]), h)?;
+            let (_, om, tau) = self.rate(&s.body, s.lever_m[0].max(s.lever_m[1]), h)?;
             let u_com = s.body.speed_m_s + s.body.accel_m_s2 * h;
             for (slot, k) in s.members.iter().enumerate() {
                 omega[*k] = (u_com + om * s.lever_m[slot], om);
             }
+            stack_torque = tau;
         }
-        Ok(omega)
+        Ok((omega, stack_torque))
     }
 
     /// Condition 5 for one body (or a stack, whose points lie within `reach_m` of its centre
     /// of mass) over a step of `h`: (u, the bound on the speed of its points within `reach_m`
-    /// over the step, m/s; Ω, rad/s).
-    fn rate(&self, b: &BodyBound, reach_m: f64, h: f64) -> Result<(f64, f64), &'static str> {
+    /// over the step, m/s; Ω, rad/s; the torque bound, the gravity gradient's included, N·m).
+    fn rate(&self, b: &BodyBound, reach_m: f64, h: f64) -> Result<(f64, f64, f64), &'static str> {
         let (g_grad, ref_speed_m_s, ref_r_m) = self.orbit;
         let offset = b.offset_m + reach_m;
         // G: the gravity-gradient tensor's norm bound at the closest the body comes to
@@ -742,21 +749,27 @@ impl Fit<'_> {
         if !above(self.mr.tol_m, jerk * h * h * h / 6.0 - f64::MIN_POSITIVE) {
             return Err("integration tolerance");
         }
-        Ok((u, om))
+        Ok((u, om, tau))
     }
 
-    /// A latched stack over a step of `h` with its turn-rate bound `om`, rad/s: the members'
+    /// A latched stack over a step of `h` with its turn-rate bound `om`, rad/s, and torque bound
+    /// `tau` (the held torques' moments and the gravity gradient's, N·m): the members'
     /// relative motion at t₀, which flying them as one body removes, moves them by at most the
     /// scene's tolerances over the step (m, rad); and the latch's load on the chaser stays
     /// below the break force throughout: |F| ≤ m_c·(A + α·|c_c| + Ω²·|c_c|) + |F_c| + |G_c|,
     /// with A the stack's acceleration bound and α ≤ (τ + λ_max·Ω²)/λ_min its angular
-    /// acceleration's (Euler's equations), τ the torque bound.
-    fn stack_holds(s: &StackFit, om: f64, h: f64, mr: &MultiRate) -> Result<(), &'static str> {
+    /// acceleration's (Euler's equations).
+    fn stack_holds(
+        s: &StackFit,
+        (om, tau): (f64, f64),
+        h: f64,
+        mr: &MultiRate,
+    ) -> Result<(), &'static str> {
         if !(above(mr.tol_m, s.residual.0 * h) && above(mr.tol_rad, s.residual.1 * h)) {
             return Err("latched stack not rigid");
         }
         let b = &s.body;
-        let alpha = (b.torque_nm + b.lambda.1 * om * om) / b.lambda.0;
+        let alpha = (tau + b.lambda.1 * om * om) / b.lambda.0;
         let lever = s.lever_m[s.chaser.0];
         let accel = b.accel_m_s2 + (alpha + om * om) * lever;
         let load = s.chaser.1 * accel + s.chaser.2;
@@ -860,13 +873,13 @@ mod tests {
         // exactly that here (ω = 0 in it too), so a break force just above holds and just
         // below refuses.
         let load = 300.0 * (1.0 / 1000.0) * 1.2;
-        assert!(Fit::stack_holds(&stack((0.0, 0.0), load * 1.001), 0.0, h, &mr).is_ok());
+        assert!(Fit::stack_holds(&stack((0.0, 0.0), load * 1.001), (0.0, 1.0), h, &mr).is_ok());
         assert_eq!(
-            Fit::stack_holds(&stack((0.0, 0.0), load * 0.999), 0.0, h, &mr),
+            Fit::stack_holds(&stack((0.0, 0.0), load * 0.999), (0.0, 1.0), h, &mr),
             Err("latch load near its break force")
         );
         // A NaN break force never clears.
-        assert!(Fit::stack_holds(&stack((0.0, 0.0), f64::NAN), 0.0, h, &mr).is_err());
+        assert!(Fit::stack_holds(&stack((0.0, 0.0), f64::NAN), (0.0, 1.0), h, &mr).is_err());
     }
 
     #[test]
@@ -874,10 +887,10 @@ mod tests {
         let mr = request();
         let h = 0.1;
         // |Δv|·h against tol_m = 1e-6 m, |Δω|·h against tol_rad = 1e-8 rad.
-        assert!(Fit::stack_holds(&stack((0.99e-5, 0.99e-7), 1e3), 0.0, h, &mr).is_ok());
+        assert!(Fit::stack_holds(&stack((0.99e-5, 0.99e-7), 1e3), (0.0, 1.0), h, &mr).is_ok());
         for r in [(1.01e-5, 0.0), (0.0, 1.01e-7), (f64::NAN, 0.0)] {
             assert_eq!(
-                Fit::stack_holds(&stack(r, 1e3), 0.0, h, &mr),
+                Fit::stack_holds(&stack(r, 1e3), (0.0, 1.0), h, &mr),
                 Err("latched stack not rigid"),
                 "{r:?}"
             );
