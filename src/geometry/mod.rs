@@ -10,4 +10,5 @@ pub mod cissoid;
 pub mod drawn;
 pub mod heart;
 pub mod mesh;
+pub mod revolution;
 pub mod superquadric;
