@@ -734,9 +734,27 @@ pub enum Revolution {
     Any,
 }
 
+/// A convex hull that is a faceted solid of revolution
+/// ([`crate::geometry::revolution::faceted_revolution`]: the docking cone's 32-gon frustum), as
+/// the per-part rate bound uses it: its solid of revolution about the axis through c lies
+/// within `offset_m` of the hull, so the hull's distance to any set is at most `offset_m` above
+/// that solid's, whose rate ignores a spin about the axis ([`PairRate`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Faceted {
+    /// c, a point on the axis (half way along the hull), body frame (as `pose_body`), m.
+    pub centre_body_m: Vector3<f64>,
+    /// Radius about c of a sphere holding the hull (and so its solid of revolution), m.
+    pub radius_m: f64,
+    /// Unit axis, body frame.
+    pub axis: Vector3<f64>,
+    /// How far the solid of revolution reaches beyond the hull, m.
+    pub offset_m: f64,
+}
+
 /// A part as the per-part rate bound uses it ([`part_pair_rates`]): a point c on the part's
 /// symmetry axis (its centre; the collider origin for parts without symmetry), the radius of a
-/// sphere about c holding the part, and its symmetry.
+/// sphere about c holding the part, and its symmetry; for a faceted solid of revolution, that
+/// too.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PartPiece {
     /// c, in the body frame (relative to the body origin, as `pose_body`), m.
@@ -745,6 +763,46 @@ pub struct PartPiece {
     pub radius_m: f64,
     /// Symmetry about an axis through c.
     pub revolution: Revolution,
+    /// The hull as a faceted solid of revolution, if it is one.
+    pub faceted: Option<Faceted>,
+    /// A box holding the part (its local AABB, as parry computes it, grown for rounding), for
+    /// the slab bound ([`SlabBound`]).
+    pub boxed: PartBox,
+}
+
+/// A box holding a part, body frame: centre, axes (unit columns), half extents, m.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PartBox {
+    /// Centre, body frame (as `pose_body`), m.
+    pub centre_body_m: Vector3<f64>,
+    /// Its axes in the body frame (unit columns).
+    pub axes: nalgebra::Matrix3<f64>,
+    /// Half extents along them, m.
+    pub half_m: Vector3<f64>,
+}
+
+impl PartBox {
+    /// The local AABB of `shape` placed at `pose_body`, its half extents grown by 1e-6
+    /// relative and 1e-9 m (the f32 box and the f64 pose).
+    pub fn of(shape: &dyn rp::Shape, pose_body: &Isometry3<f64>) -> Self {
+        let b = shape.compute_local_aabb();
+        let (lo, hi) = (conv::na(b.mins), conv::na(b.maxs));
+        let half = (hi - lo) * 0.5;
+        Self {
+            centre_body_m: (pose_body * nalgebra::Point3::from((lo + hi) * 0.5)).coords,
+            axes: *pose_body.rotation.to_rotation_matrix().matrix(),
+            half_m: half.map(|h| h * (1.0 + 1e-6) + 1e-9),
+        }
+    }
+
+    /// (min, max) over the box of u·(x − o), body frame, m.
+    pub fn extent_along(&self, u: &Vector3<f64>, o: &Vector3<f64>) -> (f64, f64) {
+        let c = u.dot(&(self.centre_body_m - o));
+        let r: f64 = (0..3)
+            .map(|k| self.half_m[k] * self.axes.column(k).dot(u).abs())
+            .sum();
+        (c - r, c + r)
+    }
 }
 
 impl PartPiece {
@@ -752,8 +810,10 @@ impl PartPiece {
     /// about the collider origin). Only parry's exact round shapes get an axis: `Ball`,
     /// `Cylinder` and `Cone` (local y, centred on the origin) and `Capsule` (its segment, c its
     /// midpoint); their radii about c come from the shape itself, inflated by 1e-6 relative
-    /// for the f32 parameters.
+    /// for the f32 parameters. A convex hull that is a faceted solid of revolution gets
+    /// [`Faceted`] (from its f32 vertices, as parry holds them).
     pub fn of(shape: &dyn rp::Shape, pose_body: &Isometry3<f64>, bound_radius_m: f64) -> Self {
+        let boxed = PartBox::of(shape, pose_body);
         let y = pose_body.rotation * Vector3::y();
         let origin = pose_body.translation.vector;
         let grow = 1.0 + 1e-6;
@@ -762,6 +822,8 @@ impl PartPiece {
                 centre_body_m: origin,
                 radius_m: f64::from(b.radius) * grow,
                 revolution: Revolution::Any,
+                faceted: None,
+                boxed,
             };
         }
         if let Some(c) = shape.as_cylinder() {
@@ -769,6 +831,8 @@ impl PartPiece {
                 centre_body_m: origin,
                 radius_m: f64::from(c.radius).hypot(f64::from(c.half_height)) * grow,
                 revolution: Revolution::Axis(y),
+                faceted: None,
+                boxed,
             };
         }
         if let Some(c) = shape.as_cone() {
@@ -776,6 +840,8 @@ impl PartPiece {
                 centre_body_m: origin,
                 radius_m: f64::from(c.radius).hypot(f64::from(c.half_height)) * grow,
                 revolution: Revolution::Axis(y),
+                faceted: None,
+                boxed,
             };
         }
         if let Some(c) = shape.as_capsule() {
@@ -791,12 +857,26 @@ impl PartPiece {
                 centre_body_m: mid.coords,
                 radius_m: (half + f64::from(c.radius)) * grow,
                 revolution,
+                faceted: None,
+                boxed,
             };
         }
+        let faceted = shape.as_convex_polyhedron().and_then(|c| {
+            let pts: Vec<Vector3<f64>> = c.points().iter().map(|p| conv::na(*p)).collect();
+            let f = crate::geometry::revolution::faceted_revolution(&pts)?;
+            Some(Faceted {
+                centre_body_m: (pose_body * nalgebra::Point3::from(f.centre_m)).coords,
+                radius_m: f.radius_m * grow,
+                axis: pose_body.rotation * f.axis,
+                offset_m: f.offset_m,
+            })
+        });
         Self {
             centre_body_m: origin,
             radius_m: bound_radius_m,
             revolution: Revolution::None,
+            faceted,
+            boxed,
         }
     }
 }
@@ -809,6 +889,11 @@ pub struct PartTerms {
     pub centre_m_s: Vec<f64>,
     /// Per part: bound on the rotation term |ω′|·r of [`part_pair_rates`], m/s.
     pub turn_m_s: Vec<f64>,
+    /// Per part: the centre and rotation terms of its solid of revolution when it is a faceted
+    /// one ([`Faceted`], its own centre, radius and axis), else the two above summed, m/s.
+    pub revolved_m_s: Vec<f64>,
+    /// Per part: [`Faceted::offset_m`], else 0, m.
+    pub offset_m: Vec<f64>,
 }
 
 /// Body i's per-part rate terms over the step (see [`part_pair_rates`]): with W_k the bounds on
@@ -816,7 +901,8 @@ pub struct PartTerms {
 /// ([`StepMotion::omega_axes_bound`]) and Ω its angular-speed bound,
 /// |ω × (c − x_cm)| = |ω_b × r| ≤ min(Ω|r|, Σ_k W_k|e_k × r|) with r = c − x_cm in the body
 /// frame; and the rotation term ρ·min(Ω, Σ_k W_k|e_k × â|) for a part symmetric about the axis
-/// â (|ω_b − (ω_b·â)â| = |ω_b × â|), 0 for a ball, ρ·Ω otherwise (ρ: the radius about c).
+/// â (|ω_b − (ω_b·â)â| = |ω_b × â|), 0 for a ball, ρ·Ω otherwise (ρ: the radius about c);
+/// for a faceted solid of revolution, the same two terms of its solid of revolution.
 pub fn part_terms(geo: &MonitorGeometry, motion: &StepMotion, i: usize, out: &mut PartTerms) {
     let om = motion.omega_bound(i);
     let (axes, w) = motion.omega_axes_bound(i);
@@ -827,15 +913,173 @@ pub fn part_terms(geo: &MonitorGeometry, motion: &StepMotion, i: usize, out: &mu
     };
     out.centre_m_s.clear();
     out.turn_m_s.clear();
+    out.revolved_m_s.clear();
+    out.offset_m.clear();
     for piece in &geo.pieces[i] {
         let r = piece.centre_body_m - geo.com_body_m[i];
-        out.centre_m_s.push((om * r.norm()).min(spread(&r)));
+        let centre = (om * r.norm()).min(spread(&r));
+        out.centre_m_s.push(centre);
         let rot = match piece.revolution {
             Revolution::None => om,
             Revolution::Axis(a) => om.min(spread(&a)),
             Revolution::Any => 0.0,
         };
         out.turn_m_s.push(rot * piece.radius_m);
+        match &piece.faceted {
+            Some(f) => {
+                let r = f.centre_body_m - geo.com_body_m[i];
+                out.revolved_m_s
+                    .push((om * r.norm()).min(spread(&r)) + om.min(spread(&f.axis)) * f.radius_m);
+                out.offset_m.push(f.offset_m);
+            }
+            None => {
+                out.revolved_m_s.push(centre + rot * piece.radius_m);
+                out.offset_m.push(0.0);
+            }
+        }
+    }
+}
+
+/// A part pair's bounds over the step ([`part_pair_rates`]): the rate L_pq of its distance,
+/// and, for a pair with a faceted solid of revolution, the rate L′_pq of the distance with each
+/// such part replaced by its solid of revolution and the sum s_pq of their offsets (otherwise
+/// L′ = L and s = 0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairRate {
+    /// L_pq, m/s.
+    pub full_m_s: f64,
+    /// L′_pq, m/s.
+    pub revolved_m_s: f64,
+    /// s_pq, m.
+    pub offset_m: f64,
+}
+
+impl PairRate {
+    /// A lower bound of the pair's distance over an interval of `w` (s) whose ends have the
+    /// certified lower bounds `la`, `lb` (m): the larger of (la + lb − L·w)/2 and
+    /// (la + lb − L′·w)/2 − s (each capped by min(la, lb), [`interval_lower_bound`]). The
+    /// second holds because d′ ≤ d ≤ d′ + s for the distance d′ with the solids of revolution
+    /// ([`crate::geometry::revolution`]): d′ ≥ la − s and lb − s at the ends, d′ changes at
+    /// most at L′, and d ≥ d′. Without a faceted part, exactly the first.
+    pub fn interval_lower(&self, la: f64, lb: f64, w: f64) -> f64 {
+        let full = interval_lower_bound(la, lb, self.full_m_s, w);
+        if self.offset_m > 0.0 {
+            full.max(interval_lower_bound(la, lb, self.revolved_m_s, w) - self.offset_m)
+        } else {
+            full
+        }
+    }
+}
+
+/// A body's centre of mass (world, m) and attitude.
+pub type BodyPose = (Vector3<f64>, UnitQuaternion<f64>);
+
+/// The slab bound of a body pair over a step: the gap between two parts' extents along an
+/// axis fixed in the faster-turning body (the spinner), a lower bound of their distance
+/// (any unit direction separates two sets by at least that gap), that changes slowly while
+/// the spinner turns about that axis — a panel spinning about the chaser's docking axis stays
+/// in its slab, though its tip moves at 240 m/s.
+///
+/// With â the spinner's principal axis of the largest component bound W_k (body frame, world
+/// â_w = R_s(t)â), a point x of the spinner has â_w·x = â_w·x_s + â·(r − c_s) (r body-fixed),
+/// so its parts' extents along â_w move with â_w·x_s alone, at
+/// d/dt(â_w·x_s) = (ω_s × â_w)·x_s + â_w·v_s. A point y of the other body moves at
+/// v_o + ω_o × (y − x_o), so its extreme along â_w moves at (ω_s × â_w)·y + â_w·ẏ. A gap
+/// (either way round) thus changes at most at
+///
+/// ```text
+/// L_slab = max|v_s − v_o| + |ω_s × â|·(max|x_s − x_o| + R_o) + Ω_o·R_o
+/// ```
+///
+/// with |ω_s × â| ≤ Σ_k W_k|e_k × â| ([`StepMotion::omega_axes_bound`]), R_o the other body's
+/// extent and Ω_o its angular-speed bound; and the gap of a pair over an interval is at least
+/// (g(a) + g(b) − L_slab·w)/2 ([`interval_lower_bound`]). Each part is taken as its box
+/// ([`PartBox`]), which holds it: a smaller gap, still a bound.
+#[derive(Debug, Clone)]
+pub struct SlabBound {
+    /// The spinner is body i (else j).
+    spinner_is_i: bool,
+    /// â, spinner's body frame.
+    axis_b: Vector3<f64>,
+    /// L_slab, m/s.
+    pub rate_m_s: f64,
+    /// Per spinner part: (min, max) of â·(r − c_s) over its box, m.
+    spinner_extents: Vec<(f64, f64)>,
+}
+
+impl SlabBound {
+    /// The slab bound of bodies i and j over the step, with the spinner the body of the
+    /// larger angular-speed bound. `None` if neither turns.
+    pub fn new(geo: &MonitorGeometry, motion: &StepMotion, i: usize, j: usize) -> Option<Self> {
+        let spinner_is_i = motion.omega_bound(i) >= motion.omega_bound(j);
+        let (sp, ot) = if spinner_is_i { (i, j) } else { (j, i) };
+        if motion.omega_bound(sp) <= 0.0 {
+            return None;
+        }
+        let (axes, w) = motion.omega_axes_bound(sp);
+        let k = (0..3).max_by(|a, b| w[*a].total_cmp(&w[*b]))?;
+        let axis_b: Vector3<f64> = axes.column(k).into();
+        let spread: f64 = (0..3)
+            .map(|m| w[m] * axes.column(m).cross(&axis_b).norm())
+            .sum();
+        let spread = spread.min(motion.omega_bound(sp));
+        let r_o = geo.extent_m[ot];
+        let rate = (motion.rel_speed_bound(i, j)
+            + spread * (motion.separation_bound(i, j) + r_o)
+            + motion.omega_bound(ot) * r_o)
+            * (1.0 + 1e-9);
+        let c = geo.com_body_m[sp];
+        let spinner_extents = geo.pieces[sp]
+            .iter()
+            .map(|p| p.boxed.extent_along(&axis_b, &c))
+            .collect();
+        rate.is_finite().then_some(Self {
+            spinner_is_i,
+            axis_b,
+            rate_m_s: rate,
+            spinner_extents,
+        })
+    }
+
+    /// Every part pair's slab gap with bodies i and j at the poses `at_i`, `at_j` (centre of
+    /// mass, attitude; row-major, p of body i by q of body j), m, into `out`: the larger of the
+    /// two ways round, each through the parts' boxes.
+    pub fn gaps(
+        &self,
+        geo: &MonitorGeometry,
+        (i, j): (usize, usize),
+        at_i: &BodyPose,
+        at_j: &BodyPose,
+        out: &mut Vec<f64>,
+    ) {
+        let ot = if self.spinner_is_i { j } else { i };
+        let ((xs, qs), (xo, qo)) = if self.spinner_is_i {
+            (at_i, at_j)
+        } else {
+            (at_j, at_i)
+        };
+        let a_w = qs * self.axis_b;
+        let u_o = qo.inverse() * a_w;
+        let (xs, xo) = (*xs, *xo);
+        let (bs, bo) = (a_w.dot(&xs), a_w.dot(&xo));
+        let c_o = geo.com_body_m[ot];
+        let other: Vec<(f64, f64)> = geo.pieces[ot]
+            .iter()
+            .map(|p| p.boxed.extent_along(&u_o, &c_o))
+            .collect();
+        out.clear();
+        let gap = |(s_lo, s_hi): (f64, f64), (o_lo, o_hi): (f64, f64)| {
+            ((bs + s_lo) - (bo + o_hi)).max((bo + o_lo) - (bs + s_hi))
+        };
+        if self.spinner_is_i {
+            for se in &self.spinner_extents {
+                out.extend(other.iter().map(|oe| gap(*se, *oe)));
+            }
+        } else {
+            for oe in &other {
+                out.extend(self.spinner_extents.iter().map(|se| gap(*se, *oe)));
+            }
+        }
     }
 }
 
@@ -867,14 +1111,19 @@ pub fn part_terms(geo: &MonitorGeometry, motion: &StepMotion, i: usize, out: &mu
 /// only on c(t) and â(t), so P(t) = c(t) + A(t)(P₀ − c₀) — a rigid motion of P whose points
 /// move at v(c) + ω′ × (x − c). A ball is symmetric about every axis through its centre: ω′ = 0.
 /// A faceted hull (a `ConvexHull` cone) is not a solid of revolution: its facets do move along
-/// their normals under a spin about its axis, so it keeps the full |ω|·ρ.
+/// their normals under a spin about its axis, so it keeps the full |ω|·ρ in L_pq; but its solid
+/// of revolution lies within [`Faceted::offset_m`] of it, so [`PairRate`] also carries the
+/// rate L′_pq with that solid's terms (its own centre, radius and axis, as for an exact solid
+/// of revolution) and the offset: a 32-gon cone spinning at 100 rad/s about its axis moves its
+/// facets at up to 12 m/s, its solid of revolution not at all, and the offset is 0.58 mm.
+/// L′_pq is not capped by L_ij: the solid of revolution may reach beyond the body's extent.
 pub fn part_pair_rates(
     geo: &MonitorGeometry,
     motion: &StepMotion,
     i: usize,
     j: usize,
     terms: &mut [PartTerms; 2],
-    out: &mut Vec<f64>,
+    out: &mut Vec<PairRate>,
 ) {
     let body = motion.distance_rate_bound(i, j);
     let rel = motion.rel_speed_bound(i, j);
@@ -882,11 +1131,17 @@ pub fn part_pair_rates(
     part_terms(geo, motion, i, ti);
     part_terms(geo, motion, j, tj);
     out.clear();
+    let grow = 1.0 + 1e-9;
     for p in 0..ti.centre_m_s.len() {
         let a = ti.centre_m_s[p] + ti.turn_m_s[p];
         for q in 0..tj.centre_m_s.len() {
-            let l = (rel + a + tj.centre_m_s[q] + tj.turn_m_s[q]) * (1.0 + 1e-9);
-            out.push(l.min(body));
+            let l = (rel + a + tj.centre_m_s[q] + tj.turn_m_s[q]) * grow;
+            let offset_m = ti.offset_m[p] + tj.offset_m[q];
+            out.push(PairRate {
+                full_m_s: l.min(body),
+                revolved_m_s: (rel + ti.revolved_m_s[p] + tj.revolved_m_s[q]) * grow,
+                offset_m,
+            });
         }
     }
 }
@@ -1493,7 +1748,7 @@ pub struct DistanceScratch {
     /// Per-part rate terms of two bodies ([`part_terms`]).
     terms: [PartTerms; 2],
     /// Per part pair rate bounds of the current body pair ([`part_pair_rates`]).
-    rates: Vec<f64>,
+    rates: Vec<PairRate>,
 }
 
 /// A sample of the per-part search ([`search_parts`]): the value (with its certified lower
@@ -1501,6 +1756,8 @@ pub struct DistanceScratch {
 struct PartSample {
     d: Bracket,
     lows: Vec<f64>,
+    /// Every part pair's slab gap ([`SlabBound::gaps`]; empty without a slab bound).
+    slabs: Vec<f64>,
     parts: (usize, usize),
 }
 
@@ -1522,7 +1779,10 @@ pub fn pair_rate_gain(
     part_pair_rates(geo, motion, i, j, &mut sc.terms, &mut sc.rates);
     let nj = geo.shapes[j].len();
     let body = motion.distance_rate_bound(i, j);
-    (sc.rates.get(a * nj + b).copied().unwrap_or(body), body)
+    (
+        sc.rates.get(a * nj + b).map(|r| r.full_m_s).unwrap_or(body),
+        body,
+    )
 }
 
 /// Every part's pose (and bounding radius) of bodies i and j at τ into the step, on the bodies'
@@ -1543,21 +1803,21 @@ fn part_poses_at<'a>(
     tmp
 }
 
-/// Full-geometry distance of bodies i < j at τ on the step's paths with every part pair's
-/// certified lower bound ([`closest_parts_lows`]).
-#[allow(clippy::too_many_arguments)]
-pub fn pair_lows_at(
+/// Full-geometry distance of bodies i < j with their centres of mass and attitudes at `poses`,
+/// with every part pair's certified lower bound ([`closest_parts_lows`]); the parts' world
+/// poses are left in `sc.tmp`.
+fn pair_lows_posed(
     geo: &MonitorGeometry,
-    motion: &StepMotion,
-    i: usize,
-    j: usize,
-    tau: f64,
+    (i, j): (usize, usize),
+    (pose_i, pose_j): (&BodyPose, &BodyPose),
     warm: Option<(usize, usize)>,
     sc: &mut DistanceScratch,
     count: &mut QueryCount,
     lows: &mut Vec<f64>,
 ) -> PartPairHit {
-    let [ti, tj] = part_poses_at(geo, motion, i, j, tau, &mut sc.tmp);
+    let [ti, tj] = &mut sc.tmp;
+    geo.part_poses(i, &pose_i.0, &pose_i.1, ti);
+    geo.part_poses(j, &pose_j.0, &pose_j.1, tj);
     closest_parts_lows(
         geo,
         i,
@@ -1576,7 +1836,10 @@ pub fn pair_lows_at(
 /// with per-part-pair bounds ([`crate::geometry::bounds::minimize_by`]): a sub-interval's bound
 /// is min over part pairs pq of (l_pq(a) + l_pq(b) − L_pq·w)/2 − offset, with l_pq the pairs'
 /// certified lower bounds at its ends ([`closest_parts_lows`]) and L_pq their rate bounds
-/// ([`part_pair_rates`], which `sc` must hold for this pair: [`pair_rate_gain`]). `f0`, `f1`:
+/// ([`part_pair_rates`], which `sc` must hold for this pair: [`pair_rate_gain`]) — for a pair
+/// with a faceted solid of revolution, the larger of that and its bound through the solid of
+/// revolution ([`PairRate::interval_lower`]), and than the pair's slab bound
+/// ([`SlabBound`]). `f0`, `f1`:
 /// f at the step's ends (the samples' brackets, less the offset); the part pairs' bounds there
 /// are evaluated again on the paths (τ = 0 and dt). Returns the search and the closest part
 /// pair where its minimum was found, if that was inside the step.
@@ -1596,10 +1859,63 @@ pub fn search_parts(
 ) -> (crate::geometry::bounds::MinSearch, Option<(usize, usize)>) {
     let dt = motion.dt_s;
     let rates = std::mem::take(&mut sc.rates);
+    // The bound each pair's lows need for the whole step to clear the threshold at once
+    // (distance terms): a pair whose bounding-sphere gap falls short of it is evaluated
+    // ([`tighten_lows`]) rather than bisected on that loose gap.
+    let thr_root = threshold(f0.value.min(f1.value)) + offset;
+    let need: Vec<f64> = rates
+        .iter()
+        .map(|l| {
+            (thr_root + 0.5 * l.full_m_s * dt)
+                .min(thr_root + l.offset_m + 0.5 * l.revolved_m_s * dt)
+        })
+        .collect();
+    let slab = SlabBound::new(geo, motion, i, j);
+    let slab_need = slab
+        .as_ref()
+        .map_or(f64::INFINITY, |b| thr_root + 0.5 * b.rate_m_s * dt);
     let mut at = warm;
     let mut sample = |tau: f64, given: Option<Bracket>, at: &mut Option<(usize, usize)>| {
         let mut lows = Vec::new();
-        let h = pair_lows_at(geo, motion, i, j, tau, *at, sc, count, &mut lows);
+        let (pose_i, pose_j) = (motion.paths[i].pose_at(tau), motion.paths[j].pose_at(tau));
+        let mut slabs = Vec::new();
+        if let Some(b) = &slab {
+            b.gaps(geo, (i, j), &pose_i, &pose_j, &mut slabs);
+        }
+        let skip = |k: usize| slabs.get(k).is_some_and(|g| *g >= slab_need);
+        if let Some(g) = given {
+            // A step end, whose bracket the caller has: no closest pair sought again. Each
+            // pair's low is its bounding-sphere gap, its memo's certified bound (the caller's
+            // sample has just refreshed it), and the bodies' certified bound, tightened where
+            // that falls short of the whole step's need.
+            let [ti, tj] = &mut sc.tmp;
+            geo.part_poses(i, &pose_i.0, &pose_i.1, ti);
+            geo.part_poses(j, &pose_j.0, &pose_j.1, tj);
+            sphere_lows(ti, tj, &mut lows);
+            memo_lows(geo, (i, j), &sc.tmp, &mut lows);
+            let floor = g.lower + offset;
+            for l in lows.iter_mut() {
+                *l = l.max(floor);
+            }
+            tighten_lows(geo, (i, j), &sc.tmp, &[], &need, &skip, &mut lows, count);
+            return PartSample {
+                d: g,
+                lows,
+                slabs,
+                parts: at.unwrap_or((0, 0)),
+            };
+        }
+        let h = pair_lows_posed(geo, (i, j), (&pose_i, &pose_j), *at, sc, count, &mut lows);
+        tighten_lows(
+            geo,
+            (i, j),
+            &sc.tmp,
+            &sc.evaluated,
+            &need,
+            &skip,
+            &mut lows,
+            count,
+        );
         *at = Some((h.a, h.b));
         let d = Bracket {
             value: h.d.value - offset,
@@ -1608,6 +1924,7 @@ pub fn search_parts(
         PartSample {
             d: given.unwrap_or(d),
             lows,
+            slabs,
             parts: (h.a, h.b),
         }
     };
@@ -1620,15 +1937,10 @@ pub fn search_parts(
         s1,
         |s: &PartSample| s.d.value,
         |a: &PartSample, b: &PartSample, w: f64| {
-            let per = a
-                .lows
-                .iter()
-                .zip(&b.lows)
-                .zip(&rates)
-                .map(|((la, lb), l)| interval_lower_bound(*la, *lb, *l, w))
-                .fold(f64::INFINITY, f64::min);
             // Never above the ends' own certified bounds (a pair's bound is at least theirs).
-            (per - offset).min(a.d.lower).min(b.d.lower)
+            (parts_bound(a, b, w, &rates, slab.as_ref()) - offset)
+                .min(a.d.lower)
+                .min(b.d.lower)
         },
         threshold,
         max_evals,
@@ -1642,6 +1954,204 @@ pub fn search_parts(
     sc.rates = rates;
     let parts = found.iter().find(|p| p.0 == r.t).map(|p| p.1);
     (r, parts)
+}
+
+/// Over a sub-interval of `w` (s) whose ends are sampled by `a` and `b`: min over part pairs
+/// of the larger of the pair's bound ([`PairRate::interval_lower`]) and its slab bound, m.
+fn parts_bound(
+    a: &PartSample,
+    b: &PartSample,
+    w: f64,
+    rates: &[PairRate],
+    slab: Option<&SlabBound>,
+) -> f64 {
+    match slab {
+        Some(sb) => a
+            .lows
+            .iter()
+            .zip(&b.lows)
+            .zip(rates)
+            .zip(a.slabs.iter().zip(&b.slabs))
+            .map(|(((la, lb), l), (ga, gb))| {
+                l.interval_lower(*la, *lb, w)
+                    .max(interval_lower_bound(*ga, *gb, sb.rate_m_s, w))
+            })
+            .fold(f64::INFINITY, f64::min),
+        None => a
+            .lows
+            .iter()
+            .zip(&b.lows)
+            .zip(rates)
+            .map(|((la, lb), l)| l.interval_lower(*la, *lb, w))
+            .fold(f64::INFINITY, f64::min),
+    }
+}
+
+/// Whether the distance of bodies i < j provably stays above `level` (m) over the whole step,
+/// from bounds alone: the per-part search of [`search_parts`] with samples that query no
+/// part pair — every pair's bounding-sphere gap and slab gap ([`SlabBound`]), with its rates
+/// ([`PairRate`]). `false`: not proven within `max_evals` interior samples (which says
+/// nothing about the distance). No exact query and no memo entry: where it does not prove
+/// the step clear, the caller's search runs exactly as without it. The swept test's first
+/// question ([`crate::sim`]).
+#[allow(clippy::too_many_arguments)]
+pub fn parts_stay_above(
+    geo: &MonitorGeometry,
+    motion: &StepMotion,
+    i: usize,
+    j: usize,
+    level: f64,
+    max_evals: u32,
+    sc: &mut DistanceScratch,
+) -> bool {
+    let dt = motion.dt_s;
+    part_pair_rates(geo, motion, i, j, &mut sc.terms, &mut sc.rates);
+    let rates = std::mem::take(&mut sc.rates);
+    let slab = SlabBound::new(geo, motion, i, j);
+    let mut sample = |tau: f64| {
+        let (pose_i, pose_j) = (motion.paths[i].pose_at(tau), motion.paths[j].pose_at(tau));
+        let [ti, tj] = &mut sc.tmp;
+        geo.part_poses(i, &pose_i.0, &pose_i.1, ti);
+        geo.part_poses(j, &pose_j.0, &pose_j.1, tj);
+        let mut lows = Vec::new();
+        sphere_lows(ti, tj, &mut lows);
+        let mut slabs = Vec::new();
+        if let Some(b) = &slab {
+            b.gaps(geo, (i, j), &pose_i, &pose_j, &mut slabs);
+        }
+        memo_lows(geo, (i, j), &sc.tmp, &mut lows);
+        // The bodies' distance is at least every pair's bound.
+        let lower = lows
+            .iter()
+            .enumerate()
+            .map(|(k, l)| slabs.get(k).map_or(*l, |g| l.max(*g)))
+            .fold(f64::INFINITY, f64::min);
+        PartSample {
+            d: Bracket {
+                value: f64::INFINITY,
+                lower,
+            },
+            lows,
+            slabs,
+            parts: (0, 0),
+        }
+    };
+    let (s0, s1) = (sample(0.0), sample(dt));
+    let r = crate::geometry::bounds::minimize_by(
+        dt,
+        s0,
+        s1,
+        |s: &PartSample| s.d.value,
+        |a: &PartSample, b: &PartSample, w: f64| {
+            parts_bound(a, b, w, &rates, slab.as_ref())
+                .min(a.d.lower)
+                .min(b.d.lower)
+        },
+        |_| level,
+        max_evals,
+        dt * 1e-9,
+        sample,
+    );
+    sc.rates = rates;
+    !r.exhausted && r.lower > level
+}
+
+/// Raises every part pair's low (m; row-major) to what its memo entry certifies at the parts'
+/// world poses `tmp`, read only (nothing evaluated, nothing kept): the kept lower bound less
+/// the parts' displacement since ([`memo::ExactEval::advance_quick`]), and for a faceted solid
+/// of revolution, less its offset and its axis's displacement
+/// ([`memo::ExactEval::advance_revolved`]).
+fn memo_lows(
+    geo: &MonitorGeometry,
+    (i, j): (usize, usize),
+    tmp: &[Vec<(Isometry3<f64>, f64)>; 2],
+    lows: &mut [f64],
+) {
+    let [ti, tj] = tmp;
+    let nj = tj.len();
+    // A faceted part's centre and axis in its own frame, radius and offset.
+    let local = |body: usize, p: usize| {
+        let f = geo.pieces[body].get(p)?.faceted?;
+        let pose = geo.pose_body[body][p];
+        Some((
+            pose.inverse_transform_point(&nalgebra::Point3::from(f.centre_body_m)),
+            pose.rotation.inverse() * f.axis,
+            f.radius_m,
+            f.offset_m,
+        ))
+    };
+    for (k, l) in lows.iter_mut().enumerate() {
+        let (a, b) = (k / nj, k % nj);
+        let Some(e) = geo.memo.get((i, a, j, b)) else {
+            continue;
+        };
+        let rel = ti[a].0.inv_mul(&tj[b].0);
+        let rel_inv = rel.inverse();
+        *l = l.max(e.advance_quick((&rel, &rel_inv), ti[a].1, tj[b].1).0);
+        if let Some((c, u, rho, s)) = local(j, b) {
+            *l = l.max(e.advance_revolved(&rel, (&c, &u, rho, s)));
+        }
+        if let Some((c, u, rho, s)) = local(i, a) {
+            let swapped =
+                memo::ExactEval::new(e.rel_inv, e.value_m, e.lower_m, e.witness_b, e.witness_a);
+            *l = l.max(swapped.advance_revolved(&rel_inv, (&c, &u, rho, s)));
+        }
+    }
+}
+
+/// Raises the lows of part pairs that `closest_parts_lows` left at a loose bound (a
+/// bounding-sphere gap, or a memo's clearing bound at the best distance) below `need[pq]`, m:
+/// each such pair is evaluated ([`pair_eval`], clearing at its need), and its low becomes the
+/// certified bound that gives — a clearing bound, or its value less its GJK and f32
+/// tolerances (as for the pairs `closest_parts_lows` evaluated), or its certified bracket's
+/// lower end. `tmp`: the parts' world poses at the sample; `evaluated`: the pairs already
+/// evaluated there; `skip`: pairs another bound clears (their slab gap).
+#[allow(clippy::too_many_arguments)]
+fn tighten_lows(
+    geo: &MonitorGeometry,
+    (i, j): (usize, usize),
+    tmp: &[Vec<(Isometry3<f64>, f64)>; 2],
+    evaluated: &[Evaluated],
+    need: &[f64],
+    skip: &dyn Fn(usize) -> bool,
+    lows: &mut [f64],
+    count: &mut QueryCount,
+) {
+    let [ti, tj] = tmp;
+    let nj = tj.len();
+    for (k, l) in lows.iter_mut().enumerate() {
+        let Some(&n) = need.get(k) else { break };
+        if *l >= n {
+            continue;
+        }
+        let (a, b) = (k / nj, k % nj);
+        if skip(k) || evaluated.iter().any(|e| e.2 == a && e.3 == b) {
+            continue;
+        }
+        // A pair whose distance is known to be below its need cannot be cleared by any bound:
+        // not evaluated (the search bisects it).
+        if let Some(e) = geo.memo.get((i, a, j, b)) {
+            let rel = ti[a].0.inv_mul(&tj[b].0);
+            let (lo, up) = e.advance_quick((&rel, &rel.inverse()), ti[a].1, tj[b].1);
+            *l = l.max(lo);
+            if up < n || *l >= n {
+                continue;
+            }
+        }
+        count.exact += 1;
+        match pair_eval(geo, i, a, &ti[a], j, b, &tj[b], n) {
+            PairEval::Clear(c) => *l = l.max(c),
+            PairEval::Value(d, known) => {
+                let scale = (ti[a].0.translation.vector - tj[b].0.translation.vector).norm()
+                    + ti[a].1
+                    + tj[b].1;
+                *l = l.max(d * (1.0 - GJK_REL_TOL) - F32_REL_TOL * scale);
+                if !known.is_nan() {
+                    *l = l.max(known);
+                }
+            }
+        }
+    }
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -193,6 +193,28 @@ impl ExactEval {
         self.advance_by(rel, moved_b.min(moved_a))
     }
 
+    /// A certified lower bound of the pair's distance at the relative pose `rel` (b's frame in
+    /// a's) when part b is a faceted solid of revolution with centre `c` and unit axis `u` (in
+    /// b's frame), radius `rho_m` about c and offset `s_m` ([`crate::geometry::revolution`]), m:
+    /// the lower bound kept, less s, less how far the solid of revolution moved in a's frame —
+    /// |c₁ − c₀| + 2·sin(φ/2)·ρ with φ the angle between the axis's two directions. (The
+    /// relative turn is a turn Q taking one axis to the other after a turn about the axis,
+    /// which maps the solid of revolution onto itself; Q moves its points by at most that.)
+    /// So d₁ ≥ d(Rev₁) ≥ d(Rev₀) − moved ≥ l₀ − s − moved. A cone spinning about its own axis
+    /// keeps its bound but for s, however far it turned.
+    pub fn advance_revolved(
+        &self,
+        rel: &Isometry3<f64>,
+        (c, u, rho_m, s_m): (&Point3<f64>, &Vector3<f64>, f64, f64),
+    ) -> f64 {
+        let (c0, c1) = (self.rel * c, rel * c);
+        let (u0, u1) = (self.rel.rotation * u, rel.rotation * u);
+        // 2·sin(φ/2) = |u₁ − u₀| for unit vectors.
+        let moved = (c1 - c0).norm() + (u1 - u0).norm() * rho_m;
+        let scale = self.rel.translation.vector.norm() + rel.translation.vector.norm() + rho_m;
+        self.lower_m - s_m - moved - F64_SLACK * scale
+    }
+
     /// The bracket at `rel` when no point of either part moved more than `moved_m` relative to
     /// the other since the evaluation.
     fn advance_by(&self, rel: &Isometry3<f64>, moved_m: f64) -> (f64, f64) {

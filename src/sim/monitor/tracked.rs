@@ -204,12 +204,14 @@ pub(super) fn track_pair(
         tolerance_m: sample_tolerance_m(&hit.d),
     };
     let dt = s.motion.dt_s;
-    if s.motion.ready
-        && fresh_prev
-        && (prev.t_s - (t - dt)).abs() <= 1e-9 * t.max(1.0)
-        && let Some(inside) = refine_over_step(s, mon, sc, count, (i, j), (&prev, &hit), w)
-    {
-        best = inside;
+    if s.motion.ready && fresh_prev && (prev.t_s - (t - dt)).abs() <= 1e-9 * t.max(1.0) {
+        // A spinning faceted cone is judged to its own tolerance, sample or not.
+        let faceted = faceted_tolerance(s, sc, (i, j), &hit);
+        best.tolerance_m = best.tolerance_m.max(faceted);
+        if let Some(inside) = refine_over_step(s, mon, sc, count, (i, j), (&prev, &hit), w, faceted)
+        {
+            best = inside;
+        }
     }
     if !mon.min_per_pair[k].distance_m.is_finite() || best.distance_m < w {
         mon.min_per_pair[k] = best;
@@ -220,7 +222,8 @@ pub(super) fn track_pair(
 
 /// Between the previous sample `prev` (at t − dt) and this one `hit` of pair (i, j), the
 /// distance is at least (d(t₀) + d(t₁) − S·dt)/2 with S the pair's distance-rate bound; where
-/// that could undercut the closest approach so far `w` (m) by more than its tolerance, the
+/// that could undercut the closest approach so far `w` (m) by more than its tolerance (at least
+/// `faceted`, [`faceted_tolerance`]), the
 /// step is searched on the bodies' paths ([`closest_in_step`]). Counts the search's
 /// evaluations and its certified lower bound in `mon`; returns the closest approach inside the
 /// step if it is below this sample's distance.
@@ -233,6 +236,7 @@ fn refine_over_step(
     (i, j): (usize, usize),
     (prev, hit): (&PairDistance, &PartPairHit),
     w: f64,
+    faceted: f64,
 ) -> Option<PairMin> {
     let (t, dt) = (s.t, s.motion.dt_s);
     let rate = s.motion.distance_rate_bound(i, j);
@@ -250,7 +254,7 @@ fn refine_over_step(
     // and still not prove it. Its tolerance is twice its own bracket's width (the bound
     // stays certified; only how close the recorded closest approach is to the true one
     // changes, by that width, and the summary's `tolerance_m` says so).
-    let slack = provable_tolerance(&hit.d, &d0);
+    let slack = provable_tolerance(&hit.d, &d0).max(faceted);
     let thr = |b: f64| {
         let w = w.min(b);
         let t = w - min_distance_tolerance_m(w).max(slack);
@@ -275,6 +279,50 @@ fn refine_over_step(
     }
     mon.min_lower_m = mon.min_lower_m.min(r.lower.max(0.0));
     inside
+}
+
+/// The tolerance of the closest approach of pair (i, j) when its closest parts `hit` include a
+/// faceted solid of revolution turning fast about its axis (the docking cone spinning with
+/// the chaser), m: 2s + L′_pq·dt/2, with s the parts' summed offsets ([`super::Faceted`]) and
+/// L′_pq the pair's rate through its solid of revolution ([`super::PairRate`]); else 0. The
+/// facets then move faster than any affordable bisection resolves (at 100 rad/s, 12 m/s: the
+/// distance dips by up to s five times a step), and the bound through the solid of revolution
+/// ([`super::PairRate::interval_lower`]) over a whole step is s + L′·dt/2 below the samples'
+/// lower bounds, which are themselves up to s below the true distance: that is what the bound
+/// proves without bisecting the step, as the closest pair's own bracket sets the tolerance of
+/// a pair GJK cannot resolve ([`crate::geometry::bounds::provable_tolerance`]). Used only when
+/// the facets' own motion over half the step, L_pq·dt/2, exceeds it; a slow cone keeps the
+/// 0.1 % tolerance. The bound stays certified; only how close the recorded closest approach is
+/// to the true one changes, and `min_distance.tolerance_m` says by how much (2.1 mm for the
+/// docking cone at 100 rad/s: s = 0.58 mm, L′ = 0.18 m/s, nearly all of it the allowance for
+/// RK4's departure from Euler's equations on the two other axes).
+fn faceted_tolerance(
+    s: &Step,
+    sc: &mut DistanceScratch,
+    (i, j): (usize, usize),
+    hit: &PartPairHit,
+) -> f64 {
+    let off = |b: usize, p: usize| {
+        s.geo.pieces[b]
+            .get(p)
+            .and_then(|x| x.faceted)
+            .map_or(0.0, |f| f.offset_m)
+    };
+    let offset = off(i, hit.a) + off(j, hit.b);
+    if offset <= 0.0 {
+        return 0.0;
+    }
+    let (pair_rate, _) = pair_rate_gain(s.geo, s.motion, i, j, (hit.a, hit.b), sc);
+    let nj = s.geo.shapes[j].len();
+    let Some(r) = sc.rates.get(hit.a * nj + hit.b) else {
+        return 0.0;
+    };
+    let tol = 2.0 * offset + 0.5 * r.revolved_m_s * s.motion.dt_s;
+    if 0.5 * pair_rate * s.motion.dt_s > tol {
+        tol
+    } else {
+        0.0
+    }
 }
 
 /// The search for the closest approach of pair (i, j) over the step, from the brackets `d0`
@@ -419,6 +467,14 @@ pub(super) fn update_overall(mon: &mut MonitorState, t: f64) {
             .as_ref()
             .is_none_or(|o| c.distance_m < o.distance_m)
     {
+        // The pair's own record of this sample may carry a wider tolerance (a spinning
+        // faceted cone's, `faceted_tolerance`).
+        let own = mon
+            .pair_index
+            .get(&(c.a, c.b))
+            .and_then(|k| mon.min_per_pair.get(*k))
+            .filter(|m| m.t_s == t && !m.inside && m.distance_m == c.distance_m)
+            .map_or(0.0, |m| m.tolerance_m);
         mon.overall = Some(PairMin {
             distance_m: c.distance_m,
             part_a: c.part_a,
@@ -428,7 +484,8 @@ pub(super) fn update_overall(mon: &mut MonitorState, t: f64) {
             tolerance_m: sample_tolerance_m(&Bracket {
                 value: c.distance_m,
                 lower: c.lower_m,
-            }),
+            })
+            .max(own),
         });
         mon.overall_pair = (c.a, c.b);
     }
