@@ -1131,9 +1131,15 @@ impl CompliantContact {
                     + acc_rel * dt * dt
                     + 1e-3;
             let lb = (ca.translation.vector - cb.translation.vector).norm() - p.radii.0 - p.radii.1;
+            // The revolved reach drops the spin terms and adds the offsets: it can only be
+            // smaller when the spin terms are larger.
+            let offsets =
+                p.faceted.0.map_or(0.0, |f| f.offset_m) + p.faceted.1.map_or(0.0, |f| f.offset_m);
+            let spin_terms = 3.0 * (sa0.omega_rad_s.norm() * ra + sb0.omega_rad_s.norm() * rb) * dt;
             if lb <= reach
                 && !p.in_contact
-                && (p.faceted.0.is_some() || p.faceted.1.is_some())
+                && offsets > 0.0
+                && spin_terms > offsets
                 && let Some(sp) = spins.as_deref_mut()
             {
                 let bounds = *sp.get_or_insert_with(|| SpinBound::pair(start, dt));

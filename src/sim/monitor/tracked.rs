@@ -205,11 +205,10 @@ pub(super) fn track_pair(
     };
     let dt = s.motion.dt_s;
     if s.motion.ready && fresh_prev && (prev.t_s - (t - dt)).abs() <= 1e-9 * t.max(1.0) {
+        let (inside, faceted) = refine_over_step(s, mon, sc, count, (i, j), (&prev, &hit), w);
         // A spinning faceted cone is judged to its own tolerance, sample or not.
-        let faceted = faceted_tolerance(s, sc, (i, j), &hit);
         best.tolerance_m = best.tolerance_m.max(faceted);
-        if let Some(inside) = refine_over_step(s, mon, sc, count, (i, j), (&prev, &hit), w, faceted)
-        {
+        if let Some(inside) = inside {
             best = inside;
         }
     }
@@ -222,8 +221,8 @@ pub(super) fn track_pair(
 
 /// Between the previous sample `prev` (at t − dt) and this one `hit` of pair (i, j), the
 /// distance is at least (d(t₀) + d(t₁) − S·dt)/2 with S the pair's distance-rate bound; where
-/// that could undercut the closest approach so far `w` (m) by more than its tolerance (at least
-/// `faceted`, [`faceted_tolerance`]), the
+/// that could undercut the closest approach so far `w` (m) by more than its tolerance (where
+/// that does not clear, at least [`faceted_tolerance`], returned when it widened it), the
 /// step is searched on the bodies' paths ([`closest_in_step`]). Counts the search's
 /// evaluations and its certified lower bound in `mon`; returns the closest approach inside the
 /// step if it is below this sample's distance.
@@ -236,8 +235,7 @@ fn refine_over_step(
     (i, j): (usize, usize),
     (prev, hit): (&PairDistance, &PartPairHit),
     w: f64,
-    faceted: f64,
-) -> Option<PairMin> {
+) -> (Option<PairMin>, f64) {
     let (t, dt) = (s.t, s.motion.dt_s);
     let rate = s.motion.distance_rate_bound(i, j);
     let d0 = Bracket {
@@ -254,14 +252,26 @@ fn refine_over_step(
     // and still not prove it. Its tolerance is twice its own bracket's width (the bound
     // stays certified; only how close the recorded closest approach is to the true one
     // changes, by that width, and the summary's `tolerance_m` says so).
-    let slack = provable_tolerance(&hit.d, &d0).max(faceted);
-    let thr = |b: f64| {
-        let w = w.min(b);
-        let t = w - min_distance_tolerance_m(w).max(slack);
-        if t <= 0.0 { f64::NEG_INFINITY } else { t }
+    let base = provable_tolerance(&hit.d, &d0);
+    let thr_with = |slack: f64| {
+        move |b: f64| {
+            let w = w.min(b);
+            let t = w - min_distance_tolerance_m(w).max(slack);
+            if t <= 0.0 { f64::NEG_INFINITY } else { t }
+        }
     };
-    if interval_lower_bound(d0.lower, hit.d.lower, rate, dt).max(0.0) >= thr(hit.d.value) {
-        return None;
+    let quick = interval_lower_bound(d0.lower, hit.d.lower, rate, dt).max(0.0);
+    if quick >= thr_with(base)(hit.d.value) {
+        return (None, 0.0);
+    }
+    // Only a step the usual tolerance does not clear at once asks whether a spinning faceted
+    // cone sets a wider one.
+    let faceted = faceted_tolerance(s, sc, (i, j), hit);
+    let used = if faceted > base { faceted } else { 0.0 };
+    let slack = base.max(faceted);
+    let thr = thr_with(slack);
+    if quick >= thr(hit.d.value) {
+        return (None, used);
     }
     let (r, parts) = closest_in_step(s, sc, count, (i, j), (d0, hit, rate), thr);
     let (pa, pb) = parts.unwrap_or((prev.part_a, prev.part_b));
@@ -278,7 +288,7 @@ fn refine_over_step(
         });
     }
     mon.min_lower_m = mon.min_lower_m.min(r.lower.max(0.0));
-    inside
+    (inside, used)
 }
 
 /// The tolerance of the closest approach of pair (i, j) when its closest parts `hit` include a
@@ -291,7 +301,8 @@ fn refine_over_step(
 /// lower bounds, which are themselves up to s below the true distance: that is what the bound
 /// proves without bisecting the step, as the closest pair's own bracket sets the tolerance of
 /// a pair GJK cannot resolve ([`crate::geometry::bounds::provable_tolerance`]). Used only when
-/// the facets' own motion over half the step, L_pq·dt/2, exceeds it; a slow cone keeps the
+/// what the spin adds to the pair's rate over half the step, (L_pq − L′_pq)·dt/2, exceeds
+/// it, and only on a step the usual tolerance does not clear at once; a slow cone keeps the
 /// 0.1 % tolerance. The bound stays certified; only how close the recorded closest approach is
 /// to the true one changes, and `min_distance.tolerance_m` says by how much (2.1 mm for the
 /// docking cone at 100 rad/s: s = 0.58 mm, L′ = 0.18 m/s, nearly all of it the allowance for
@@ -318,7 +329,9 @@ fn faceted_tolerance(
         return 0.0;
     };
     let tol = 2.0 * offset + 0.5 * r.revolved_m_s * s.motion.dt_s;
-    if 0.5 * pair_rate * s.motion.dt_s > tol {
+    // What the spin about the axis adds to the pair's rate over half the step must exceed it:
+    // a pair whose rate is its drift gains nothing from the solid of revolution.
+    if 0.5 * (pair_rate - r.revolved_m_s) * s.motion.dt_s > tol {
         tol
     } else {
         0.0
