@@ -169,8 +169,8 @@ fn about_axis(
     })
 }
 
-/// The brute-force reference measures parry's hull of the points, so these run with the
-/// simulation (the `sim` feature); the core builds without parry.
+// The brute-force reference measures parry's hull of the points, so these run with the
+// simulation (the `sim` feature); the core builds without parry.
 #[cfg(all(test, feature = "sim"))]
 mod tests {
     //! Reference: brute force. The hull's vertices turned about the found axis through a grid
