@@ -89,6 +89,35 @@ pub struct CompliantPair {
     pub last_contact: Option<(Vector3<f64>, Vector3<f64>)>,
 }
 
+impl CompliantPair {
+    /// A pair out of contact: `names` (a, b), and each part's shape, pose in its body frame and
+    /// bounding radius about its origin (m).
+    pub fn new(
+        names: (String, String),
+        a: (&rp::SharedShape, &Isometry3<f64>, f64),
+        b: (&rp::SharedShape, &Isometry3<f64>, f64),
+    ) -> Self {
+        CompliantPair {
+            names,
+            shapes: (a.0.clone(), b.0.clone()),
+            poses: (*a.1, *b.1),
+            radii: (a.2, b.2),
+            vertices: (shape_vertices(a.0), shape_vertices(b.0)),
+            faceted: (
+                PartPiece::of(&**a.0, a.1, a.2).faceted,
+                PartPiece::of(&**b.0, b.1, b.2).faceted,
+            ),
+            in_contact: false,
+            impact_speed_m_s: 0.0,
+            contact_peak_n: 0.0,
+            start_s: 0.0,
+            last_depth_m: f64::NEG_INFINITY,
+            last_force_n: f64::NEG_INFINITY,
+            last_contact: None,
+        }
+    }
+}
+
 /// What a pair did in one step.
 #[derive(Debug, Clone)]
 pub struct PairStep {
@@ -1711,27 +1740,14 @@ pub fn install_between(
     let mut pairs = Vec::new();
     for a in &pa {
         for b in &pb {
-            pairs.push(CompliantPair {
-                names: (
+            pairs.push(CompliantPair::new(
+                (
                     format!("{}/{}", roster.names[ia], a.name),
                     format!("{}/{}", roster.names[ib], b.name),
                 ),
-                shapes: (a.shape.clone(), b.shape.clone()),
-                poses: (a.pose_body, b.pose_body),
-                radii: (a.bound_radius_m, b.bound_radius_m),
-                vertices: (shape_vertices(&a.shape), shape_vertices(&b.shape)),
-                faceted: (
-                    PartPiece::of(&*a.shape, &a.pose_body, a.bound_radius_m).faceted,
-                    PartPiece::of(&*b.shape, &b.pose_body, b.bound_radius_m).faceted,
-                ),
-                in_contact: false,
-                impact_speed_m_s: 0.0,
-                contact_peak_n: 0.0,
-                start_s: 0.0,
-                last_depth_m: f64::NEG_INFINITY,
-                last_force_n: f64::NEG_INFINITY,
-                last_contact: None,
-            });
+                (&a.shape, &a.pose_body, a.bound_radius_m),
+                (&b.shape, &b.pose_body, b.bound_radius_m),
+            ));
         }
     }
     let law = Law::from_spec(spec);
@@ -1807,20 +1823,7 @@ mod tests {
     //! at a 10 mm gap the revolved reach drops a pair that the full reach (3·|ω|·R·dt = 0.78 m)
     //! keeps.
     use super::*;
-    use crate::scene::BodyRole;
-
-    fn body(j: Matrix3<f64>) -> SimBody {
-        SimBody {
-            index: 0,
-            name: "b".into(),
-            role: BodyRole::Other,
-            handle: rp::RigidBodyHandle::invalid(),
-            mass_kg: 300.0,
-            inertia_kg_m2: j,
-            com_body_m: Vector3::zeros(),
-            inertia_inv: j.try_inverse().expect("invertible"),
-        }
-    }
+    use crate::sim::motion::tests::body;
 
     #[test]
     fn revolved_reach_never_drops_a_pair_that_touches_within_the_step() {
@@ -1860,24 +1863,15 @@ mod tests {
                     att: nalgebra::UnitQuaternion::identity(),
                     omega_rad_s: Vector3::zeros(),
                 };
-                let p = CompliantPair {
-                    names: ("a/cone".into(), "b/wall".into()),
-                    shapes: (cone.clone(), wall.clone()),
-                    poses: (cone_pose, Isometry3::identity()),
-                    radii: (0.25_f64.hypot(0.12), Vector3::new(0.1, 0.05, 0.1).norm()),
-                    vertices: (Vec::new(), Vec::new()),
-                    faceted: (
-                        PartPiece::of(&*cone, &cone_pose, 0.25_f64.hypot(0.12)).faceted,
-                        None,
+                let p = CompliantPair::new(
+                    ("a/cone".into(), "b/wall".into()),
+                    (&cone, &cone_pose, 0.25_f64.hypot(0.12)),
+                    (
+                        &wall,
+                        &Isometry3::identity(),
+                        Vector3::new(0.1, 0.05, 0.1).norm(),
                     ),
-                    in_contact: false,
-                    impact_speed_m_s: 0.0,
-                    contact_peak_n: 0.0,
-                    start_s: 0.0,
-                    last_depth_m: f64::NEG_INFINITY,
-                    last_force_n: f64::NEG_INFINITY,
-                    last_contact: None,
-                };
+                );
                 assert!(p.faceted.0.is_some());
                 let start = StepStart {
                     d: (Dyn::new(&ba, None), Dyn::new(&bb, None)),

@@ -625,12 +625,13 @@ pub fn omega_components_euler(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     //! The path against closed forms: a parabola, and a torque-free spin about a principal
     //! axis (constant rate: the attitude at τ is a rotation by ωτ).
     use super::*;
 
-    fn body(j: Matrix3<f64>) -> SimBody {
+    /// A test body of 1 kg with inertia `j` about its centre of mass at its origin.
+    pub(crate) fn body(j: Matrix3<f64>) -> SimBody {
         SimBody {
             index: 0,
             name: "b".into(),
