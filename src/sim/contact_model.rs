@@ -1122,67 +1122,61 @@ impl CompliantContact {
     /// only, which the revolved reach bounds). If one is, a contact may act within the step
     /// and change the spin, and every pair is judged again with the reach above alone.
     fn window(&mut self, start: &StepStart, dt: f64) -> (Vec<usize>, (f64, f64)) {
-        let mut spins: Option<Option<[SpinBound; 2]>> = None;
-        let (mut candidates, mut r_max) = self.window_pass(start, dt, Some(&mut spins));
-        if !candidates.is_empty() && spins.is_some_and(|s| s.is_some()) {
-            (candidates, r_max) = self.window_pass(start, dt, None);
-        }
-        for (k, p) in self.pairs.iter_mut().enumerate() {
-            if !candidates.contains(&k) {
-                p.last_depth_m = f64::NEG_INFINITY;
-            }
-        }
-        (candidates, r_max)
-    }
-
-    /// One pass of [`Self::window`]: the candidates and their largest lever arms, judged with
-    /// the full reach, and also with the revolved reach when `spins` is given (its bodies'
-    /// spin bounds, computed on the first pair that needs them; `None` inside when a body
-    /// cannot have them).
-    fn window_pass(
-        &self,
-        start: &StepStart,
-        dt: f64,
-        mut spins: Option<&mut Option<Option<[SpinBound; 2]>>>,
-    ) -> (Vec<usize>, (f64, f64)) {
         let (sa0, sb0) = start.s;
         let (pose_a, pose_b) = start.pose;
         let (v_rel, acc_rel) = (start.v_rel, start.acc_rel);
-        let mut candidates: Vec<usize> = Vec::new();
-        let mut r_max: (f64, f64) = (0.0, 0.0);
+        // A pair in contact makes the step a contact step: the full reach alone.
+        let mut spins: Option<Option<[SpinBound; 2]>> =
+            self.pairs.iter().any(|p| p.in_contact).then_some(None);
+        // Per pair within the full reach: (index, within the revolved reach too, lever arms).
+        let mut near: Vec<(usize, bool, f64, f64)> = Vec::new();
         for (k, p) in self.pairs.iter().enumerate().filter(|_| self.enabled) {
             let ca = pose_a * p.poses.0;
             let cb = pose_b * p.poses.1;
             let ra = (ca.translation.vector - sa0.pos_m).norm() + p.radii.0;
             let rb = (cb.translation.vector - sb0.pos_m).norm() + p.radii.1;
-            let mut reach =
+            let reach =
                 3.0 * (v_rel + sa0.omega_rad_s.norm() * ra + sb0.omega_rad_s.norm() * rb) * dt
                     + acc_rel * dt * dt
                     + 1e-3;
+            let spin_terms = 3.0 * (sa0.omega_rad_s.norm() * ra + sb0.omega_rad_s.norm() * rb) * dt;
+            if p.in_contact {
+                near.push((k, true, ra, rb));
+                continue;
+            }
             let lb = (ca.translation.vector - cb.translation.vector).norm() - p.radii.0 - p.radii.1;
+            if lb > reach {
+                continue;
+            }
             // The revolved reach drops the spin terms and adds the offsets: it can only be
             // smaller when the spin terms are larger.
             let offsets =
                 p.faceted.0.map_or(0.0, |f| f.offset_m) + p.faceted.1.map_or(0.0, |f| f.offset_m);
-            let spin_terms = 3.0 * (sa0.omega_rad_s.norm() * ra + sb0.omega_rad_s.norm() * rb) * dt;
-            if lb <= reach
-                && !p.in_contact
-                && offsets > 0.0
-                && spin_terms > offsets
-                && let Some(sp) = spins.as_deref_mut()
-            {
-                let bounds = *sp.get_or_insert_with(|| SpinBound::pair(start, dt));
+            let mut reach_min = reach;
+            if offsets > 0.0 && spin_terms > offsets {
+                let bounds = *spins.get_or_insert_with(|| SpinBound::pair(start, dt));
                 if let Some(b) = bounds {
-                    reach = reach.min(revolved_reach(start, p, &b, dt));
+                    reach_min = reach.min(revolved_reach(start, p, &b, dt));
                 }
             }
-            let near = p.in_contact
-                || (lb <= reach
-                    && super::monitor::shape_distance(&ca, &*p.shapes.0, &cb, &*p.shapes.1)
-                        <= reach);
-            if near {
+            let d = super::monitor::shape_distance(&ca, &*p.shapes.0, &cb, &*p.shapes.1);
+            if d <= reach {
+                near.push((k, d <= reach_min && lb <= reach_min, ra, rb));
+            }
+        }
+        // No pair within the revolved reach: free flight. Otherwise every pair within the
+        // full reach (a contact within the step may change the spin).
+        let mut candidates: Vec<usize> = Vec::new();
+        let mut r_max: (f64, f64) = (0.0, 0.0);
+        if near.iter().any(|n| n.1) {
+            for &(k, _, ra, rb) in &near {
                 candidates.push(k);
                 r_max = (r_max.0.max(ra), r_max.1.max(rb));
+            }
+        }
+        for (k, p) in self.pairs.iter_mut().enumerate() {
+            if !candidates.contains(&k) {
+                p.last_depth_m = f64::NEG_INFINITY;
             }
         }
         (candidates, r_max)

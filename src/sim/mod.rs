@@ -886,10 +886,14 @@ fn sweep_pair(
     if lb0 - rate * dt > SPLIT_GAP_M {
         return none;
     }
-    // The parts' bounds alone (no closest pair sought) for a body turning fast: a chaser
-    // spinning at 100 rad/s about its docking axis, its panels in their slabs and its cone's
-    // solid of revolution at rest, is cleared without one exact query.
-    if rate >= monitor::PER_PART_MIN_GAIN * motion.rel_speed_bound(i, j)
+    // The parts' bounds alone (no closest pair sought) for a body turning fast — its turn
+    // moves a point by more than the split gap within the step, and more than the bodies'
+    // relative motion does: a chaser spinning at 100 rad/s about its docking axis, its panels
+    // in their slabs and its cone's solid of revolution at rest, is cleared without one exact
+    // query.
+    let turn = motion.omega_bound(i) * geo.extent_m[i] + motion.omega_bound(j) * geo.extent_m[j];
+    if turn * dt > SPLIT_GAP_M
+        && rate >= monitor::PER_PART_MIN_GAIN * motion.rel_speed_bound(i, j)
         && monitor::parts_stay_above(
             geo,
             motion,

@@ -320,7 +320,10 @@ fn faceted_tolerance(
             .map_or(0.0, |f| f.offset_m)
     };
     let offset = off(i, hit.a) + off(j, hit.b);
-    if offset <= 0.0 {
+    // What the spin adds to the pair's rate is at most the bodies' rotation terms.
+    let m = s.motion;
+    let spin = m.omega_bound(i) * m.extent_m[i] + m.omega_bound(j) * m.extent_m[j];
+    if offset <= 0.0 || 0.5 * spin * m.dt_s <= 2.0 * offset {
         return 0.0;
     }
     let (pair_rate, _) = pair_rate_gain(s.geo, s.motion, i, j, (hit.a, hit.b), sc);
