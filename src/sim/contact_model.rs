@@ -1128,8 +1128,9 @@ impl CompliantContact {
         // A pair in contact makes the step a contact step: the full reach alone.
         let mut spins: Option<Option<[SpinBound; 2]>> =
             self.pairs.iter().any(|p| p.in_contact).then_some(None);
-        // Per pair within the full reach: (index, within the revolved reach too, lever arms).
-        let mut near: Vec<(usize, bool, f64, f64)> = Vec::new();
+        // Per pair within the full reach by its sphere gap: (index, within the revolved reach
+        // (Some) or not yet known (None, its distance not yet computed), full reach, lever arms).
+        let mut near: Vec<(usize, Option<bool>, f64, f64, f64)> = Vec::new();
         for (k, p) in self.pairs.iter().enumerate().filter(|_| self.enabled) {
             let ca = pose_a * p.poses.0;
             let cb = pose_b * p.poses.1;
@@ -1139,9 +1140,8 @@ impl CompliantContact {
                 3.0 * (v_rel + sa0.omega_rad_s.norm() * ra + sb0.omega_rad_s.norm() * rb) * dt
                     + acc_rel * dt * dt
                     + 1e-3;
-            let spin_terms = 3.0 * (sa0.omega_rad_s.norm() * ra + sb0.omega_rad_s.norm() * rb) * dt;
             if p.in_contact {
-                near.push((k, true, ra, rb));
+                near.push((k, Some(true), reach, ra, rb));
                 continue;
             }
             let lb = (ca.translation.vector - cb.translation.vector).norm() - p.radii.0 - p.radii.1;
@@ -1150,6 +1150,7 @@ impl CompliantContact {
             }
             // The revolved reach drops the spin terms and adds the offsets: it can only be
             // smaller when the spin terms are larger.
+            let spin_terms = 3.0 * (sa0.omega_rad_s.norm() * ra + sb0.omega_rad_s.norm() * rb) * dt;
             let offsets =
                 p.faceted.0.map_or(0.0, |f| f.offset_m) + p.faceted.1.map_or(0.0, |f| f.offset_m);
             let mut reach_min = reach;
@@ -1159,19 +1160,31 @@ impl CompliantContact {
                     reach_min = reach.min(revolved_reach(start, p, &b, dt));
                 }
             }
+            if lb > reach_min {
+                // Out of the revolved reach: its distance only matters if another pair is in.
+                near.push((k, None, reach, ra, rb));
+                continue;
+            }
             let d = super::monitor::shape_distance(&ca, &*p.shapes.0, &cb, &*p.shapes.1);
             if d <= reach {
-                near.push((k, d <= reach_min && lb <= reach_min, ra, rb));
+                near.push((k, Some(d <= reach_min), reach, ra, rb));
             }
         }
         // No pair within the revolved reach: free flight. Otherwise every pair within the
         // full reach (a contact within the step may change the spin).
         let mut candidates: Vec<usize> = Vec::new();
         let mut r_max: (f64, f64) = (0.0, 0.0);
-        if near.iter().any(|n| n.1) {
-            for &(k, _, ra, rb) in &near {
-                candidates.push(k);
-                r_max = (r_max.0.max(ra), r_max.1.max(rb));
+        if near.iter().any(|n| n.1 == Some(true)) {
+            for &(k, within, reach, ra, rb) in &near {
+                let keep = within.is_some() || {
+                    let p = &self.pairs[k];
+                    let (ca, cb) = (pose_a * p.poses.0, pose_b * p.poses.1);
+                    super::monitor::shape_distance(&ca, &*p.shapes.0, &cb, &*p.shapes.1) <= reach
+                };
+                if keep {
+                    candidates.push(k);
+                    r_max = (r_max.0.max(ra), r_max.1.max(rb));
+                }
             }
         }
         for (k, p) in self.pairs.iter_mut().enumerate() {
