@@ -500,6 +500,29 @@ fn invariant_part_rate_bounds_hold_under_fast_spins() {
     }
 }
 
+/// The chaser's inertias (110/140/160 kg·m², and a unit one), the chaser at the origin
+/// drifting at 0.02 m/s along −x and spinning at 100 rad/s about x (a principal axis), and a
+/// body at rest at `b_pos`.
+fn spin_about_x(b_pos: Vector3<f64>) -> ([Matrix3<f64>; 2], BodyState, BodyState) {
+    let inertia = [
+        Matrix3::from_diagonal(&Vector3::new(110.0, 140.0, 160.0)),
+        Matrix3::identity(),
+    ];
+    let sa = BodyState {
+        pos_m: Vector3::zeros(),
+        vel_m_s: Vector3::new(-0.02, 0.0, 0.0),
+        att: UnitQuaternion::identity(),
+        omega_rad_s: Vector3::new(100.0, 0.0, 0.0),
+    };
+    let sb = BodyState {
+        pos_m: b_pos,
+        vel_m_s: Vector3::zeros(),
+        att: UnitQuaternion::identity(),
+        omega_rad_s: Vector3::zeros(),
+    };
+    (inertia, sa, sb)
+}
+
 /// A spin about a principal axis, torque-free, through a round part's axis: the round part's
 /// rate is its centre's drift alone, and a box's is not. (The numbers the cliff relies on.)
 #[test]
@@ -531,22 +554,7 @@ fn invariant_round_parts_on_the_spin_axis_have_no_spin_rate() {
             0.1,
         )],
     ]);
-    let inertia = [
-        Matrix3::from_diagonal(&Vector3::new(110.0, 140.0, 160.0)),
-        Matrix3::identity(),
-    ];
-    let sa = BodyState {
-        pos_m: Vector3::zeros(),
-        vel_m_s: Vector3::new(-0.02, 0.0, 0.0),
-        att: UnitQuaternion::identity(),
-        omega_rad_s: Vector3::new(100.0, 0.0, 0.0),
-    };
-    let sb = BodyState {
-        pos_m: Vector3::new(-1.0, 0.0, 0.0),
-        vel_m_s: Vector3::zeros(),
-        att: UnitQuaternion::identity(),
-        omega_rad_s: Vector3::zeros(),
-    };
+    let (inertia, sa, sb) = spin_about_x(Vector3::new(-1.0, 0.0, 0.0));
     let motion = step_motion(
         &geo,
         vec![
@@ -617,22 +625,7 @@ fn val_faceted_cone_spinning_about_its_axis_is_bounded_through_its_solid_of_revo
     let s0 = 0.12 * (1.0 - (std::f64::consts::PI / 32.0).cos());
     assert!(f.offset_m >= s0 && f.offset_m < 1.01 * s0, "{f:?}");
     assert!((f.axis - Vector3::x()).norm() < 1e-9 || (f.axis + Vector3::x()).norm() < 1e-9);
-    let inertia = [
-        Matrix3::from_diagonal(&Vector3::new(110.0, 140.0, 160.0)),
-        Matrix3::identity(),
-    ];
-    let sa = BodyState {
-        pos_m: Vector3::zeros(),
-        vel_m_s: Vector3::new(-0.02, 0.0, 0.0),
-        att: UnitQuaternion::identity(),
-        omega_rad_s: Vector3::new(100.0, 0.0, 0.0),
-    };
-    let sb = BodyState {
-        pos_m: Vector3::zeros(),
-        vel_m_s: Vector3::zeros(),
-        att: UnitQuaternion::identity(),
-        omega_rad_s: Vector3::zeros(),
-    };
+    let (inertia, sa, sb) = spin_about_x(Vector3::zeros());
     let screw = [
         Motion::Screw {
             x0: sa.pos_m,

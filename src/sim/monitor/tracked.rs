@@ -266,14 +266,14 @@ fn refine_over_step(
     }
     // Only a step the usual tolerance does not clear at once asks whether a spinning faceted
     // cone sets a wider one.
-    let faceted = faceted_tolerance(s, sc, (i, j), hit);
+    let (faceted, gain) = faceted_tolerance(s, sc, (i, j), hit);
     let used = if faceted > base { faceted } else { 0.0 };
     let slack = base.max(faceted);
     let thr = thr_with(slack);
     if quick >= thr(hit.d.value) {
         return (None, used);
     }
-    let (r, parts) = closest_in_step(s, sc, count, (i, j), (d0, hit, rate), thr);
+    let (r, parts) = closest_in_step(s, sc, count, (i, j), (d0, hit, rate), thr, gain);
     let (pa, pb) = parts.unwrap_or((prev.part_a, prev.part_b));
     mon.interval_evals += u64::from(r.evals);
     let mut inside = None;
@@ -312,7 +312,7 @@ fn faceted_tolerance(
     sc: &mut DistanceScratch,
     (i, j): (usize, usize),
     hit: &PartPairHit,
-) -> f64 {
+) -> (f64, Option<(f64, f64)>) {
     let off = |b: usize, p: usize| {
         s.geo.pieces[b]
             .get(p)
@@ -324,21 +324,23 @@ fn faceted_tolerance(
     let m = s.motion;
     let spin = m.omega_bound(i) * m.extent_m[i] + m.omega_bound(j) * m.extent_m[j];
     if offset <= 0.0 || 0.5 * spin * m.dt_s <= 2.0 * offset {
-        return 0.0;
+        return (0.0, None);
     }
-    let (pair_rate, _) = pair_rate_gain(s.geo, s.motion, i, j, (hit.a, hit.b), sc);
+    let gain = pair_rate_gain(s.geo, s.motion, i, j, (hit.a, hit.b), sc);
+    let pair_rate = gain.0;
     let nj = s.geo.shapes[j].len();
     let Some(r) = sc.rates.get(hit.a * nj + hit.b) else {
-        return 0.0;
+        return (0.0, Some(gain));
     };
     let tol = 2.0 * offset + 0.5 * r.revolved_m_s * s.motion.dt_s;
     // What the spin about the axis adds to the pair's rate over half the step must exceed it:
     // a pair whose rate is its drift gains nothing from the solid of revolution.
-    if 0.5 * (pair_rate - r.revolved_m_s) * s.motion.dt_s > tol {
+    let tol = if 0.5 * (pair_rate - r.revolved_m_s) * s.motion.dt_s > tol {
         tol
     } else {
         0.0
-    }
+    };
+    (tol, Some(gain))
 }
 
 /// The search for the closest approach of pair (i, j) over the step, from the brackets `d0`
@@ -346,7 +348,8 @@ fn faceted_tolerance(
 /// ([`search_parts`]) for a body turning fast (the bodies' rate bound at least
 /// [`PER_PART_MIN_GAIN`] times that of the closest part pair), else the bodies' bound
 /// ([`minimize`] with the pair's distance-rate bound `rate`, m/s). Returns the search and the
-/// closest parts where its minimum was found, if that was at an evaluated point.
+/// closest parts where its minimum was found, if that was at an evaluated point. `gain`: the
+/// pair's [`pair_rate_gain`] if the caller has just computed it (its rates still in `sc`).
 fn closest_in_step(
     s: &Step,
     sc: &mut DistanceScratch,
@@ -354,11 +357,13 @@ fn closest_in_step(
     (i, j): (usize, usize),
     (d0, hit, rate): (Bracket, &PartPairHit, f64),
     thr: impl Fn(f64) -> f64,
+    gain: Option<(f64, f64)>,
 ) -> (MinSearch, Option<(usize, usize)>) {
     let (geo, motion) = (s.geo, s.motion);
     let dt = motion.dt_s;
     // A body turning fast: the per-part-pair bounds (`search_parts`).
-    let (pair_rate, body_rate) = pair_rate_gain(geo, motion, i, j, (hit.a, hit.b), sc);
+    let (pair_rate, body_rate) =
+        gain.unwrap_or_else(|| pair_rate_gain(geo, motion, i, j, (hit.a, hit.b), sc));
     if body_rate >= PER_PART_MIN_GAIN * pair_rate {
         let (r, parts) = search_parts(
             geo,
