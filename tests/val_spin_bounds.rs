@@ -9,7 +9,11 @@
 //! path) or the monitor's own f64 free-flight path (RK4 of Euler's equations under a held
 //! torque, `BodyPath::pose_at`), at spins up to 100 rad/s (1 rad a step). Checked:
 //! * every part pair's bound L_pq (`part_pair_rates`): on each of 1, 8 and 64 sub-intervals,
-//!   the dense minimum of the pair's distance is at least (d(a) + d(b) − L_pq·w)/2;
+//!   the dense minimum of the pair's distance is at least (d(a) + d(b) − L_pq·w)/2 (and, for a
+//!   faceted solid of revolution, its bound through its solid of revolution);
+//! * every pair's slab gap along the spinning body's axis (`SlabBound`) is at most its
+//!   distance at every dense instant, and on the same sub-intervals the dense minimum is at
+//!   least the gap's interval bound with L_slab;
 //! * the lower bound the monitor reports between the two samples (`search_parts`, as the
 //!   closest-approach search and a `MinDistance` guarantee call it) is at most the dense
 //!   minimum of the bodies' distance;
@@ -311,6 +315,52 @@ fn check_step(label: &str, geo: &MonitorGeometry, motions: &[Motion; 2], inertia
                     pq % nb,
                     rates[pq]
                 );
+            }
+        }
+    }
+    // 1b. The slab bound (`SlabBound`): every pair's slab gap is at most its distance at every
+    // dense instant (a separating direction), and on 1, 8 and 64 sub-intervals the dense
+    // minimum stays above the gap's interval bound with L_slab.
+    if let Some(slab) = monitor::SlabBound::new(geo, &motion, 0, 1) {
+        let mut gaps: Vec<Vec<f64>> = vec![Vec::with_capacity(N + 1); na * nb];
+        let mut g = Vec::new();
+        for k in 0..=N {
+            let tau = DT * k as f64 / N as f64;
+            slab.gaps(
+                geo,
+                (0, 1),
+                &motions[0].pose(tau),
+                &motions[1].pose(tau),
+                &mut g,
+            );
+            for (pq, x) in g.iter().enumerate() {
+                gaps[pq].push(*x);
+            }
+        }
+        for (pq, (dp, gp)) in d.iter().zip(&gaps).enumerate() {
+            for (k, (x, dk)) in gp.iter().zip(dp).enumerate() {
+                assert!(
+                    *x <= dk + noise(*dk, scale),
+                    "{label}: pair {pq} slab gap {x} above its distance {dk} at sample {k}"
+                );
+            }
+            for pieces in [1, 8, 64] {
+                let w = N / pieces;
+                for c in 0..pieces {
+                    let (ka, kb) = (c * w, (c + 1) * w);
+                    let bound = interval_lower_bound(
+                        gp[ka],
+                        gp[kb],
+                        slab.rate_m_s,
+                        DT * w as f64 / N as f64,
+                    );
+                    let m = dp[ka..=kb].iter().copied().fold(f64::INFINITY, f64::min);
+                    assert!(
+                        m + noise(m, scale) >= bound,
+                        "{label}: pair {pq} piece {c}/{pieces}: dense minimum {m} below its slab bound {bound} (L_slab {})",
+                        slab.rate_m_s
+                    );
+                }
             }
         }
     }
