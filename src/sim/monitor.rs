@@ -14,10 +14,12 @@ use bevy_rapier3d::parry::query;
 use bevy_rapier3d::rapier::math::Pose;
 use bevy_rapier3d::rapier::prelude as rp;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+use sphere_prune::SpherePrune;
 use std::collections::{BTreeMap, HashMap};
 
 mod contact_steps;
 pub mod memo;
+pub mod sphere_prune;
 mod tracked;
 
 /// Who a collider is.
@@ -1270,7 +1272,41 @@ pub fn closest_parts(
 ) -> PartPairHit {
     let mut none = None;
     closest_parts_inner(
-        geo, i, pi, j, pj, keep, warm, certify, candidates, evaluated, count, &mut none,
+        geo, i, pi, j, pj, keep, warm, certify, candidates, evaluated, count, &mut none, None,
+    )
+}
+
+/// [`closest_parts`] over every part pair of a tracked body pair whose bodies' centres of mass
+/// and attitudes are `now`, with the bounding-sphere gaps carried in `prune` from a reference
+/// step ([`sphere_prune`]): the same candidates, evaluations, result and counters, without
+/// computing the gaps the bodies' motion since cannot have brought under the best distance.
+#[allow(clippy::too_many_arguments)]
+pub fn closest_parts_pruned(
+    geo: &MonitorGeometry,
+    i: usize,
+    pi: &[(Isometry3<f64>, f64)],
+    j: usize,
+    pj: &[(Isometry3<f64>, f64)],
+    warm: Option<(usize, usize)>,
+    candidates: &mut Vec<(f64, usize, usize)>,
+    evaluated: &mut Vec<Evaluated>,
+    count: &mut QueryCount,
+    prune: (&mut SpherePrune, [BodyPose; 2]),
+) -> PartPairHit {
+    closest_parts_inner(
+        geo,
+        i,
+        pi,
+        j,
+        pj,
+        &|_, _| true,
+        warm,
+        true,
+        candidates,
+        evaluated,
+        count,
+        &mut None,
+        Some(prune),
     )
 }
 
@@ -1307,6 +1343,7 @@ pub fn closest_parts_lows(
         evaluated,
         count,
         &mut Some(&mut *l),
+        None,
     );
     {
         let scale = |a: usize, b: usize| {
@@ -1552,6 +1589,7 @@ fn closest_parts_inner(
     evaluated: &mut Vec<Evaluated>,
     count: &mut QueryCount,
     lows: &mut Option<&mut Vec<f64>>,
+    mut prune: Option<(&mut SpherePrune, [BodyPose; 2])>,
 ) -> PartPairHit {
     let nj = pj.len();
     if let Some(l) = lows.as_deref_mut() {
@@ -1579,17 +1617,54 @@ fn closest_parts_inner(
         }
     }
     candidates.clear();
-    for (a, (pa, ra)) in pi.iter().enumerate() {
-        for (b, (pb, rb)) in pj.iter().enumerate() {
-            if !keep(a, b) || warm == Some((a, b)) {
-                continue;
+    // The bounding-sphere gap of part pair (a, b), m.
+    let gap = |a: usize, b: usize| {
+        (pi[a].0.translation.vector - pj[b].0.translation.vector).norm() - pi[a].1 - pj[b].1
+    };
+    // The gaps carried from the reference step, where their bound holds (`sphere_prune`).
+    let walked = prune.as_mut().is_some_and(|(p, now)| {
+        p.walk(
+            now,
+            (pi.len(), nj),
+            best,
+            warm,
+            gap,
+            candidates,
+            &mut count.pruned,
+        )
+    });
+    if !walked {
+        // Every gap, recorded for a new reference where one is wanted.
+        let mut record = prune
+            .as_mut()
+            .filter(|(p, _)| p.wants_reference())
+            .map(|(p, _)| p.gaps_buffer());
+        for a in 0..pi.len() {
+            for b in 0..nj {
+                if !keep(a, b) {
+                    continue;
+                }
+                if warm == Some((a, b)) {
+                    if let Some(r) = record.as_deref_mut() {
+                        r.push((gap(a, b), a, b));
+                    }
+                    continue;
+                }
+                let lb = gap(a, b);
+                if let Some(r) = record.as_deref_mut() {
+                    r.push((lb, a, b));
+                }
+                if lb < best {
+                    candidates.push((lb, a, b));
+                } else {
+                    count.pruned += 1;
+                }
             }
-            let lb = (pa.translation.vector - pb.translation.vector).norm() - ra - rb;
-            if lb < best {
-                candidates.push((lb, a, b));
-            } else {
-                count.pruned += 1;
-            }
+        }
+        if record.is_some()
+            && let Some((p, now)) = prune.as_mut()
+        {
+            p.retake(now, pi, pj);
         }
     }
     // Nearest bounding-sphere gap first, ties by part indices: a min-heap pops them in the
@@ -1749,6 +1824,8 @@ pub struct DistanceScratch {
     terms: [PartTerms; 2],
     /// Per part pair rate bounds of the current body pair ([`part_pair_rates`]).
     rates: Vec<PairRate>,
+    /// The tracked pairs' carried bounding-sphere gaps, by pair slot ([`sphere_prune`]).
+    prune: Vec<SpherePrune>,
 }
 
 /// A sample of the per-part search ([`search_parts`]): the value (with its certified lower

@@ -10,8 +10,8 @@ use super::super::motion::StepMotion;
 use super::super::{BodyState, MonitorState, NamedPairs, PairMin, Roster, SimBody};
 use super::{
     DistanceScratch, MAX_MIN_EVALS, MonitorGeometry, PER_PART_MIN_GAIN, PartPairHit, QueryCount,
-    closest_parts, min_distance_tolerance_m, pair_at, pair_rate_gain, sample_tolerance_m,
-    search_parts,
+    closest_parts, closest_parts_pruned, min_distance_tolerance_m, pair_at, pair_rate_gain,
+    sample_tolerance_m, search_parts,
 };
 use crate::geometry::bounds::{
     Bracket, MinSearch, interval_lower_bound, minimize, provable_tolerance,
@@ -149,19 +149,22 @@ pub(super) fn track_pair(
     let prev = mon.pairs[k].clone();
     let fresh_prev = prev.t_s.is_finite();
     let warm = fresh_prev.then_some((prev.part_a, prev.part_b));
+    if sc.prune.len() <= k {
+        sc.prune.resize_with(k + 1, Default::default);
+    }
     let (pi, pj) = (&sc.poses[i].1, &sc.poses[j].1);
-    let hit = closest_parts(
+    let (vi, vj) = (&mon.bodies[i], &mon.bodies[j]);
+    let hit = closest_parts_pruned(
         geo,
         i,
         pi,
         j,
         pj,
-        &|_, _| true,
         warm,
-        true,
         &mut sc.candidates,
         &mut sc.evaluated,
         count,
+        (&mut sc.prune[k], [(vi.pos_m, vi.att), (vj.pos_m, vj.att)]),
     );
     let (dock_i, dock_j) = (&geo.docking[i], &geo.docking[j]);
     let clearance = if geo.has_docking[i] && geo.has_docking[j] && dock_i[hit.a] && dock_j[hit.b] {
