@@ -384,11 +384,22 @@ pub struct StepMotion {
 }
 
 /// Bound on |x′_a − x′_b| over the step for two paths, m/s: the velocities are linear on each
-/// piece, so the largest difference is at a piece end (either side).
+/// piece, so the largest difference is at a piece end (either side). Each distinct end is
+/// evaluated once, and on both sides only where it is a path's split (elsewhere the two sides
+/// are the same velocity): the same maximum as every end on both sides.
 pub fn rel_speed(a: &BodyPath, b: &BodyPath) -> f64 {
     let mut m: f64 = 0.0;
-    for t in a.piece_ends().iter().chain(b.piece_ends().iter()) {
-        for right in [false, true] {
+    let ends = [0.0, a.t_split, a.dt, 0.0, b.t_split, b.dt];
+    for (k, t) in ends.iter().enumerate() {
+        if ends[..k].contains(t) {
+            continue;
+        }
+        let sides: &[bool] = if *t == a.t_split || *t == b.t_split {
+            &[false, true]
+        } else {
+            &[false]
+        };
+        for &right in sides {
             m = m.max((a.vel_at(*t, right) - b.vel_at(*t, right)).norm());
         }
     }
