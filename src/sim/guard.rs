@@ -178,12 +178,16 @@ fn install(app: &mut App) {
         ),
     );
     // One condition per set (a condition on a tuple of sets would be evaluated once, before
-    // the first of them, for the whole step): each stage runs only while no check has tripped,
-    // so the step a check trips in goes no further.
-    for stage in Stage::ALL {
-        app.configure_sets(SimStep, stage.run_if(clear));
+    // the first of them, for the whole step): each set after a check runs only while no check
+    // has tripped, so the step a check trips in goes no further. The sets before the first
+    // check (Sense to Environment, and the force check) need none: only these checks trip the
+    // guard, and `SimStep` is run only while it is clear (`advance` and
+    // `Simulation::step_pipeline` stop at a trip). Each condition is a resource fetch and a
+    // system run every step, so there are no more of them than that.
+    for set in [Stage::Physics, Stage::Monitor, Stage::Record] {
+        app.configure_sets(SimStep, set.run_if(clear));
     }
-    for check in [GuardCheck::Forces, GuardCheck::States, GuardCheck::Outputs] {
+    for check in [GuardCheck::States, GuardCheck::Outputs] {
         app.configure_sets(SimStep, check.run_if(clear));
     }
     app.add_systems(

@@ -1941,9 +1941,16 @@ impl Plugin for PipelinePlugin {
                 .in_set(Stage::Monitor),
         ));
         schedule.add_systems((
-            multirate::plan_step.in_set(Order::Plan),
+            // Each runs only where its resource exists (a fixed-step scene plans nothing, a
+            // scene without plumed jets loads nothing): a condition is one resource fetch, the
+            // systems' parameters are up to nineteen.
+            multirate::plan_step
+                .in_set(Order::Plan)
+                .run_if(resource_exists::<multirate::MultiRate>),
             environment_gravity.in_set(Order::Gravity),
-            plume::plume_forces.in_set(Order::PlumeForces),
+            plume::plume_forces
+                .in_set(Order::PlumeForces)
+                .run_if(resource_exists::<plume::PlumeLoadState>),
             physics_step.in_set(Stage::Physics),
             (monitor::distances, monitor::contacts)
                 .chain()
