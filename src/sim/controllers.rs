@@ -1025,19 +1025,21 @@ impl Plugin for ControllersPlugin {
             planar: self.planar,
             ..Default::default()
         });
+        // One condition for the three: a set's condition is evaluated once a step, before the
+        // first of its systems (what it reads changes only between steps, when a controller is
+        // added), where a condition on each would be a resource fetch and a run each.
+        app.configure_sets(SimStep, Hosted.run_if(hosting));
         app.add_systems(
             SimStep,
             (
                 // After the L2 frame is brought to this step (an empty set outside L2 scenes).
                 host_sense
                     .in_set(Stage::Sense)
-                    .after(super::environment::EnvironmentSense)
-                    .run_if(hosting),
-                host_control.in_set(Stage::Control).run_if(hosting),
-                host_actuate
-                    .in_set(super::Order::ControllerForces)
-                    .run_if(hosting),
-            ),
+                    .after(super::environment::EnvironmentSense),
+                host_control.in_set(Stage::Control),
+                host_actuate.in_set(super::Order::ControllerForces),
+            )
+                .in_set(Hosted),
         );
         app.add_systems(
             SimStep,
@@ -1052,6 +1054,11 @@ impl Plugin for ControllersPlugin {
 fn hosting(host: Res<ControllerHost>) -> bool {
     !(host.slots.is_empty() && host.disturbances.is_empty())
 }
+
+/// The controller host's per-step systems (`host_sense`, `host_control`, `host_actuate`),
+/// which run only while there is something to host.
+#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
+struct Hosted;
 
 /// Run condition: some controller writes diagnostics after the step.
 fn post_step_wanted(host: Res<ControllerHost>) -> bool {

@@ -433,17 +433,21 @@ pub mod conv {
 fn advance(world: &mut World) {
     let n = world.resource::<StepBudget>().0;
     let start = world.resource::<Clock>().step;
-    loop {
-        let done = world.resource::<Clock>().step - start;
-        if done >= n {
-            break;
+    // The schedule is taken out of `Schedules` once for the whole budget, not once a step
+    // (`run_schedule` moves it out of the map and back every call).
+    world.schedule_scope(SimStep, |world, schedule| {
+        loop {
+            let done = world.resource::<Clock>().step - start;
+            if done >= n {
+                break;
+            }
+            world.resource_mut::<multirate::SpanCap>().0 = n - done;
+            schedule.run(world);
+            if world.resource::<guard::Guard>().trip.is_some() {
+                break;
+            }
         }
-        world.resource_mut::<multirate::SpanCap>().0 = n - done;
-        world.run_schedule(SimStep);
-        if world.resource::<guard::Guard>().trip.is_some() {
-            break;
-        }
-    }
+    });
     world.resource_mut::<StepBudget>().0 = 0;
 }
 

@@ -90,12 +90,21 @@ fn half_turn(rel0: &Isometry3<f64>, rel1: &Isometry3<f64>) -> (f64, Option<Vecto
 /// polyhedron or a box (the distance from a line is convex, so a vertex reaches its maximum
 /// over the solid), a ball's radius. `None` for other shapes (meshes included).
 pub fn axis_radius_m(shape: &dyn rp::Shape, u: &Vector3<f64>) -> Option<f64> {
-    let off = |p: Vector| {
+    // Squared distances, one square root at the end: the norm is the square root of the
+    // squared norm and the square root is correctly rounded and monotone, so this is the
+    // largest norm bit for bit.
+    let off2 = |p: Vector| {
         let p = conv::na(p);
-        (p - u * p.dot(u)).norm()
+        (p - u * p.dot(u)).norm_squared()
     };
     if let Some(c) = shape.as_convex_polyhedron() {
-        return Some(c.points().iter().map(|p| off(*p)).fold(0.0, f64::max));
+        return Some(
+            c.points()
+                .iter()
+                .map(|p| off2(*p))
+                .fold(0.0, f64::max)
+                .sqrt(),
+        );
     }
     if let Some(b) = shape.as_cuboid() {
         let h = b.half_extents;
@@ -103,11 +112,11 @@ pub fn axis_radius_m(shape: &dyn rp::Shape, u: &Vector3<f64>) -> Option<f64> {
         for sx in [-1.0, 1.0] {
             for sy in [-1.0, 1.0] {
                 for sz in [-1.0, 1.0] {
-                    m = m.max(off(Vector::new(sx * h.x, sy * h.y, sz * h.z)));
+                    m = m.max(off2(Vector::new(sx * h.x, sy * h.y, sz * h.z)));
                 }
             }
         }
-        return Some(m);
+        return Some(m.sqrt());
     }
     shape.as_ball().map(|b| f64::from(b.radius))
 }
