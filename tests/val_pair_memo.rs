@@ -14,6 +14,10 @@
 //! (`monitor::GJK_REL_TOL`). Lower bounds are checked against the closed forms with only the f32
 //! rounding as slack; values may exceed the truth by GJK's tolerance and f32's, never fall below
 //! it by more than f32's.
+//!
+//! The filter in front of the turn's-axis bracket (`ExactEval::advance_unturned`) is checked
+//! against that bracket itself at random poses: its lower bound never below, its upper bound
+//! equal (a property of the two formulas, no reference needed).
 
 mod common;
 
@@ -290,4 +294,56 @@ fn val_pair_memo_is_bounded() {
     // A kept pair is still updated.
     m.put((0, 0, 1, 2), e);
     assert_eq!(m.len(), PAIR_MEMO_MAX_PAIRS);
+}
+
+#[test]
+fn val_pair_memo_unturned_bracket_bounds_the_axis_bracket() {
+    // `pair_eval` asks the turn's-axis bracket (`advance_parts`) only where the bracket with
+    // no turn at all (`advance_unturned`) could decide: that is sound only if, at every pose,
+    // the unturned lower bound is at least the axis one and the upper bounds are equal (every
+    // decision needs a lower bound at least some level, for a fixed upper bound). Checked on
+    // a box–box pair and a cone–box pair (the docking cone's convex hull, whose axis bound is
+    // the tight one) at 2 000 random later poses each, turns up to π.
+    let (bx, rbx) = cuboid(Vector3::new(0.6, 0.3, 0.2));
+    let ring = |r: f64, x: f64| {
+        (0..32).map(move |k| {
+            let a = k as f64 * std::f64::consts::TAU / 32.0;
+            rp::Vector::new(x as f32, (r * a.cos()) as f32, (r * a.sin()) as f32)
+        })
+    };
+    let pts: Vec<rp::Vector> = ring(0.15, 0.0).chain(ring(0.04, 0.25)).collect();
+    let cone = rp::SharedShape::convex_hull(&pts).expect("cone hull");
+    let rcone = 0.26;
+    let mut seed = 11u64;
+    let mut next = move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for (a, ra) in [(&bx, rbx), (&cone, rcone)] {
+        let pa = iso(Vector3::zeros(), UnitQuaternion::identity());
+        let pb = iso(Vector3::new(1.5, 0.2, -0.1), UnitQuaternion::identity());
+        let e = memo::convex_exact(&pa, (&**a, ra), &pb, (&*bx, rbx)).expect("support maps");
+        for _ in 0..2000 {
+            let r: Vec<f64> = (0..10).map(|_| next() - 0.5).collect();
+            let axis = Vector3::new(r[0], r[1], r[2]);
+            let angle = std::f64::consts::PI * (r[3] + 0.5);
+            let q = UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(axis), angle);
+            let move_a = iso(Vector3::new(r[4], r[5], r[6]) * 0.4, q);
+            let pb1 = iso(
+                pb.translation.vector + Vector3::new(r[7], r[8], r[9]) * 0.4,
+                UnitQuaternion::identity(),
+            );
+            let rel = move_a.inv_mul(&pb1);
+            let rel_inv = rel.inverse();
+            let (lo_u, up_u) = e.advance_unturned((&rel, &rel_inv), ra, rbx);
+            let (lo_x, up_x) = e.advance_parts((&rel, &rel_inv), (&**a, ra), (&*bx, rbx));
+            assert_eq!(up_u, up_x, "upper bounds differ");
+            assert!(
+                lo_u >= lo_x,
+                "unturned lower {lo_u} below the axis bound's {lo_x}"
+            );
+        }
+    }
 }

@@ -1467,7 +1467,12 @@ pub fn pair_eval(
         if let Some(answer) = decide(quick) {
             return answer;
         }
-        if let Some(answer) = decide(e.advance_parts((&rel, &rel_inv), (sa, pa.1), (sb, pb.1))) {
+        // The axis bound only where it could decide: every decision asks for a lower bound at
+        // least some level, and no turn at all would give the highest it can
+        // (`advance_unturned`); where even that decides nothing, the axis bound would not.
+        if decide(e.advance_unturned((&rel, &rel_inv), pa.1, pb.1)).is_some()
+            && let Some(answer) = decide(e.advance_parts((&rel, &rel_inv), (sa, pa.1), (sb, pb.1)))
+        {
             return answer;
         }
     }

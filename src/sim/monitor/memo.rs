@@ -187,6 +187,28 @@ impl ExactEval {
         self.advance_by(rel, moved_b.min(moved_a))
     }
 
+    /// The bracket [`Self::advance_parts`] would give if neither part had turned relative to
+    /// the other (its chord term zero): its lower bound is at least that of
+    /// [`Self::advance_parts`] and its upper bound the same, so a decision that needs a higher
+    /// lower bound than this one's cannot be reached with the turn's axis either (the same
+    /// floating-point terms as [`displacement_bound_axis_m`], whose rounding is monotone).
+    /// `rel_inv` is `rel.inverse()`; `ra_m`, `rb_m` the parts' bounding radii.
+    pub fn advance_unturned(
+        &self,
+        (rel, rel_inv): (&Isometry3<f64>, &Isometry3<f64>),
+        ra_m: f64,
+        rb_m: f64,
+    ) -> (f64, f64) {
+        let floor = |rel0: &Isometry3<f64>, rel1: &Isometry3<f64>, r_m: f64| {
+            let dt = (rel1.translation.vector - rel0.translation.vector).norm();
+            let scale = rel0.translation.vector.norm() + rel1.translation.vector.norm() + r_m;
+            dt + 0.0 + F64_SLACK * scale
+        };
+        let moved_b = floor(&self.rel, rel, rb_m);
+        let moved_a = floor(&self.rel_inv, rel_inv, ra_m);
+        self.advance_by(rel, moved_b.min(moved_a))
+    }
+
     /// [`Self::advance`] with the rotation's axis, on whichever side bounds the motion better
     /// (part b's points moving in a's frame, or a's in b's: the distance is the same):
     /// [`displacement_bound_axis_m`].
