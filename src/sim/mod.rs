@@ -530,6 +530,10 @@ pub struct PhysicsScratch {
     free_end: Vec<BodyState>,
     /// Pair evaluation buffers.
     dist: monitor::DistanceScratch,
+    /// The swept test's body pairs (kept between steps for its allocation).
+    pairs: Vec<(usize, usize)>,
+    /// Per body: touching another or jointed at the start of the step (kept likewise).
+    attached: Vec<bool>,
 }
 
 impl guarantee_bounds::MotionBounds for motion::StepMotion {
@@ -683,9 +687,20 @@ fn prepare_motion(p: &mut PhysicsStep, sc: &mut PhysicsScratch) {
     sc.start.clear();
     sc.free_end.clear();
     if p.motion.ready {
-        let paths = std::mem::replace(&mut p.motion.paths, Vec::with_capacity(n));
-        let free = std::mem::take(&mut p.motion.free_before);
-        p.motion.prev = Some(Box::new((paths, free)));
+        // The last step's paths become `prev`; the buffers of the step before it are reused
+        // for this step's (emptied below), not allocated anew.
+        let m = &mut *p.motion;
+        match m.prev.as_deref_mut() {
+            Some(prev) => {
+                std::mem::swap(&mut prev.0, &mut m.paths);
+                std::mem::swap(&mut prev.1, &mut m.free_before);
+            }
+            None => {
+                let paths = std::mem::replace(&mut p.motion.paths, Vec::with_capacity(n));
+                let free = std::mem::take(&mut p.motion.free_before);
+                p.motion.prev = Some(Box::new((paths, free)));
+            }
+        }
     }
     p.motion.paths.clear();
     p.motion.free_before.clear();
@@ -1000,17 +1015,17 @@ fn swept_test(
     dt: f64,
 ) -> (bool, Option<f64>) {
     let n = p.roster.bodies.len();
-    let pairs: Vec<(usize, usize)> = if p.bp.all_pairs {
-        (0..n)
-            .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
-            .collect()
+    let mut pairs = std::mem::take(&mut sc.pairs);
+    pairs.clear();
+    if p.bp.all_pairs {
+        pairs.extend((0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))));
     } else {
-        p.bp.near.iter().copied().collect()
-    };
+        pairs.extend(p.bp.near.iter().copied());
+    }
     let mut engage = false;
     let mut split: Option<f64> = None;
     let mut count = monitor::QueryCount::default();
-    for (i, j) in pairs {
+    for &(i, j) in &pairs {
         if attached[i] || attached[j] {
             continue;
         }
@@ -1026,6 +1041,7 @@ fn swept_test(
         }
     }
     p.sync.swept_queries += count.exact;
+    sc.pairs = pairs;
     (engage, split)
 }
 
@@ -1195,16 +1211,13 @@ fn physics_step(mut p: PhysicsStep, mut scratch: Local<PhysicsScratch>) {
     // Bodies touching another or jointed when the step starts: rapier holds them (a stack's
     // members are held by the stack, and kept out of the swept test: the planner proved every
     // other body out of rapier's reach of them).
-    let attached: Vec<bool> = p
-        .roster
-        .bodies
-        .iter()
-        .map(|e| {
-            let b = p.q.get(*e).expect("body").0;
-            p.contact.touching.get(b.index).copied().unwrap_or(false)
-                || jointed(&p.phys.world, b.handle)
-        })
-        .collect();
+    let mut attached = std::mem::take(&mut sc.attached);
+    attached.clear();
+    attached.extend(p.roster.bodies.iter().map(|e| {
+        let b = p.q.get(*e).expect("body").0;
+        p.contact.touching.get(b.index).copied().unwrap_or(false)
+            || jointed(&p.phys.world, b.handle)
+    }));
     let any_attached = attached.iter().any(|a| *a);
     // 2. The swept test; rapier keeps stepping while its own broad phase still pairs any
     // colliders (not under a stack's long step, which the planner proved clear of contact).
@@ -1230,6 +1243,7 @@ fn physics_step(mut p: PhysicsStep, mut scratch: Local<PhysicsScratch>) {
     p.sync.stepped = stepped;
     // 4. Commit; a stack's members then record what held them, as rapier's joint impulses are.
     commit(&mut p, sc, &attached, &substepped, stepped, t0, dt);
+    sc.attached = attached;
     for (k, impulse, angular) in held.into_iter().flatten() {
         p.contact.body_impulse[k] = impulse;
         p.contact.body_angular_impulse[k] = angular;
@@ -1370,9 +1384,14 @@ fn note_under_resolved(
 /// The reference orbit `back_s` from its current time (negative: earlier), in orbit scenes.
 fn reference_at(orbit: Option<&OrbitEnv>, back_s: f64) -> Option<crate::guarantee::ReferenceView> {
     orbit.map(|o| {
-        let mut r = o.reference.clone();
-        r.step(back_s);
-        let (p, v) = r.state();
+        // (A step of zero leaves the orbit as it is: no copy for it.)
+        let (p, v) = if back_s == 0.0 {
+            o.reference.state()
+        } else {
+            let mut r = o.reference.clone();
+            r.step(back_s);
+            r.state()
+        };
         crate::guarantee::ReferenceView {
             pos_eci_m: p,
             vel_eci_m_s: v,
