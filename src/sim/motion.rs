@@ -385,16 +385,21 @@ pub struct StepMotion {
 
 /// Bound on |x′_a − x′_b| over the step for two paths, m/s: the velocities are linear on each
 /// piece, so the largest difference is at a piece end (either side). Each distinct end is
-/// evaluated once, and on both sides only where it is a path's split (elsewhere the two sides
-/// are the same velocity): the same maximum as every end on both sides.
+/// evaluated once, and on both sides only where a path changes piece there (a free piece
+/// followed by a straight one, [`BodyPath::vel_at`]; elsewhere the two sides are the same
+/// velocity): the same maximum as every end on both sides.
 pub fn rel_speed(a: &BodyPath, b: &BodyPath) -> f64 {
     let mut m: f64 = 0.0;
     let ends = [0.0, a.t_split, a.dt, 0.0, b.t_split, b.dt];
+    // (Exactly where `vel_at`'s two sides differ: a free piece, at its end, not followed by
+    // `rest <= 0`.)
+    let turns =
+        |p: &BodyPath, t: f64| t == p.t_split && p.free.is_some() && !(p.dt - p.t_split <= 0.0);
     for (k, t) in ends.iter().enumerate() {
         if ends[..k].contains(t) {
             continue;
         }
-        let sides: &[bool] = if *t == a.t_split || *t == b.t_split {
+        let sides: &[bool] = if turns(a, *t) || turns(b, *t) {
             &[false, true]
         } else {
             &[false]
@@ -652,6 +657,61 @@ pub(crate) mod tests {
             inertia_kg_m2: j,
             com_body_m: Vector3::zeros(),
             inertia_inv: j.try_inverse().expect("invertible"),
+        }
+    }
+
+    #[test]
+    fn rel_speed_is_the_maximum_over_every_end_on_both_sides() {
+        // Reference: the definition — every piece end of both paths, both sides, every
+        // velocity difference — against the deduplicated evaluation, bit for bit, over free
+        // paths, straight paths, split paths (a free piece then a straight one) and a split
+        // whose rest is NaN.
+        let mut x: u64 = 0x2545_F491_4F6C_DD1D;
+        let mut r = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let dt = 0.01;
+        for k in 0..4000 {
+            let mut v = || Vector3::new(r(), r(), r());
+            let path = |kind: usize, v: &mut dyn FnMut() -> Vector3<f64>| {
+                let t_split = match kind {
+                    0 => dt,
+                    1 => 0.0,
+                    2 => dt * 0.37,
+                    _ => f64::NAN,
+                };
+                let free = (kind != 1).then(|| FreePiece {
+                    accel_m_s2: v(),
+                    torque_nm: Vector3::zeros(),
+                    inertia: Matrix3::identity(),
+                    inertia_inv: Matrix3::identity(),
+                });
+                BodyPath {
+                    x0: v(),
+                    v0: v(),
+                    q0: UnitQuaternion::identity(),
+                    w0: Vector3::zeros(),
+                    free,
+                    t_split,
+                    xs: v(),
+                    qs: UnitQuaternion::identity(),
+                    x1: v(),
+                    q1: UnitQuaternion::identity(),
+                    dt,
+                    omega_max_rad_s: 0.0,
+                }
+            };
+            let (a, b) = (path(k % 4, &mut v), path((k / 4) % 4, &mut v));
+            let mut want: f64 = 0.0;
+            for t in a.piece_ends().iter().chain(b.piece_ends().iter()) {
+                for right in [false, true] {
+                    want = want.max((a.vel_at(*t, right) - b.vel_at(*t, right)).norm());
+                }
+            }
+            assert_eq!(rel_speed(&a, &b).to_bits(), want.to_bits(), "case {k}");
         }
     }
 
