@@ -390,6 +390,16 @@ pub struct StepMotion {
 /// velocity): the same maximum as every end on both sides.
 pub fn rel_speed(a: &BodyPath, b: &BodyPath) -> f64 {
     let mut m: f64 = 0.0;
+    // Both free over the whole step (the common case): the ends are 0 and dt, one side each,
+    // the velocities `vel_at`'s expressions.
+    if let (Some(fa), Some(fb)) = (&a.free, &b.free)
+        && a.t_split == a.dt
+        && b.t_split == b.dt
+        && a.dt == b.dt
+    {
+        let d = |t: f64| ((a.v0 + fa.accel_m_s2 * t) - (b.v0 + fb.accel_m_s2 * t)).norm();
+        return m.max(d(0.0)).max(d(a.dt));
+    }
     let ends = [0.0, a.t_split, a.dt, 0.0, b.t_split, b.dt];
     // (Exactly where `vel_at`'s two sides differ: a free piece, at its end, not followed by
     // `rest <= 0`.)
@@ -562,11 +572,25 @@ pub fn omega_bound_euler(lam: [f64; 3], l0: f64, two_e0: f64, torque: f64, dt: f
             && e <= e_hi * (1.0 + slack)
     };
     let mut best: f64 = 0.0;
+    // A point with u_p = x, u_q = y and 0 on the third axis, built without indexed stores (a
+    // store to a computed index, then the array read whole, stalls the store forwarding: this
+    // function's largest cost when it was written so).
+    let point = |p: usize, x: f64, q: usize, y: f64| {
+        let at = |k: usize| {
+            if k == p {
+                x
+            } else if k == q {
+                y
+            } else {
+                0.0
+            }
+        };
+        [at(0), at(1), at(2)]
+    };
     // One axis: u_p within both slabs.
     for p in 0..3 {
         let hi = (l2_hi / (lam[p] * lam[p])).min(e_hi / lam[p]);
-        let mut u = [0.0; 3];
-        u[p] = hi;
+        let u = point(p, hi, p, hi);
         if feasible(&u) {
             best = best.max(hi);
         }
@@ -582,11 +606,9 @@ pub fn omega_bound_euler(lam: [f64; 3], l0: f64, two_e0: f64, torque: f64, dt: f
                 }
                 let up = (l2 * lam[q] - lam[q] * lam[q] * e) / det;
                 let uq = (lam[p] * lam[p] * e - lam[p] * l2) / det;
-                let mut u = [0.0; 3];
-                u[p] = up.max(0.0);
-                u[q] = uq.max(0.0);
-                if feasible(&u) {
-                    best = best.max(u[p] + u[q]);
+                let (up, uq) = (up.max(0.0), uq.max(0.0));
+                if feasible(&point(p, up, q, uq)) {
+                    best = best.max(up + uq);
                 }
             }
         }
