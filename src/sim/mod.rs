@@ -1975,11 +1975,16 @@ impl Plugin for PipelinePlugin {
                 .in_set(Order::PlumeForces)
                 .run_if(resource_exists::<plume::PlumeLoadState>),
             physics_step.in_set(Stage::Physics),
-            (monitor::distances, monitor::contacts)
+            (
+                monitor::distances,
+                monitor::contacts.run_if(monitor::contacts_wanted),
+            )
                 .chain()
                 .in_set(Order::Geometry),
             check_guarantees.in_set(Order::Guarantees),
-            output::record.in_set(Stage::Record),
+            output::record
+                .run_if(output::record_wanted)
+                .in_set(Stage::Record),
         ));
         app.add_schedule(schedule);
         app.add_systems(Update, advance);

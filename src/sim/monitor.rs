@@ -2405,6 +2405,22 @@ pub fn touch_time(
     }
 }
 
+/// Run condition of [`contacts`]: whether it has anything to do this step — rapier stepped (its
+/// contact pairs are this step's), the compliant docking model is present, a contact is active
+/// (it may end) or the last step's points or pairs are still to be cleared. Otherwise the
+/// system would find nothing and change nothing; not running it saves its resource fetches.
+pub fn contacts_wanted(
+    sync: Res<super::RapierSync>,
+    cs: Res<ContactState>,
+    compliant: Option<Res<super::contact_model::CompliantContact>>,
+) -> bool {
+    sync.stepped
+        || compliant.is_some()
+        || !cs.active.is_empty()
+        || !cs.points.is_empty()
+        || !cs.step_pairs.is_empty()
+}
+
 /// Monitor system: rapier's contacts between bodies, named by part, and the compliant docking
 /// model's; start/end events, peak force and impulse per part, docking contact vs collision;
 /// the per-point rows of `contact_points.csv`.

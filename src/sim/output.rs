@@ -717,6 +717,16 @@ fn write_step(
     rec.last_row_step = Some(step);
 }
 
+/// Run condition of [`record`]: a row is due (or forced), contact points are written at full
+/// rate, or events are pending — everything `record` does; on the other steps it would do
+/// nothing, and not running it saves its resource fetches.
+pub fn record_wanted(clock: Res<Clock>, rec: Res<Recorder>, log: Res<EventLog>) -> bool {
+    clock.step.is_multiple_of(u64::from(rec.every))
+        || rec.force_row
+        || rec.files.as_ref().is_some_and(|f| f.points.is_some())
+        || !log.pending.is_empty()
+}
+
 /// Record system: a row every `every` steps, events as they happen.
 #[allow(clippy::too_many_arguments)] // a Bevy system: one parameter per resource it reads
 pub fn record(
