@@ -128,6 +128,18 @@ pub enum GuardCheck {
     Outputs,
 }
 
+/// The stretches of the step between one check and the next, each run only while the guard is
+/// clear.
+#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
+enum GuardSegment {
+    /// After the force check: Physics, then the state check.
+    AfterForces,
+    /// After the state check: Monitor, then the output check.
+    AfterStates,
+    /// After the output check: Record.
+    AfterOutputs,
+}
+
 fn clear(g: Res<Guard>) -> bool {
     g.trip.is_none()
 }
@@ -177,18 +189,29 @@ fn install(app: &mut App) {
                 .before(Stage::Record),
         ),
     );
-    // One condition per set (a condition on a tuple of sets would be evaluated once, before
-    // the first of them, for the whole step): each set after a check runs only while no check
-    // has tripped, so the step a check trips in goes no further. The sets before the first
-    // check (Sense to Environment, and the force check) need none: only these checks trip the
-    // guard, and `SimStep` is run only while it is clear (`advance` and
-    // `Simulation::step_pipeline` stop at a trip). Each condition is a resource fetch and a
-    // system run every step, so there are no more of them than that.
-    for set in [Stage::Physics, Stage::Monitor, Stage::Record] {
-        app.configure_sets(SimStep, set.run_if(clear));
-    }
-    for check in [GuardCheck::States, GuardCheck::Outputs] {
-        app.configure_sets(SimStep, check.run_if(clear));
+    // Each stage after a check runs only while no check has tripped, so the step a check trips
+    // in goes no further. A set's condition is evaluated once a step, before the first of its
+    // systems; only these checks trip the guard, so between one check and the next its state
+    // cannot change, and one condition covers each stretch (`GuardSegment`): Physics and the
+    // state check after the force check, Monitor and the output check after the state check,
+    // Record after the output check. The sets before the first check (Sense to Environment,
+    // and the force check) need none: `SimStep` is run only while the guard is clear
+    // (`advance` and `Simulation::step_pipeline` stop at a trip). Each condition is a
+    // resource fetch and a run every step, so there are no more of them than that.
+    app.configure_sets(
+        SimStep,
+        (
+            (Stage::Physics, GuardCheck::States).in_set(GuardSegment::AfterForces),
+            (Stage::Monitor, GuardCheck::Outputs).in_set(GuardSegment::AfterStates),
+            Stage::Record.in_set(GuardSegment::AfterOutputs),
+        ),
+    );
+    for segment in [
+        GuardSegment::AfterForces,
+        GuardSegment::AfterStates,
+        GuardSegment::AfterOutputs,
+    ] {
+        app.configure_sets(SimStep, segment.run_if(clear));
     }
     app.add_systems(
         SimStep,
