@@ -1284,9 +1284,9 @@ pub fn closest_parts(
 pub fn closest_parts_pruned(
     geo: &MonitorGeometry,
     i: usize,
-    pi: &[(Isometry3<f64>, f64)],
+    pi: &LazyPoses,
     j: usize,
-    pj: &[(Isometry3<f64>, f64)],
+    pj: &LazyPoses,
     warm: Option<(usize, usize)>,
     candidates: &mut Vec<(f64, usize, usize)>,
     evaluated: &mut Vec<Evaluated>,
@@ -1581,12 +1581,12 @@ pub type Evaluated = (f64, f64, usize, usize);
 /// to the certified bound of a pair that a hull cleared. The certified lower bound of the
 /// closest pair, with `certify`, is [`certified_lower`]'s.
 #[allow(clippy::too_many_arguments)]
-fn closest_parts_inner(
+fn closest_parts_inner<P: PoseSource + ?Sized>(
     geo: &MonitorGeometry,
     i: usize,
-    pi: &[(Isometry3<f64>, f64)],
+    pi: &P,
     j: usize,
-    pj: &[(Isometry3<f64>, f64)],
+    pj: &P,
     keep: &dyn Fn(usize, usize) -> bool,
     warm: Option<(usize, usize)>,
     certify: bool,
@@ -1596,7 +1596,7 @@ fn closest_parts_inner(
     lows: &mut Option<&mut Vec<f64>>,
     mut prune: Option<(&mut SpherePrune, [BodyPose; 2])>,
 ) -> PartPairHit {
-    let nj = pj.len();
+    let (ni, nj) = (pi.count(), pj.count());
     if let Some(l) = lows.as_deref_mut() {
         sphere_lows(pi, pj, l);
     }
@@ -1606,8 +1606,9 @@ fn closest_parts_inner(
             ls[a * nj + b] = ls[a * nj + b].max(l);
         }
     };
-    let query =
-        |a: usize, b: usize, clear_at: f64| pair_eval(geo, i, a, &pi[a], j, b, &pj[b], clear_at);
+    let query = |a: usize, b: usize, clear_at: f64| {
+        pair_eval(geo, i, a, pi.at(a), j, b, pj.at(b), clear_at)
+    };
     let warm = warm.filter(|(a, b)| keep(*a, *b));
     evaluated.clear();
     let (mut best, mut ba, mut bb) = (f64::INFINITY, 0, 0);
@@ -1624,13 +1625,14 @@ fn closest_parts_inner(
     candidates.clear();
     // The bounding-sphere gap of part pair (a, b), m.
     let gap = |a: usize, b: usize| {
-        (pi[a].0.translation.vector - pj[b].0.translation.vector).norm() - pi[a].1 - pj[b].1
+        let (pa, pb) = (pi.at(a), pj.at(b));
+        (pa.0.translation.vector - pb.0.translation.vector).norm() - pa.1 - pb.1
     };
     // The gaps carried from the reference step, where their bound holds (`sphere_prune`).
     let walked = prune.as_mut().is_some_and(|(p, now)| {
         p.walk(
             now,
-            (pi.len(), nj),
+            (ni, nj),
             best,
             warm,
             gap,
@@ -1644,7 +1646,7 @@ fn closest_parts_inner(
             .as_mut()
             .filter(|(p, _)| p.wants_reference())
             .map(|(p, _)| p.gaps_buffer());
-        for a in 0..pi.len() {
+        for a in 0..ni {
             for b in 0..nj {
                 if !keep(a, b) {
                     continue;
@@ -1752,10 +1754,12 @@ impl Eq for NearestFirst {}
 
 /// Every part pair's bounding-sphere gap |c_a − c_b| − r_a − r_b, m, into `l` (cleared first),
 /// row-major: part a of `pi` by part b of `pj` (world poses and bounding radii, m).
-fn sphere_lows(pi: &[(Isometry3<f64>, f64)], pj: &[(Isometry3<f64>, f64)], l: &mut Vec<f64>) {
+fn sphere_lows<P: PoseSource + ?Sized>(pi: &P, pj: &P, l: &mut Vec<f64>) {
     l.clear();
-    for (pa, ra) in pi {
-        for (pb, rb) in pj {
+    for a in 0..pi.count() {
+        let (pa, ra) = pi.at(a);
+        for b in 0..pj.count() {
+            let (pb, rb) = pj.at(b);
             l.push((pa.translation.vector - pb.translation.vector).norm() - ra - rb);
         }
     }
@@ -1767,10 +1771,10 @@ fn sphere_lows(pi: &[(Isometry3<f64>, f64)], pj: &[(Isometry3<f64>, f64)], l: &m
 /// f32 tolerances could be below it (see [`closest_parts`]). A pair's certified bound is the
 /// one its evaluation gave (mesh pairs), else its [`shape_bracket`]'s lower bound (one more
 /// exact query in `count`).
-fn certified_lower(
+fn certified_lower<P: PoseSource + ?Sized>(
     geo: &MonitorGeometry,
-    (i, pi): (usize, &[(Isometry3<f64>, f64)]),
-    (j, pj): (usize, &[(Isometry3<f64>, f64)]),
+    (i, pi): (usize, &P),
+    (j, pj): (usize, &P),
     evaluated: &[Evaluated],
     (ba, bb): (usize, usize),
     count: &mut QueryCount,
@@ -1781,10 +1785,8 @@ fn certified_lower(
     let mut certified = |e: &Evaluated| {
         if e.1.is_nan() {
             count.exact += 1;
-            shape_bracket(
-                &pi[e.2].0, &*si[e.2], pi[e.2].1, &pj[e.3].0, &*sj[e.3], pj[e.3].1,
-            )
-            .lower
+            let (pa, pb) = (pi.at(e.2), pj.at(e.3));
+            shape_bracket(&pa.0, &*si[e.2], pa.1, &pb.0, &*sj[e.3], pb.1).lower
         } else {
             e.1
         }
@@ -1798,8 +1800,8 @@ fn certified_lower(
         if (a, b) == (ba, bb) {
             continue;
         }
-        let scale =
-            (pi[a].0.translation.vector - pj[b].0.translation.vector).norm() + pi[a].1 + pj[b].1;
+        let (pa, pb) = (pi.at(a), pj.at(b));
+        let scale = (pa.0.translation.vector - pb.0.translation.vector).norm() + pa.1 + pb.1;
         let loose = d * (1.0 - GJK_REL_TOL) - F32_REL_TOL * scale;
         if loose < lower {
             lower = lower.min(certified(e));
@@ -1810,6 +1812,67 @@ fn certified_lower(
 
 /// World poses and bounding radii of one body's parts.
 pub type PartPoses = Vec<(Isometry3<f64>, f64)>;
+
+/// A body's part poses (world pose and bounding radius of each part), as the closest-parts
+/// search reads them: all computed ([`PartPoses`]), or computed on first use ([`LazyPoses`]).
+pub trait PoseSource {
+    /// Parts.
+    fn count(&self) -> usize;
+    /// Part `a`'s world pose and bounding radius.
+    fn at(&self, a: usize) -> &(Isometry3<f64>, f64);
+}
+
+impl PoseSource for [(Isometry3<f64>, f64)] {
+    fn count(&self) -> usize {
+        self.len()
+    }
+    fn at(&self, a: usize) -> &(Isometry3<f64>, f64) {
+        &self[a]
+    }
+}
+
+/// One body's part poses for one step, each computed when first read, as
+/// [`MonitorGeometry::part_poses`] computes it (the same expression: bit for bit the same
+/// pose). The closest-parts search of a tracked pair reads a handful of a winged body's parts
+/// a step once the bounding-sphere gaps are carried ([`sphere_prune`]).
+pub struct LazyPoses<'a> {
+    /// Body frame's world pose (its origin, not its centre of mass).
+    body: Isometry3<f64>,
+    /// Parts' poses in the body frame.
+    pose_body: &'a [Isometry3<f64>],
+    /// Parts' bounding radii, m.
+    radius: &'a [f64],
+    /// The poses computed so far this step.
+    cells: &'a [std::cell::OnceCell<(Isometry3<f64>, f64)>],
+}
+
+impl<'a> LazyPoses<'a> {
+    /// Body `b` of `geo` with its centre of mass at `pos` and attitude `att`, its poses kept in
+    /// `cells` (emptied by the caller at each new step; one per part).
+    pub fn new(
+        geo: &'a MonitorGeometry,
+        b: usize,
+        (pos, att): (&Vector3<f64>, &UnitQuaternion<f64>),
+        cells: &'a [std::cell::OnceCell<(Isometry3<f64>, f64)>],
+    ) -> Self {
+        let origin = pos - att * geo.com_body_m[b];
+        Self {
+            body: Isometry3::from_parts(origin.into(), *att),
+            pose_body: &geo.pose_body[b],
+            radius: &geo.radius[b],
+            cells,
+        }
+    }
+}
+
+impl PoseSource for LazyPoses<'_> {
+    fn count(&self) -> usize {
+        self.cells.len()
+    }
+    fn at(&self, a: usize) -> &(Isometry3<f64>, f64) {
+        self.cells[a].get_or_init(|| (self.body * self.pose_body[a], self.radius[a]))
+    }
+}
 
 /// (body, part) of each side of a contact pair.
 type ContactSides = ((usize, usize), (usize, usize));
@@ -1831,6 +1894,9 @@ pub struct DistanceScratch {
     rates: Vec<PairRate>,
     /// The tracked pairs' carried bounding-sphere gaps, by pair slot ([`sphere_prune`]).
     prune: Vec<SpherePrune>,
+    /// Per body: its part poses computed on first use this step ([`LazyPoses`]), and the step
+    /// they are for.
+    lazy: Vec<(u64, Vec<std::cell::OnceCell<(Isometry3<f64>, f64)>>)>,
 }
 
 /// A sample of the per-part search ([`search_parts`]): the value (with its certified lower
@@ -1973,7 +2039,7 @@ pub fn search_parts(
             let [ti, tj] = &mut sc.tmp;
             geo.part_poses(i, &pose_i.0, &pose_i.1, ti);
             geo.part_poses(j, &pose_j.0, &pose_j.1, tj);
-            sphere_lows(ti, tj, &mut lows);
+            sphere_lows(&ti[..], &tj[..], &mut lows);
             memo_lows(geo, (i, j), &sc.tmp, &mut lows);
             let floor = g.lower + offset;
             for l in lows.iter_mut() {
@@ -2096,7 +2162,7 @@ pub fn parts_stay_above(
         geo.part_poses(i, &pose_i.0, &pose_i.1, ti);
         geo.part_poses(j, &pose_j.0, &pose_j.1, tj);
         let mut lows = Vec::new();
-        sphere_lows(ti, tj, &mut lows);
+        sphere_lows(&ti[..], &tj[..], &mut lows);
         let mut slabs = Vec::new();
         if let Some(b) = &slab {
             b.gaps(geo, (i, j), &pose_i, &pose_j, &mut slabs);
@@ -2318,6 +2384,9 @@ pub fn distances(
     tracked::refresh_views(mon, &roster, &bodies);
     if sc.poses.len() != n {
         sc.poses = vec![(u64::MAX, Vec::new()); n];
+    }
+    if sc.lazy.len() != n {
+        sc.lazy = (0..n).map(|_| (u64::MAX, Vec::new())).collect();
     }
     let step = clock.step;
     let s = tracked::Step {

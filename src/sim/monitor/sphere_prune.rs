@@ -41,8 +41,8 @@
 //! loop's; non-finite poses and changed part counts); every golden output byte-identical
 //! (`tests/golden.rs`, with the monitor's counters).
 
-use super::BodyPose;
-use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+use super::{BodyPose, PoseSource};
+use nalgebra::{UnitQuaternion, Vector3};
 
 /// Pairs of smallest gap kept with their gaps at the reference.
 pub const HEAD: usize = 32;
@@ -161,19 +161,15 @@ impl SpherePrune {
     /// A new reference from the plain loop's gaps (in [`Self::gaps_buffer`], every pair of
     /// the `ni` × `nj` parts) at the poses `now` and part poses `pi`, `pj` (world, with
     /// bounding radii).
-    pub fn retake(
-        &mut self,
-        now: &[BodyPose; 2],
-        pi: &[(Isometry3<f64>, f64)],
-        pj: &[(Isometry3<f64>, f64)],
-    ) {
-        let (ni, nj) = (pi.len(), pj.len());
+    pub fn retake<P: PoseSource + ?Sized>(&mut self, now: &[BodyPose; 2], pi: &P, pj: &P) {
+        let (ni, nj) = (pi.count(), pj.count());
         if self.all.len() != ni * nj {
             self.n = (0, 0);
             return;
         }
-        let reach = |x: &Vector3<f64>, parts: &[(Isometry3<f64>, f64)]| {
-            parts.iter().fold((0.0f64, 0.0f64), |(rho, r), (p, rp)| {
+        let reach = |x: &Vector3<f64>, parts: &P| {
+            (0..parts.count()).fold((0.0f64, 0.0f64), |(rho, r), a| {
+                let (p, rp) = parts.at(a);
                 (rho.max((p.translation.vector - x).norm()), r.max(*rp))
             })
         };
@@ -216,7 +212,7 @@ mod tests {
     //! poses at each step (the plain loop of `closest_parts`), against which the bound D and
     //! the walk's candidates and pruned count are checked, step by step.
     use super::*;
-    use nalgebra::Translation3;
+    use nalgebra::{Isometry3, Translation3};
 
     /// A small deterministic generator (64-bit LCG), uniform in [0, 1).
     struct Lcg(u64);
@@ -349,7 +345,7 @@ mod tests {
                             buf.push((gap(&pi, &pj, a, b), a, b));
                         }
                     }
-                    sp.retake(&now, &pi, &pj);
+                    sp.retake(&now, &pi[..], &pj[..]);
                     reference = Some(
                         (0..ni * nj)
                             .map(|k| gap(&pi, &pj, k / nj, k % nj))
@@ -428,7 +424,7 @@ mod tests {
                 buf.push((g(a, b), a, b));
             }
         }
-        sp.retake(&ok, &pi, &pj);
+        sp.retake(&ok, &pi[..], &pj[..]);
         assert!(sp.walk(&ok, (5, 4), 10.0, None, g, &mut c, &mut pruned));
         assert_eq!(pruned, 20);
         for bad in [f64::NAN, f64::INFINITY, 1e308] {
@@ -446,14 +442,14 @@ mod tests {
                     buf.push((g(a, b), a, b));
                 }
             }
-            sp.retake(&ok, &pi, &pj);
+            sp.retake(&ok, &pi[..], &pj[..]);
         }
         // A body with another number of parts: no walk, and the next plain loop retakes.
         assert!(!sp.walk(&ok, (5, 3), 10.0, None, g, &mut c, &mut pruned));
         assert!(sp.wants_reference());
         // Too few gaps for the part counts: no reference is taken.
         sp.gaps_buffer().push((1.0, 0, 0));
-        sp.retake(&ok, &pi, &pj);
+        sp.retake(&ok, &pi[..], &pj[..]);
         assert!(!sp.walk(&ok, (5, 4), 10.0, None, g, &mut c, &mut pruned));
     }
 }

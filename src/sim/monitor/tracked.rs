@@ -9,9 +9,9 @@ use super::super::broadphase::BroadPhase;
 use super::super::motion::StepMotion;
 use super::super::{BodyState, MonitorState, NamedPairs, PairMin, Roster, SimBody};
 use super::{
-    DistanceScratch, MAX_MIN_EVALS, MonitorGeometry, PER_PART_MIN_GAIN, PartPairHit, QueryCount,
-    closest_parts, closest_parts_pruned, min_distance_tolerance_m, pair_at, pair_rate_gain,
-    sample_tolerance_m, search_parts,
+    DistanceScratch, LazyPoses, MAX_MIN_EVALS, MonitorGeometry, PER_PART_MIN_GAIN, PartPairHit,
+    QueryCount, closest_parts, closest_parts_pruned, min_distance_tolerance_m, pair_at,
+    pair_rate_gain, sample_tolerance_m, search_parts,
 };
 use crate::geometry::bounds::{
     Bracket, MinSearch, interval_lower_bound, minimize, provable_tolerance,
@@ -130,6 +130,23 @@ fn ensure_part_poses(s: &Step, views: &[BodyView], b: usize, sc: &mut DistanceSc
     }
 }
 
+/// Body b's part poses for this step computed on first use (`sc.lazy[b]`, emptied at each new
+/// step).
+fn ensure_lazy_poses(s: &Step, b: usize, sc: &mut DistanceScratch) {
+    let n = s.geo.pose_body[b].len();
+    let (stamp, cells) = &mut sc.lazy[b];
+    if *stamp != s.step || cells.len() != n {
+        if cells.len() == n {
+            cells.iter_mut().for_each(|c| {
+                c.take();
+            });
+        } else {
+            *cells = (0..n).map(|_| std::cell::OnceCell::new()).collect();
+        }
+        *stamp = s.step;
+    }
+}
+
 /// One tracked pair (i, j) in slot k: its sample now (the distance with its certified lower
 /// bound, the closest parts, and the clearance of the parts other than two docking parts, when
 /// two docking parts are the closest), its closest approach over the run judged on
@@ -144,7 +161,7 @@ pub(super) fn track_pair(
 ) {
     let (geo, t) = (s.geo, s.t);
     for b in [i, j] {
-        ensure_part_poses(s, &mon.bodies, b, sc);
+        ensure_lazy_poses(s, b, sc);
     }
     let prev = mon.pairs[k].clone();
     let fresh_prev = prev.t_s.is_finite();
@@ -152,22 +169,29 @@ pub(super) fn track_pair(
     if sc.prune.len() <= k {
         sc.prune.resize_with(k + 1, Default::default);
     }
-    let (pi, pj) = (&sc.poses[i].1, &sc.poses[j].1);
     let (vi, vj) = (&mon.bodies[i], &mon.bodies[j]);
-    let hit = closest_parts_pruned(
-        geo,
-        i,
-        pi,
-        j,
-        pj,
-        warm,
-        &mut sc.candidates,
-        &mut sc.evaluated,
-        count,
-        (&mut sc.prune[k], [(vi.pos_m, vi.att), (vj.pos_m, vj.att)]),
-    );
+    let hit = {
+        let li = LazyPoses::new(geo, i, (&vi.pos_m, &vi.att), &sc.lazy[i].1);
+        let lj = LazyPoses::new(geo, j, (&vj.pos_m, &vj.att), &sc.lazy[j].1);
+        closest_parts_pruned(
+            geo,
+            i,
+            &li,
+            j,
+            &lj,
+            warm,
+            &mut sc.candidates,
+            &mut sc.evaluated,
+            count,
+            (&mut sc.prune[k], [(vi.pos_m, vi.att), (vj.pos_m, vj.att)]),
+        )
+    };
     let (dock_i, dock_j) = (&geo.docking[i], &geo.docking[j]);
     let clearance = if geo.has_docking[i] && geo.has_docking[j] && dock_i[hit.a] && dock_j[hit.b] {
+        for b in [i, j] {
+            ensure_part_poses(s, &mon.bodies, b, sc);
+        }
+        let (pi, pj) = (&sc.poses[i].1, &sc.poses[j].1);
         closest_parts(
             geo,
             i,
