@@ -1426,7 +1426,8 @@ pub fn pair_eval(
     let settled = |lower: f64, upper: f64| lower >= upper * (1.0 - GJK_REL_TOL) - eps;
     // The pair's last exact evaluation, advanced to this pose (a certified bracket, `memo`).
     let key = (i, a, j, b);
-    if let Some(e) = geo.memo.get(key) {
+    // (Read in place: the kept evaluation is not copied out of the memo.)
+    let memo_answer = geo.memo.with(key, |e| {
         // The radii's bound first (cheap), then the turn's axis (tighter for a part rolling
         // about its own axis) only if that does not settle the pair.
         //
@@ -1465,16 +1466,18 @@ pub fn pair_eval(
         let rel_inv = rel.inverse();
         let quick = e.advance_quick((&rel, &rel_inv), pa.1, pb.1);
         if let Some(answer) = decide(quick) {
-            return answer;
+            return Some(answer);
         }
         // The axis bound only where it could decide: every decision asks for a lower bound at
         // least some level, and no turn at all would give the highest it can
         // (`advance_unturned`); where even that decides nothing, the axis bound would not.
-        if decide(e.advance_unturned((&rel, &rel_inv), pa.1, pb.1)).is_some()
-            && let Some(answer) = decide(e.advance_parts((&rel, &rel_inv), (sa, pa.1), (sb, pb.1)))
-        {
-            return answer;
+        if decide(e.advance_unturned((&rel, &rel_inv), pa.1, pb.1)).is_some() {
+            return decide(e.advance_parts((&rel, &rel_inv), (sa, pa.1), (sb, pb.1)));
         }
+        None
+    });
+    if let Some(answer) = memo_answer.flatten() {
+        return answer;
     }
     if ha.is_none() && hb.is_none() {
         // Two parts with support maps: parry's query with its witnesses and the certified gap

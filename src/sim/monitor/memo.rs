@@ -318,6 +318,12 @@ impl PairMemo {
         self.0.lock().ok()?.get(&key).copied()
     }
 
+    /// `f` applied to the kept evaluation of a pair, if any, read in place (no copy of it; the
+    /// memo is locked while `f` runs, so `f` must not use the memo).
+    pub fn with<R>(&self, key: PairKey, f: impl FnOnce(&ExactEval) -> R) -> Option<R> {
+        self.0.lock().ok()?.get(&key).map(f)
+    }
+
     /// Keeps (or replaces) a pair's evaluation; a new pair is not kept once
     /// [`PAIR_MEMO_MAX_PAIRS`] are.
     pub fn put(&self, key: PairKey, e: ExactEval) {
