@@ -17,6 +17,7 @@ bsk`, then `VENV/bin/python benches/basilisk_free_drift.py [--steps N] [--rpod P
 import argparse
 import math
 import re
+import statistics
 import subprocess
 import sys
 import time
@@ -95,6 +96,10 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=20000)
     ap.add_argument("--rpod", default="target/release/rpod")
+    ap.add_argument("--rounds", type=int, default=5,
+                    help="free_drift: rounds of (Basilisk, rpod) measured one after the other; "
+                         "each round's ratio is printed, then their median (a shared machine's "
+                         "speed drifts between runs: a ratio is only taken within a round)")
     ap.add_argument("--flagship", action="store_true",
                     help="instead: the whole flagship (2 700 s) against Basilisk propagating "
                          "the two spacecraft for 2 700 s at 0.1 s (the flagship's speed goal)")
@@ -110,14 +115,22 @@ def main():
         print(f"Basilisk, 2 spacecraft, two-body + J2, RK4, 27000 steps of 0.1 s: {27000 / bsk:.2f} s wall")
         print(f"rpod MultiRate / Basilisk wall = {multi / (27000 / bsk):.2f} (goal ≤ 1)")
         return 0
-    bsk = basilisk_steps_per_s(a.steps, 0.01)
-    ours, report = rpod_steps_per_s(a.rpod, a.steps)
-    print(report.rstrip())
-    if bsk is None:
-        print("Basilisk not installed (pip install bsk in a venv): skipped")
-        return 0
-    print(f"Basilisk      {bsk:9.0f} steps/s  {1e6 / bsk:7.2f} µs/step  (2 spacecraft, two-body + J2, RK4)")
-    print(f"rpod / Basilisk = {ours / bsk:.2f} (steps/s)")
+    ratios = []
+    for k in range(max(1, a.rounds)):
+        bsk = basilisk_steps_per_s(a.steps, 0.01)
+        ours, report = rpod_steps_per_s(a.rpod, a.steps)
+        if k == 0 or bsk is None:
+            print(report.rstrip())
+        if bsk is None:
+            print("Basilisk not installed (pip install bsk in a venv): skipped")
+            return 0
+        ratios.append(ours / bsk)
+        print(f"round {k + 1}: rpod {ours:9.0f} steps/s, Basilisk {bsk:9.0f} steps/s "
+              f"({1e6 / bsk:.2f} µs/step; 2 spacecraft, two-body + J2, RK4): "
+              f"rpod / Basilisk = {ours / bsk:.2f}")
+    ratios.sort()
+    print(f"rpod / Basilisk = {statistics.median(ratios):.2f} (steps/s, median of {len(ratios)} "
+          f"rounds; {ratios[0]:.2f}-{ratios[-1]:.2f})")
     return 0
 
 

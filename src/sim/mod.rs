@@ -563,7 +563,10 @@ impl guarantee_bounds::MotionBounds for motion::StepMotion {
 /// The step's motion bounds with the bound on the Hill frame's rate (orbit scenes).
 struct FrameMotion<'a> {
     motion: &'a motion::StepMotion,
-    hill_rate_rad_s: Option<f64>,
+    /// The reference orbit, for the Hill frame's rate bound (computed on first use, once a
+    /// step: most guarantees never ask for it).
+    orbit: Option<&'a OrbitEnv>,
+    hill_rate_rad_s: std::cell::OnceCell<Option<f64>>,
     /// Set when a bound that rests on the bodies' rotation was read (an angular-speed bound,
     /// or a full-geometry distance rate): in a step that turns a body by more than
     /// [`motion::UNDER_RESOLVED_TURN_RAD`] such a bound is not proven.
@@ -595,7 +598,13 @@ impl guarantee_bounds::MotionBounds for FrameMotion<'_> {
         self.motion.distance_rate_bound(i, j)
     }
     fn hill_rate_bound_rad_s(&self) -> Option<f64> {
-        self.hill_rate_rad_s
+        *self.hill_rate_rad_s.get_or_init(|| {
+            self.orbit.and_then(|o| {
+                let (r, v) = o.reference.state();
+                let g = o.reference.gravity();
+                crate::orbit::lvlh::hill_rate_bound_rad_s(&r, &v, self.motion.dt_s, g)
+            })
+        })
     }
 }
 
@@ -1427,8 +1436,9 @@ fn judge_at_sample(
 struct IntervalCase<'g> {
     /// The guarantee.
     inv: &'g dyn Guarantee,
-    /// What its margin reads (the pairs evaluated at τ into the step).
-    reads: crate::guarantee::Reads,
+    /// What its margin reads (the pairs evaluated at τ into the step), asked of the guarantee
+    /// only when a margin inside the step is evaluated ([`IntervalCase::reads`]).
+    reads: std::cell::OnceCell<crate::guarantee::Reads>,
     /// Its margin at t₀: the last sample's, or re-evaluated under this step's inputs if it
     /// reads them ([`Guarantee::step_inputs`]).
     m0: crate::geometry::bounds::Bracket,
@@ -1438,6 +1448,13 @@ struct IntervalCase<'g> {
     rate: f64,
     /// The rate bound rests on a rotation the step under-resolves (it cannot be held).
     rotation_unproven: bool,
+}
+
+impl IntervalCase<'_> {
+    /// What the margin reads ([`Guarantee::reads`], asked once).
+    fn reads(&self) -> &crate::guarantee::Reads {
+        self.reads.get_or_init(|| self.inv.reads())
+    }
 }
 
 /// What the guarantees are judged on over the step [t₀, t] (t₀ = t − dt): the monitor's sample
@@ -1553,9 +1570,9 @@ impl StepJudge<'_> {
         rate: f64,
         rotation_unproven: bool,
     ) -> IntervalCase<'g> {
-        let reads = inv.reads();
+        let reads = std::cell::OnceCell::new();
         let m0 = if inv.step_inputs() {
-            self.margin_at(inv, &reads, 0.0)
+            self.margin_at(inv, reads.get_or_init(|| inv.reads()), 0.0)
         } else {
             last
         };
@@ -1629,7 +1646,7 @@ impl StepJudge<'_> {
                 thr,
                 budget,
                 dt * 1e-9,
-                |tau| self.margin_at(c.inv, &c.reads, tau),
+                |tau| self.margin_at(c.inv, c.reads(), tau),
             ),
         };
         if c.rotation_unproven {
@@ -1732,7 +1749,7 @@ impl StepJudge<'_> {
             // Violated from the step's start (the step's inputs changed there).
             finding.first_violation_s = Some((t0, t0));
         }
-        let mut eval = |tau: f64| self.margin_at(c.inv, &c.reads, tau);
+        let mut eval = |tau: f64| self.margin_at(c.inv, c.reads(), tau);
         if m0.value >= 0.0 && went_negative {
             let cr = first_below(dt, m0, m1, rate, 0.0, t_tol, MAX_CROSSING_EVALS, &mut eval);
             finding.first_violation_s = match cr {
@@ -1779,7 +1796,7 @@ impl StepJudge<'_> {
             // The detail where the new state is known to hold: the end of the time bracket.
             // (Its queries are not counted: the counts report the judgement's cost.)
             let tau = (ch.t_s + ch.t_tol_s - t0).clamp(0.0, dt);
-            self.fill(&c.reads, tau, false);
+            self.fill(c.reads(), tau, false);
             if let Some(d) = c.inv.detail(&self.view_at(tau)) {
                 e["detail"] = d;
             }
@@ -1847,10 +1864,8 @@ fn check_guarantees(
     };
     let frame_motion = FrameMotion {
         motion: &motion,
-        hill_rate_rad_s: orbit.and_then(|o| {
-            let (r, v) = o.reference.state();
-            crate::orbit::lvlh::hill_rate_bound_rad_s(&r, &v, motion.dt_s, o.reference.gravity())
-        }),
+        orbit,
+        hill_rate_rad_s: std::cell::OnceCell::new(),
         rotation_read: std::cell::Cell::new(false),
     };
     let g = &mut *g;
