@@ -1897,6 +1897,8 @@ pub struct DistanceScratch {
     rates: Vec<PairRate>,
     /// The tracked pairs' carried bounding-sphere gaps, by pair slot ([`sphere_prune`]).
     prune: Vec<SpherePrune>,
+    /// The tracked pairs of the step (kept for its allocation).
+    pairs: Vec<(usize, usize)>,
     /// Per body: its part poses computed on first use this step ([`LazyPoses`]), and the step
     /// they are for.
     lazy: Vec<(u64, Vec<std::cell::OnceCell<(Isometry3<f64>, f64)>>)>,
@@ -2399,10 +2401,13 @@ pub fn distances(
         step,
     };
     let mut count = QueryCount::default();
-    for (i, j) in tracked::tracked_pairs(&bp, &named, n) {
+    let mut pairs = std::mem::take(&mut sc.pairs);
+    tracked::tracked_pairs(&bp, &named, n, &mut pairs);
+    for &(i, j) in &pairs {
         let k = tracked::pair_slot(mon, (i, j), t);
         tracked::track_pair(&s, mon, sc, &mut count, (i, j), k);
     }
+    sc.pairs = pairs;
     tracked::closest_tracked(mon, t);
     let row_due = step.is_multiple_of(u64::from(every.0.max(1))) || every.1;
     if !bp.all_pairs && row_due {

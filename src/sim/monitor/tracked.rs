@@ -66,25 +66,28 @@ pub(super) fn refresh_views(
     }
 }
 
-/// The pairs (i < j) tracked this step, sorted: every pair of the `n` bodies when all are
-/// tracked; else the broad phase's near pairs whose bounding spheres are within the horizon,
-/// and the pairs a guarantee names.
-pub(super) fn tracked_pairs(bp: &BroadPhase, named: &NamedPairs, n: usize) -> Vec<(usize, usize)> {
+/// The pairs (i < j) tracked this step, sorted, into `v` (its allocation reused): every pair of
+/// the `n` bodies when all are tracked; else the broad phase's near pairs whose bounding
+/// spheres are within the horizon, and the pairs a guarantee names.
+pub(super) fn tracked_pairs(
+    bp: &BroadPhase,
+    named: &NamedPairs,
+    n: usize,
+    v: &mut Vec<(usize, usize)>,
+) {
+    v.clear();
     if bp.all_pairs {
-        (0..n)
-            .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
-            .collect()
+        v.extend((0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))));
     } else {
-        let mut v: Vec<(usize, usize)> = bp
-            .near
-            .iter()
-            .copied()
-            .filter(|(i, j)| bp.sphere_gap(*i, *j) <= bp.horizon_m)
-            .collect();
+        v.extend(
+            bp.near
+                .iter()
+                .copied()
+                .filter(|(i, j)| bp.sphere_gap(*i, *j) <= bp.horizon_m),
+        );
         v.extend(named.0.iter().copied());
         v.sort_unstable();
         v.dedup();
-        v
     }
 }
 
