@@ -1280,7 +1280,7 @@ pub struct MonitorState {
     /// Part pairs skipped by bounding-sphere pruning over the run.
     pub pruned_pairs: u64,
     /// Position of each tracked body pair (i < j) in `pairs`.
-    pub pair_index: std::collections::HashMap<(usize, usize), usize>,
+    pub pair_index: std::collections::HashMap<(usize, usize), usize, monitor::memo::KeyHash>,
     /// The closest pair at the last step (tracked or not).
     pub closest: Option<PairDistance>,
     /// The closest approach of any pair over the run (to the tolerance of

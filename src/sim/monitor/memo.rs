@@ -297,8 +297,9 @@ impl std::hash::Hasher for KeyHasher {
     }
 }
 
-/// [`KeyHasher`] as a `HashMap`'s hasher.
-type KeyHash = std::hash::BuildHasherDefault<KeyHasher>;
+/// [`KeyHasher`] as a `HashMap`'s hasher (also the monitor's pair index,
+/// [`crate::sim::MonitorState::pair_index`]: small integer keys, looked up a few times a step).
+pub type KeyHash = std::hash::BuildHasherDefault<KeyHasher>;
 
 impl Clone for PairMemo {
     fn clone(&self) -> Self {
