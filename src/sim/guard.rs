@@ -19,8 +19,9 @@
 //! 10¹⁵ N no thruster; no physical scene comes near it, while rapier's f32 arithmetic squares
 //! values (a 10¹⁹ number squared overflows f32), so anything past it is already meaningless.
 //!
-//! After a trip no stage runs any more (each has a run condition), so nothing of the bad step
-//! reaches the recorder; the run stops at once. `rpod run` then exits with code 3, leaves the
+//! After a trip no stage runs any more (each stretch of the step after a check has a run
+//! condition, and the runners of `SimStep` stop at a trip), so nothing of the bad step reaches
+//! the recorder; the run stops at once. `rpod run` then exits with code 3, leaves the
 //! rows recorded up to the last good step as `*.partial` files and writes no `summary.json`
 //! (nothing looks like a whole run); `rpod trials` records the trial's outcome as
 //! `NUMERIC_FAILURE` with the trip as its reason.
