@@ -712,8 +712,13 @@ fn prepare_motion(p: &mut PhysicsStep, sc: &mut PhysicsScratch) {
         }
     }
     p.motion.paths.clear();
-    p.motion.free_before.clear();
-    p.motion.free_before.resize(n, None);
+    // Every body's entry None (in place when the length is right: no copy of a `None` path).
+    if p.motion.free_before.len() == n {
+        p.motion.free_before.iter_mut().for_each(|f| *f = None);
+    } else {
+        p.motion.free_before.clear();
+        p.motion.free_before.resize(n, None);
+    }
 }
 
 /// Hands every body's wrench to rapier (used if it steps).
