@@ -134,11 +134,11 @@ pub enum GuardCheck {
 #[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
 enum GuardSegment {
     /// After the force check: Physics, then the state check.
-    AfterForces,
+    Physics,
     /// After the state check: Monitor, then the output check.
-    AfterStates,
+    Monitor,
     /// After the output check: Record.
-    AfterOutputs,
+    Record,
 }
 
 fn clear(g: Res<Guard>) -> bool {
@@ -202,15 +202,15 @@ fn install(app: &mut App) {
     app.configure_sets(
         SimStep,
         (
-            (Stage::Physics, GuardCheck::States).in_set(GuardSegment::AfterForces),
-            (Stage::Monitor, GuardCheck::Outputs).in_set(GuardSegment::AfterStates),
-            Stage::Record.in_set(GuardSegment::AfterOutputs),
+            (Stage::Physics, GuardCheck::States).in_set(GuardSegment::Physics),
+            (Stage::Monitor, GuardCheck::Outputs).in_set(GuardSegment::Monitor),
+            Stage::Record.in_set(GuardSegment::Record),
         ),
     );
     for segment in [
-        GuardSegment::AfterForces,
-        GuardSegment::AfterStates,
-        GuardSegment::AfterOutputs,
+        GuardSegment::Physics,
+        GuardSegment::Monitor,
+        GuardSegment::Record,
     ] {
         app.configure_sets(SimStep, segment.run_if(clear));
     }

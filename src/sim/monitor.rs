@@ -1834,6 +1834,9 @@ impl PoseSource for [(Isometry3<f64>, f64)] {
     }
 }
 
+/// A body's part poses for one step, each set when first read ([`LazyPoses`]).
+pub type LazyCells = Vec<std::cell::OnceCell<(Isometry3<f64>, f64)>>;
+
 /// One body's part poses for one step, each computed when first read, as
 /// [`MonitorGeometry::part_poses`] computes it (the same expression: bit for bit the same
 /// pose). The closest-parts search of a tracked pair reads a handful of a winged body's parts
@@ -1901,7 +1904,7 @@ pub struct DistanceScratch {
     pairs: Vec<(usize, usize)>,
     /// Per body: its part poses computed on first use this step ([`LazyPoses`]), and the step
     /// they are for.
-    lazy: Vec<(u64, Vec<std::cell::OnceCell<(Isometry3<f64>, f64)>>)>,
+    lazy: Vec<(u64, LazyCells)>,
 }
 
 /// A sample of the per-part search ([`search_parts`]): the value (with its certified lower

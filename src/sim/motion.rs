@@ -403,8 +403,10 @@ pub fn rel_speed(a: &BodyPath, b: &BodyPath) -> f64 {
     let ends = [0.0, a.t_split, a.dt, 0.0, b.t_split, b.dt];
     // (Exactly where `vel_at`'s two sides differ: a free piece, at its end, not followed by
     // `rest <= 0`.)
-    let turns =
-        |p: &BodyPath, t: f64| t == p.t_split && p.free.is_some() && !(p.dt - p.t_split <= 0.0);
+    let turns = |p: &BodyPath, t: f64| {
+        let rest = p.dt - p.t_split;
+        t == p.t_split && p.free.is_some() && (rest > 0.0 || rest.is_nan())
+    };
     for (k, t) in ends.iter().enumerate() {
         if ends[..k].contains(t) {
             continue;
@@ -588,8 +590,8 @@ pub fn omega_bound_euler(lam: [f64; 3], l0: f64, two_e0: f64, torque: f64, dt: f
         [at(0), at(1), at(2)]
     };
     // One axis: u_p within both slabs.
-    for p in 0..3 {
-        let hi = (l2_hi / (lam[p] * lam[p])).min(e_hi / lam[p]);
+    for (p, &l) in lam.iter().enumerate() {
+        let hi = (l2_hi / (l * l)).min(e_hi / l);
         let u = point(p, hi, p, hi);
         if feasible(&u) {
             best = best.max(hi);

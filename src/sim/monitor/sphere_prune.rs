@@ -97,6 +97,7 @@ impl SpherePrune {
     /// `gap(a, b)` is the plain loop's gap. False (nothing pushed or counted) when the bound
     /// does not clear the pairs outside the head, or there is no reference: then the caller
     /// runs the plain loop and hands its gaps to [`Self::retake`] if [`Self::wants_reference`].
+    #[allow(clippy::too_many_arguments)]
     pub fn walk(
         &mut self,
         now: &[BodyPose; 2],
@@ -116,7 +117,9 @@ impl SpherePrune {
             return false;
         }
         let d = self.moved(now);
-        if !(self.rest_min - d >= best) {
+        // (False for NaN: a bound that is not a number clears nothing.)
+        let clears = self.rest_min - d >= best;
+        if !clears {
             // The bound is spent: plain steps, then a new reference.
             self.n = (0, 0);
             self.wait = self.backoff;
