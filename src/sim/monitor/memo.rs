@@ -68,10 +68,18 @@ const F64_SLACK: f64 = 64.0 * f64::EPSILON;
 /// in part a's frame, between the relative poses `rel0` and `rel1` (b's frame in a's), m:
 /// |t₁ − t₀| + 2·sin(θ/2)·r_b with θ the angle of R₁R₀ᵀ, plus the f64 rounding.
 pub fn displacement_bound_m(rel0: &Isometry3<f64>, rel1: &Isometry3<f64>, rb_m: f64) -> f64 {
-    let dt = (rel1.translation.vector - rel0.translation.vector).norm();
+    let (dt, slack) = translation_and_slack(rel0, rel1, rb_m);
     let chord = 2.0 * half_turn(rel0, rel1).0 * rb_m;
-    let scale = rel0.translation.vector.norm() + rel1.translation.vector.norm() + rb_m;
-    dt + chord + F64_SLACK * scale
+    dt + chord + slack
+}
+
+/// A displacement bound's translation term |t₁ − t₀| and its rounding allowance
+/// F64_SLACK·(|t₀| + |t₁| + r), m: shared by every displacement bound (and by
+/// [`ExactEval::advance_unturned`]), so that they are the same floating-point terms.
+fn translation_and_slack(rel0: &Isometry3<f64>, rel1: &Isometry3<f64>, r_m: f64) -> (f64, f64) {
+    let dt = (rel1.translation.vector - rel0.translation.vector).norm();
+    let scale = rel0.translation.vector.norm() + rel1.translation.vector.norm() + r_m;
+    (dt, F64_SLACK * scale)
 }
 
 /// sin(θ/2) of the turn R₁R₀ᵀ between the rotations of `rel0` and `rel1` (θ in [0, π]) and its
@@ -132,8 +140,7 @@ pub fn displacement_bound_axis_m(
     rel1: &Isometry3<f64>,
     (b, rb_m): (&dyn rp::Shape, f64),
 ) -> f64 {
-    let dt = (rel1.translation.vector - rel0.translation.vector).norm();
-    let scale = rel0.translation.vector.norm() + rel1.translation.vector.norm() + rb_m;
+    let (dt, slack) = translation_and_slack(rel0, rel1, rb_m);
     let chord = match half_turn(rel0, rel1) {
         (sin_half, Some(u)) => {
             let ub = rel0.rotation.inverse() * u;
@@ -142,7 +149,7 @@ pub fn displacement_bound_axis_m(
         }
         _ => 0.0,
     };
-    dt + chord + F64_SLACK * scale
+    dt + chord + slack
 }
 
 impl ExactEval {
@@ -200,9 +207,8 @@ impl ExactEval {
         rb_m: f64,
     ) -> (f64, f64) {
         let floor = |rel0: &Isometry3<f64>, rel1: &Isometry3<f64>, r_m: f64| {
-            let dt = (rel1.translation.vector - rel0.translation.vector).norm();
-            let scale = rel0.translation.vector.norm() + rel1.translation.vector.norm() + r_m;
-            dt + 0.0 + F64_SLACK * scale
+            let (dt, slack) = translation_and_slack(rel0, rel1, r_m);
+            dt + 0.0 + slack
         };
         let moved_b = floor(&self.rel, rel, rb_m);
         let moved_a = floor(&self.rel_inv, rel_inv, ra_m);
