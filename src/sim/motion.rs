@@ -386,7 +386,7 @@ pub struct StepMotion {
 /// Bound on |x′_a − x′_b| over the step for two paths, m/s: the velocities are linear on each
 /// piece, so the largest difference is at a piece end (either side). Each distinct end is
 /// evaluated once, and on both sides only where a path changes piece there (a free piece
-/// followed by a straight one, [`BodyPath::vel_at`]; elsewhere the two sides are the same
+/// followed by a straight one, `BodyPath::vel_at`; elsewhere the two sides are the same
 /// velocity): the same maximum as every end on both sides.
 pub fn rel_speed(a: &BodyPath, b: &BodyPath) -> f64 {
     let mut m: f64 = 0.0;
