@@ -7,12 +7,14 @@ J = diag(110, 140, 160) kg·m² — in the same 7178 km orbit with two-body + J2
 same fixed step (0.01 s; Basilisk's default RK4 integrator), for the same number of steps.
 rpod's figure is `rpod bench scenes/examples/free_drift.ron` (the whole pipeline: f64 dynamics,
 full-geometry monitor with interval bounds, guarantees) measured in the same run. The ratio
-printed is rpod steps/s over Basilisk steps/s.
+printed is rpod steps/s over Basilisk steps/s, for each of `--rounds` rounds (Basilisk, then
+rpod, one after the other) and their median: on a shared machine whose speed drifts from
+minute to minute, a ratio means something only within a round.
 
 Nothing is installed or downloaded here: without Basilisk the script says so and prints
 rpod's figure alone. J2 is given to Basilisk directly (normalised C̄20 = −J2/√5) so that no
 gravity file has to be fetched. Set-up, once: `python3 -m venv VENV && VENV/bin/pip install
-bsk`, then `VENV/bin/python benches/basilisk_free_drift.py [--steps N] [--rpod PATH]`.
+bsk`, then `VENV/bin/python benches/basilisk_free_drift.py [--steps N] [--rounds N] [--rpod PATH]`.
 """
 import argparse
 import math
