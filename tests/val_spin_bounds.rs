@@ -26,16 +26,26 @@
 //! 0.3 rad, a guarantee resting on the rotation is `unresolved`, never `held`, and its search
 //! only looks for a violation: its cost is the closed-form bisection depth to prove zero.
 //!
+//! And `rpod::geometry::revolution`: a hull found to be a faceted solid of revolution has its
+//! solid of revolution within its offset, checked by brute force (every vertex turned through
+//! a grid of angles, its distance to the hull's triangles in f64 by `common::closest_on_triangle`,
+//! Ericson's region test); shapes that are not (twisted rings, boxes, slot walls, uneven rings,
+//! NaN, empty, 1e300) are refused or stay finite.
+//!
 //! Tolerances: parry works in f32 — a dense value is within 8 f32 ulps of the pose's scale
 //! (|translation| + both bounding radii, a few metres: ≈ 4e-6 m) of the true distance, and
 //! GJK stops at 1.2e-3 of the distance (`monitor::GJK_REL_TOL`); every comparison allows that
 //! much and nothing more.
 
+mod common;
+
 use bevy_rapier3d::parry::query;
+use bevy_rapier3d::parry::shape::ConvexPolyhedron;
 use bevy_rapier3d::rapier::math::{Pose, Vector};
 use bevy_rapier3d::rapier::prelude as rp;
 use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 use rpod::geometry::bounds::{Bracket, interval_lower_bound};
+use rpod::geometry::revolution::{FacetedRevolution, faceted_revolution};
 use rpod::math::rng::Lcg;
 use rpod::scene::{BodyRole, load_scene_str};
 use rpod::sim::monitor::{
@@ -1062,4 +1072,163 @@ fn regress_spin_beyond_the_resolved_turn_is_refused_unless_allowed() {
     let loaded =
         load_scene_str(&allowed, "fast_spin_refused", &[]).unwrap_or_else(|e| panic!("{e}"));
     Simulation::new(&loaded).unwrap_or_else(|e| panic!("{e}"));
+}
+
+// Faceted solids of revolution (`rpod::geometry::revolution`). Reference: brute force. The
+// hull's vertices turned about the found axis through a grid of angles, each measured in f64
+// against the triangles of the hull's boundary (parry's triangulation; the closest point on
+// each triangle by `common::closest_on_triangle`; parry's own point projection, GJK in f32,
+// reports 0 for a point 0.5 mm outside a 0.12 m cone, so it is not used): the distance to a
+// convex set is convex, so the farthest point of a turned copy of the hull is one of its
+// vertices, and the largest of these distances is (to the angle grid) how far the solid of
+// revolution reaches beyond the hull. It must stay within the offset, and the offset within
+// twice it (the bound is not loose).
+
+/// Two rings of `n` about x at heights 0 and `len`, radii `r0`, `r1`, the second turned by
+/// `phase_tip`.
+fn frustum(n: usize, r0: f64, r1: f64, len: f64, phase_tip: f64) -> Vec<Vector3<f64>> {
+    let mut pts = Vec::new();
+    for k in 0..n {
+        let phi = std::f64::consts::TAU * k as f64 / n as f64;
+        pts.push(Vector3::new(0.0, r0 * phi.cos(), r0 * phi.sin()));
+        let phi = phi + phase_tip;
+        pts.push(Vector3::new(len, r1 * phi.cos(), r1 * phi.sin()));
+    }
+    pts
+}
+
+/// The largest distance from the hull of `points` (its boundary triangulated by parry,
+/// measured in f64) of one of its vertices turned about the found axis by 2π·m/`angles`.
+fn brute_offset(points: &[Vector3<f64>], f: &FacetedRevolution, angles: u32) -> f64 {
+    let pts: Vec<Vector> = points
+        .iter()
+        .map(|p| Vector::new(p.x as f32, p.y as f32, p.z as f32))
+        .collect();
+    let hull = ConvexPolyhedron::from_convex_hull(&pts).expect("hull");
+    let (vtx, idx) = hull.to_trimesh();
+    let vtx: Vec<Vector3<f64>> = vtx
+        .iter()
+        .map(|p| Vector3::new(f64::from(p.x), f64::from(p.y), f64::from(p.z)))
+        .collect();
+    let inner = vtx.iter().sum::<Vector3<f64>>() / vtx.len() as f64;
+    // Outward planes (n, h) of the triangles.
+    let planes: Vec<(Vector3<f64>, f64)> = idx
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|k| vtx[k as usize]);
+            let mut n = (b - a).cross(&(c - a)).normalize();
+            if n.dot(&(inner - a)) > 0.0 {
+                n = -n;
+            }
+            (n, n.dot(&a))
+        })
+        .collect();
+    let axis = nalgebra::Unit::new_normalize(f.axis);
+    let mut worst: f64 = 0.0;
+    for p in &vtx {
+        for m in 0..angles {
+            let rot = nalgebra::Rotation3::from_axis_angle(
+                &axis,
+                std::f64::consts::TAU * f64::from(m) / f64::from(angles),
+            );
+            let q = f.centre_m + rot * (p - f.centre_m);
+            if planes.iter().all(|(n, h)| n.dot(&q) <= *h) {
+                continue;
+            }
+            let d = idx
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|k| vtx[k as usize]);
+                    (q - common::closest_on_triangle(q, a, b, c)).norm()
+                })
+                .fold(f64::INFINITY, f64::min);
+            worst = worst.max(d);
+        }
+    }
+    worst
+}
+
+#[test]
+fn val_faceted_revolution_of_the_docking_cone_bounds_its_solid_of_revolution() {
+    let pts = frustum(32, 0.12, 0.03, 0.25, 0.0);
+    let f = faceted_revolution(&pts).expect("a faceted cone");
+    assert_eq!(f.facets, 32);
+    assert!((f.axis.x.abs() - 1.0).abs() < 1e-12, "{f:?}");
+    let s0 = 0.12 * (1.0 - (std::f64::consts::PI / 32.0).cos());
+    assert!(f.offset_m >= s0 && f.offset_m < s0 * 1.001, "{f:?}");
+    let brute = brute_offset(&pts, &f, 1024);
+    // The brute force measures the f32 hull: its rounding, ~1e-8 m here, is the 1e-7.
+    assert!(brute <= f.offset_m + 1e-7, "{brute} > {}", f.offset_m);
+    assert!(brute > 0.5 * f.offset_m, "{brute} vs {}", f.offset_m);
+    // The centre is on the axis, half way along, and the radius holds every vertex.
+    assert!((f.centre_m - Vector3::new(0.125, 0.0, 0.0)).norm() < 1e-12);
+    assert!(pts.iter().all(|p| (p - f.centre_m).norm() <= f.radius_m));
+}
+
+#[test]
+fn val_faceted_revolution_of_a_tilted_prism_and_a_pyramid() {
+    let rot = nalgebra::Rotation3::from_euler_angles(0.3, -0.7, 1.1);
+    let shift = Vector3::new(0.4, -1.0, 2.0);
+    let prism: Vec<_> = frustum(6, 0.5, 0.5, 1.2, 0.0)
+        .iter()
+        .map(|p| rot * p + shift)
+        .collect();
+    let f = faceted_revolution(&prism).expect("a hexagonal prism");
+    assert_eq!(f.facets, 6);
+    assert!((f.axis.dot(&(rot * Vector3::x())).abs() - 1.0).abs() < 1e-9);
+    let brute = brute_offset(&prism, &f, 384);
+    assert!(
+        brute <= f.offset_m + 1e-6 && brute > 0.5 * f.offset_m,
+        "{brute} {f:?}"
+    );
+    // A pyramid: one ring of 8 and an apex on the axis.
+    let mut pyramid: Vec<_> = frustum(8, 0.3, 0.0, 0.5, 0.0)
+        .into_iter()
+        .step_by(2)
+        .collect();
+    pyramid.push(Vector3::new(0.5, 0.0, 0.0));
+    let f = faceted_revolution(&pyramid).expect("a pyramid");
+    assert_eq!(f.facets, 8);
+    let brute = brute_offset(&pyramid, &f, 512);
+    assert!(
+        brute <= f.offset_m + 1e-6 && brute > 0.5 * f.offset_m,
+        "{brute} {f:?}"
+    );
+}
+
+#[test]
+fn invariant_shapes_that_are_not_faceted_revolutions_are_refused() {
+    // Rings out of phase (a twisted prism): its slices are not homothetic N-gons.
+    assert!(faceted_revolution(&frustum(8, 0.2, 0.2, 0.4, 0.2)).is_none());
+    // A box that is not square across any of its axes.
+    let mut b = Vec::new();
+    for x in [-0.5, 0.5] {
+        for y in [-0.3, 0.3] {
+            for z in [-0.1, 0.1] {
+                b.push(Vector3::new(x, y, z));
+            }
+        }
+    }
+    assert!(faceted_revolution(&b).is_none());
+    // A slot wall (two corners of each of two rings).
+    let wall: Vec<_> = frustum(16, 0.15, 0.15, 0.2, 0.0)
+        .into_iter()
+        .take(4)
+        .collect();
+    assert!(faceted_revolution(&wall).is_none());
+    // Rings of different counts.
+    let mut uneven = frustum(8, 0.2, 0.1, 0.3, 0.0);
+    uneven.pop();
+    assert!(faceted_revolution(&uneven).is_none());
+    // Hostile values.
+    assert!(faceted_revolution(&[]).is_none());
+    let mut nan = frustum(8, 0.2, 0.1, 0.3, 0.0);
+    nan[3].y = f64::NAN;
+    assert!(faceted_revolution(&nan).is_none());
+    let huge = frustum(8, 1e300, 1e300, 1e300, 0.0);
+    if let Some(f) = faceted_revolution(&huge) {
+        assert!(f.offset_m.is_finite() && f.radius_m.is_finite());
+    }
+    let flat = vec![Vector3::zeros(); 12];
+    assert!(faceted_revolution(&flat).is_none());
 }
