@@ -314,19 +314,13 @@ fn val_pair_memo_unturned_bracket_bounds_the_axis_bracket() {
     let pts: Vec<rp::Vector> = ring(0.15, 0.0).chain(ring(0.04, 0.25)).collect();
     let cone = rp::SharedShape::convex_hull(&pts).expect("cone hull");
     let rcone = 0.26;
-    let mut seed = 11u64;
-    let mut next = move || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = rpod::math::rng::Lcg(11);
     for (a, ra) in [(&bx, rbx), (&cone, rcone)] {
         let pa = iso(Vector3::zeros(), UnitQuaternion::identity());
         let pb = iso(Vector3::new(1.5, 0.2, -0.1), UnitQuaternion::identity());
         let e = memo::convex_exact(&pa, (&**a, ra), &pb, (&*bx, rbx)).expect("support maps");
         for _ in 0..2000 {
-            let r: Vec<f64> = (0..10).map(|_| next() - 0.5).collect();
+            let r: Vec<f64> = (0..10).map(|_| rng.uniform() - 0.5).collect();
             let axis = Vector3::new(r[0], r[1], r[2]);
             let angle = std::f64::consts::PI * (r[3] + 0.5);
             let q = UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(axis), angle);

@@ -690,16 +690,10 @@ pub(crate) mod tests {
         // velocity difference — against the deduplicated evaluation, bit for bit, over free
         // paths, straight paths, split paths (a free piece then a straight one) and a split
         // whose rest is NaN.
-        let mut x: u64 = 0x2545_F491_4F6C_DD1D;
-        let mut r = || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rng = crate::math::rng::Lcg(0x2545_F491_4F6C_DD1D);
         let dt = 0.01;
         for k in 0..4000 {
-            let mut v = || Vector3::new(r(), r(), r());
+            let mut v = || rng.vec3(0.5);
             let path = |kind: usize, v: &mut dyn FnMut() -> Vector3<f64>| {
                 let t_split = match kind {
                     0 => dt,

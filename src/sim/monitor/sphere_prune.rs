@@ -215,22 +215,8 @@ mod tests {
     //! poses at each step (the plain loop of `closest_parts`), against which the bound D and
     //! the walk's candidates and pruned count are checked, step by step.
     use super::*;
+    use crate::math::rng::Lcg;
     use nalgebra::{Isometry3, Translation3};
-
-    /// A small deterministic generator (64-bit LCG), uniform in [0, 1).
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn vec(&mut self, r: f64) -> Vector3<f64> {
-            Vector3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * 2.0 * r
-        }
-    }
 
     /// Parts of a body: (offset from the centre of mass in the body frame, own rotation,
     /// bounding radius).
@@ -239,11 +225,11 @@ mod tests {
     fn parts(rng: &mut Lcg, n: usize, reach: f64) -> Parts {
         (0..n)
             .map(|_| {
-                let axis = rng.vec(1.0);
+                let axis = rng.vec3(1.0);
                 (
-                    rng.vec(reach),
+                    rng.vec3(reach),
                     UnitQuaternion::from_scaled_axis(axis),
-                    0.05 + rng.next(),
+                    0.05 + rng.uniform(),
                 )
             })
             .collect()
