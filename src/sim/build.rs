@@ -480,9 +480,9 @@ fn insert_core_resources(
 }
 
 /// Adds one plugin per feature, in this order (each doc comment names the sets it runs in):
-/// the pipeline, the guard, the environment, then where the scene has them the t = 0 overlaps,
-/// the docking mechanism and its compliant contact, the air-bearing table, the controllers
-/// and the plume loads; then finishes the app.
+/// the pipeline, the guard, the environment, then where the scene has them the multi-rate
+/// planner's system, the t = 0 overlaps, the docking mechanism and its compliant contact, the
+/// air-bearing table, the controllers and the plume loads; then finishes the app.
 fn add_feature_plugins(
     app: &mut App,
     loaded: &LoadedScene,
@@ -495,6 +495,17 @@ fn add_feature_plugins(
         super::guard::GuardPlugin,
         environment,
     ));
+    if app
+        .world()
+        .contains_resource::<super::multirate::MultiRate>()
+    {
+        // The planner is in the schedule only with its resource (a fixed-step scene plans
+        // nothing and pays nothing for it).
+        app.add_systems(
+            super::SimStep,
+            super::multirate::plan_step.in_set(super::Order::Plan),
+        );
+    }
     if let Some(p) = super::overlap::OverlapPlugin::new(loaded, suppressed)? {
         app.add_plugins(p);
     }
@@ -700,7 +711,7 @@ impl Simulation {
         self.app
             .world()
             .get_resource::<super::guard::Guard>()
-            .and_then(|g| g.trip.as_ref())
+            .and_then(|g| g.trip())
     }
 
     /// Simulated time, s.
@@ -897,11 +908,13 @@ impl Simulation {
     /// controllers' commands, e.g. forces applied from Python). It writes no columns, so it may
     /// be added at any time; it acts from the next step.
     pub fn add_disturbance(&mut self, d: Box<dyn crate::control::registry::Disturbance>) {
-        self.app
-            .world_mut()
+        let world = self.app.world_mut();
+        world
             .resource_mut::<super::controllers::ControllerHost>()
             .disturbances
             .push(d);
+        // It fails only while the schedule runs, and a `&mut Simulation` is not stepping.
+        let _ = super::controllers::schedule_host_systems(world);
     }
 
     /// The monitor's results.

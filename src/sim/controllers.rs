@@ -123,9 +123,11 @@ pub const NAV_COLUMNS: [&str; 18] = [
 /// Every controller of the simulation and the scenario's disturbances.
 #[derive(Resource, Default)]
 pub struct ControllerHost {
-    /// Controllers, in installation order.
+    /// Controllers, in installation order (hosted by `Simulation::add_controller` or a
+    /// scene's `controllers`, which also put the host's systems in the schedule).
     pub slots: Vec<HostedSlot>,
-    /// Disturbances, in installation order.
+    /// Disturbances, in installation order (added by `Simulation::add_disturbance`, which also
+    /// puts the host's systems in the schedule).
     pub disturbances: Vec<Box<dyn Disturbance>>,
     /// Bodies' constants.
     pub info: Vec<BodyInfo>,
@@ -141,6 +143,10 @@ pub struct ControllerHost {
     gravity: bool,
     /// `jet_pulse` events raised so far in the run, all jets together.
     jet_pulse_events: u64,
+    /// `host_sense`, `host_control` and `host_actuate` are in the schedule.
+    scheduled: bool,
+    /// `host_post_step` is in the schedule.
+    post_step_scheduled: bool,
 }
 
 impl ControllerHost {
@@ -986,12 +992,58 @@ pub fn host_slot(world: &mut World, slot: Slot) -> Result<usize, String> {
     let mut host = world.resource_mut::<ControllerHost>();
     host.gravity |= slot.needs.gravity;
     host.slots.push(slot);
-    Ok(host.slots.len() - 1)
+    let k = host.slots.len() - 1;
+    schedule_host_systems(world)?;
+    Ok(k)
 }
 
-/// The controller host: owns the [`ControllerHost`] resource and four systems, each running
-/// only while there is something to host (a scene without controllers or disturbances runs
-/// none of them): `host_sense` in [`super::Stage::Sense`] (after
+/// Puts the host's per-step systems in `SimStep` once there is something to host
+/// (`host_sense`, `host_control`, `host_actuate`), and `host_post_step` once a law asks for
+/// post-step diagnostics; a no-op when they are there. A system that is in the schedule runs,
+/// or asks its run condition, every step — a run of the executor's bookkeeping and a fetch of
+/// each of its resources —, so a scene without controllers or disturbances has none of them.
+/// Fails only if the schedule is not in the world (it is taken out while it runs, and nothing
+/// hosts a controller then).
+pub(crate) fn schedule_host_systems(world: &mut World) -> Result<(), String> {
+    use super::{SimStep, Stage};
+    let (main, post) = {
+        let h = world.resource::<ControllerHost>();
+        let hosting = !(h.slots.is_empty() && h.disturbances.is_empty());
+        let post = h
+            .slots
+            .iter()
+            .any(|s| s.n_cols > 0 && s.at.contains(&DiagnosticsAt::PostStep));
+        (hosting && !h.scheduled, post && !h.post_step_scheduled)
+    };
+    if !(main || post) {
+        return Ok(());
+    }
+    let mut schedules = world.resource_mut::<Schedules>();
+    let Some(schedule) = schedules.get_mut(SimStep) else {
+        return Err("the pipeline's schedule is not in the world (it is running)".into());
+    };
+    if main {
+        schedule.add_systems((
+            // After the L2 frame is brought to this step (an empty set outside L2 scenes).
+            host_sense
+                .in_set(Stage::Sense)
+                .after(super::environment::EnvironmentSense),
+            host_control.in_set(Stage::Control),
+            host_actuate.in_set(super::Order::ControllerForces),
+        ));
+    }
+    if post {
+        schedule.add_systems(host_post_step.in_set(super::Order::PostStepDiagnostics));
+    }
+    let mut h = world.resource_mut::<ControllerHost>();
+    h.scheduled |= main;
+    h.post_step_scheduled |= post;
+    Ok(())
+}
+
+/// The controller host: owns the [`ControllerHost`] resource and four systems, put in the
+/// schedule with the first controller or disturbance (a scene without either has none of
+/// them): `host_sense` in [`super::Stage::Sense`] (after
 /// [`super::environment::EnvironmentSense`]), `host_control` in [`super::Stage::Control`],
 /// `host_actuate` in [`super::Order::ControllerForces`] (a controller's force is added after the
 /// docking mechanism's: the order of floating-point sums is part of a run's bit-exact result),
@@ -1019,52 +1071,14 @@ impl ControllersPlugin {
 
 impl Plugin for ControllersPlugin {
     fn build(&self, app: &mut App) {
-        use super::{SimStep, Stage};
         app.insert_resource(ControllerHost {
             info: self.info.clone(),
             planar: self.planar,
             ..Default::default()
         });
-        // One condition for the three: a set's condition is evaluated once a step, before the
-        // first of its systems (what it reads changes only between steps, when a controller is
-        // added), where a condition on each would be a resource fetch and a run each.
-        app.configure_sets(SimStep, Hosted.run_if(hosting));
-        app.add_systems(
-            SimStep,
-            (
-                // After the L2 frame is brought to this step (an empty set outside L2 scenes).
-                host_sense
-                    .in_set(Stage::Sense)
-                    .after(super::environment::EnvironmentSense),
-                host_control.in_set(Stage::Control),
-                host_actuate.in_set(super::Order::ControllerForces),
-            )
-                .in_set(Hosted),
-        );
-        app.add_systems(
-            SimStep,
-            host_post_step
-                .in_set(super::Order::PostStepDiagnostics)
-                .run_if(post_step_wanted),
-        );
+        // The per-step systems are added with the first controller or disturbance
+        // (`schedule_host_systems`).
     }
-}
-
-/// Run condition: the host has a controller or a disturbance.
-fn hosting(host: Res<ControllerHost>) -> bool {
-    !(host.slots.is_empty() && host.disturbances.is_empty())
-}
-
-/// The controller host's per-step systems (`host_sense`, `host_control`, `host_actuate`),
-/// which run only while there is something to host.
-#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
-struct Hosted;
-
-/// Run condition: some controller writes diagnostics after the step.
-fn post_step_wanted(host: Res<ControllerHost>) -> bool {
-    host.slots
-        .iter()
-        .any(|s| s.n_cols > 0 && s.at.contains(&DiagnosticsAt::PostStep))
 }
 
 /// Adds the [`ControllersPlugin`] and hosts the scene's `controllers`, in scene order. Called

@@ -19,22 +19,28 @@
 //! 10¹⁵ N no thruster; no physical scene comes near it, while rapier's f32 arithmetic squares
 //! values (a 10¹⁹ number squared overflows f32), so anything past it is already meaningless.
 //!
-//! After a trip no stage runs any more (each stretch of the step after a check has a run
-//! condition, and the runners of `SimStep` stop at a trip), so nothing of the bad step reaches
-//! the recorder; the run stops at once. `rpod run` then exits with code 3, leaves the
+//! After a trip no stage runs any more (each check is the run condition of the stage after it,
+//! and the runners of `SimStep` stop at a trip), so nothing of the bad step reaches the
+//! recorder; the run stops at once. `rpod run` then exits with code 3, leaves the
 //! rows recorded up to the last good step as `*.partial` files and writes no `summary.json`
 //! (nothing looks like a whole run); `rpod trials` records the trial's outcome as
 //! `NUMERIC_FAILURE` with the trip as its reason.
 //!
-//! The checks are their own systems, ordered between the stages, so they stay independent of
-//! how the physics step itself is written.
+//! Each check is the run condition of the stage it guards (forces gate Physics, states gate
+//! Monitor, outputs gate Record): a stage's condition is evaluated once a step, right before the
+//! first of its systems, so after every system of the stages before it — the place of a check
+//! between two stages — and a check that trips keeps the stage it gates from running. So the
+//! checks stay independent of how the physics step itself is written, and cost no system of
+//! their own (each system is a run of the executor's bookkeeping and a fetch of each of its
+//! resources, every step: three systems and three conditions were 9 % of `free_drift`'s
+//! step). A condition may only read; the first trip is recorded in a write-once cell
+//! ([`std::sync::OnceLock`]) of the [`Guard`].
 
 use super::output::Diagnostics;
 use super::{
-    BodyState, Clock, EventLog, Guarantees, MonitorState, Roster, SimBody, SimStep, Stage, Wrench,
+    BodyState, Clock, EventLog, Guarantees, MonitorState, SimBody, SimStep, Stage, Wrench,
 };
 use crate::scene::validate::{MAX_ORBIT_RADIUS_M, MAX_RATE_DEG_S, MAX_SPEED_M_S};
-use bevy::ecs::schedule::SystemSet;
 use bevy::prelude::*;
 use std::fmt;
 
@@ -114,35 +120,16 @@ impl fmt::Display for GuardTrip {
 /// The guard's state: the first trip, if any.
 #[derive(Resource, Debug, Default, Clone)]
 pub struct Guard {
-    /// The first value that tripped the guard.
-    pub trip: Option<GuardTrip>,
+    /// The first value that tripped the guard, set once by the check that found it (each check
+    /// is a run condition, which may only read its parameters: hence a write-once cell).
+    trip: std::sync::OnceLock<GuardTrip>,
 }
 
-/// The guard's checks, ordered between the pipeline stages.
-#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
-pub enum GuardCheck {
-    /// After Environment, before Physics: the wrenches.
-    Forces,
-    /// After Physics, before Monitor: the states.
-    States,
-    /// After Monitor, before Record: distances, margins, columns.
-    Outputs,
-}
-
-/// The stretches of the step between one check and the next, each run only while the guard is
-/// clear.
-#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
-enum GuardSegment {
-    /// After the force check: Physics, then the state check.
-    Physics,
-    /// After the state check: Monitor, then the output check.
-    Monitor,
-    /// After the output check: Record.
-    Record,
-}
-
-fn clear(g: Res<Guard>) -> bool {
-    g.trip.is_none()
+impl Guard {
+    /// The first value that tripped the guard, if one has.
+    pub fn trip(&self) -> Option<&GuardTrip> {
+        self.trip.get()
+    }
 }
 
 fn bad(v: f64) -> bool {
@@ -160,10 +147,9 @@ pub const MAX_EVENTS_PER_RUN: u64 = 1_000_000;
 /// raise.
 pub const MAX_EVENT_BYTES_PER_RUN: u64 = 256 << 20;
 
-/// The guard: owns the [`Guard`] resource and the [`GuardCheck`] sets, placed between the
-/// pipeline's stages (Forces after Environment, States after Physics, Outputs after Monitor,
-/// each before the next stage), with one check system in each. It makes every [`Stage`] and
-/// every check run only while no check has tripped. Added right after
+/// The guard: owns the [`Guard`] resource and gives three pipeline stages their checks as run
+/// conditions (the forces gate [`Stage::Physics`], the states [`Stage::Monitor`], the outputs
+/// [`Stage::Record`]): after a trip no stage runs. Added right after
 /// [`super::PipelinePlugin`] (it configures the pipeline's sets).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct GuardPlugin;
@@ -176,50 +162,16 @@ impl Plugin for GuardPlugin {
 
 fn install(app: &mut App) {
     app.insert_resource(Guard::default());
+    // Each check gates the stage after it; the stages before the first check (Sense to
+    // Environment) need none: `SimStep` is run only while the guard is clear (`advance` and
+    // `Simulation::step_pipeline` stop at a trip). A check finding the guard already tripped
+    // (by an earlier check of the same step) answers false without looking.
     app.configure_sets(
         SimStep,
         (
-            GuardCheck::Forces
-                .after(Stage::Environment)
-                .before(Stage::Physics),
-            GuardCheck::States
-                .after(Stage::Physics)
-                .before(Stage::Monitor),
-            GuardCheck::Outputs
-                .after(Stage::Monitor)
-                .before(Stage::Record),
-        ),
-    );
-    // Each stage after a check runs only while no check has tripped, so the step a check trips
-    // in goes no further. A set's condition is evaluated once a step, before the first of its
-    // systems; only these checks trip the guard, so between one check and the next its state
-    // cannot change, and one condition covers each stretch (`GuardSegment`): Physics and the
-    // state check after the force check, Monitor and the output check after the state check,
-    // Record after the output check. The sets before the first check (Sense to Environment,
-    // and the force check) need none: `SimStep` is run only while the guard is clear
-    // (`advance` and `Simulation::step_pipeline` stop at a trip). Each condition is a
-    // resource fetch and a run every step, so there are no more of them than that.
-    app.configure_sets(
-        SimStep,
-        (
-            (Stage::Physics, GuardCheck::States).in_set(GuardSegment::Physics),
-            (Stage::Monitor, GuardCheck::Outputs).in_set(GuardSegment::Monitor),
-            Stage::Record.in_set(GuardSegment::Record),
-        ),
-    );
-    for segment in [
-        GuardSegment::Physics,
-        GuardSegment::Monitor,
-        GuardSegment::Record,
-    ] {
-        app.configure_sets(SimStep, segment.run_if(clear));
-    }
-    app.add_systems(
-        SimStep,
-        (
-            check_forces.in_set(GuardCheck::Forces),
-            check_states.in_set(GuardCheck::States),
-            check_outputs.in_set(GuardCheck::Outputs),
+            Stage::Physics.run_if(forces_clear),
+            Stage::Monitor.run_if(states_clear),
+            Stage::Record.run_if(outputs_clear),
         ),
     );
 }
@@ -242,59 +194,71 @@ fn first_beyond(
         .map(|(c, x)| (format!("{quantity}.{c}"), *x, limit))
 }
 
-/// Records the first trip: (quantity, value, limit).
-fn trip(
-    g: &mut Guard,
-    clock: &Clock,
-    check: &'static str,
-    body: Option<&str>,
-    q: (String, f64, f64),
-) {
-    if g.trip.is_none() {
-        g.trip = Some(GuardTrip {
-            t_s: clock.t_s(),
-            step: clock.step,
-            check,
-            body: body.map(str::to_string),
-            quantity: q.0,
-            value: q.1,
-            limit: q.2,
-        });
-    }
+/// Records the first trip: (quantity, value, limit). A later one (none can happen: every check
+/// answers false once the guard has tripped) would be dropped.
+fn trip(g: &Guard, clock: &Clock, check: &'static str, body: Option<&str>, q: (String, f64, f64)) {
+    let _ = g.trip.set(GuardTrip {
+        t_s: clock.t_s(),
+        step: clock.step,
+        check,
+        body: body.map(str::to_string),
+        quantity: q.0,
+        value: q.1,
+        limit: q.2,
+    });
 }
 
-/// Bodies in scene order (deterministic: the first bad body in scene order is reported).
-fn in_order<'a, T: Component>(
-    roster: &Roster,
+/// The first bad quantity of the first body in scene order that has one (bodies are visited in
+/// the query's order, the one of least [`SimBody::index`] kept: the same body as a walk in
+/// scene order, without a lookup per body).
+fn first_bad_body<'a, T: Component>(
     q: &'a Query<(&SimBody, &T)>,
-) -> impl Iterator<Item = (&'a SimBody, &'a T)> {
-    roster.bodies.iter().filter_map(|e| q.get(*e).ok())
-}
-
-fn check_forces(
-    clock: Res<Clock>,
-    roster: Res<Roster>,
-    q: Query<(&SimBody, &Wrench)>,
-    mut g: ResMut<Guard>,
-) {
-    for (b, w) in in_order(&roster, &q) {
-        let found = first_bad("gravity_n", &w.gravity_n)
-            .or_else(|| first_bad("force_n", &w.force_n))
-            .or_else(|| first_bad("torque_nm", &w.torque_nm));
-        if let Some(q) = found {
-            trip(&mut g, &clock, "force", Some(&b.name), q);
-            return;
+    bad: impl Fn(&T) -> Option<(String, f64, f64)>,
+) -> Option<(&'a SimBody, (String, f64, f64))> {
+    let mut first: Option<(&SimBody, (String, f64, f64))> = None;
+    for (b, x) in q {
+        if first.as_ref().is_some_and(|(f, _)| f.index < b.index) {
+            continue;
+        }
+        if let Some(found) = bad(x) {
+            first = Some((b, found));
         }
     }
+    first
 }
 
-fn check_states(
-    clock: Res<Clock>,
-    roster: Res<Roster>,
-    q: Query<(&SimBody, &BodyState)>,
-    mut g: ResMut<Guard>,
-) {
-    for (b, s) in in_order(&roster, &q) {
+/// The force check, run condition of [`Stage::Physics`]: every body's wrench after the
+/// Environment stage. False (Physics and everything after it skipped) at a trip.
+fn forces_clear(clock: Res<Clock>, q: Query<(&SimBody, &Wrench)>, g: Res<Guard>) -> bool {
+    if g.trip().is_some() {
+        return false;
+    }
+    let found = first_bad_body(&q, |w| {
+        first_bad("gravity_n", &w.gravity_n)
+            .or_else(|| first_bad("force_n", &w.force_n))
+            .or_else(|| first_bad("torque_nm", &w.torque_nm))
+    });
+    match found {
+        Some((b, q)) => {
+            trip(&g, &clock, "force", Some(&b.name), q);
+            false
+        }
+        None => true,
+    }
+}
+
+/// The state check, run condition of [`Stage::Monitor`]: every body's state after the Physics
+/// stage. False (Monitor and everything after it skipped) at a trip, or when the guard has
+/// already tripped.
+fn states_clear(clock: Res<Clock>, q: Query<(&SimBody, &BodyState)>, g: Res<Guard>) -> bool {
+    if g.trip().is_some() {
+        return false;
+    }
+    // The same limits as every scene input of the unit (`…_m`, `…_m_s`, `…_rad_s`): a state
+    // beyond them is outside what rpod was asked to simulate (a law flown to a multiple of the
+    // speed of light, a spin no structure survives).
+    let rate_limit_rad_s = MAX_RATE_DEG_S.to_radians();
+    let found = first_bad_body(&q, |s| {
         let quat = s.att.quaternion();
         let att = [
             ("qw", quat.w),
@@ -305,67 +269,62 @@ fn check_states(
         .into_iter()
         .find(|(_, v)| !v.is_finite())
         .map(|(n, v)| (format!("attitude.{n}"), v, GUARD_LIMIT));
-        // The same limits as every scene input of the unit (`…_m`, `…_m_s`, `…_rad_s`): a
-        // state beyond them is outside what rpod was asked to simulate (a law flown to a
-        // multiple of the speed of light, a spin no structure survives).
-        let rate_limit_rad_s = MAX_RATE_DEG_S.to_radians();
-        let found = first_beyond("pos_m", &s.pos_m, MAX_ORBIT_RADIUS_M)
+        first_beyond("pos_m", &s.pos_m, MAX_ORBIT_RADIUS_M)
             .or_else(|| first_beyond("vel_m_s", &s.vel_m_s, MAX_SPEED_M_S))
             .or(att)
-            .or_else(|| first_beyond("omega_rad_s", &s.omega_rad_s, rate_limit_rad_s));
-        if let Some(q) = found {
-            trip(&mut g, &clock, "state", Some(&b.name), q);
-            return;
+            .or_else(|| first_beyond("omega_rad_s", &s.omega_rad_s, rate_limit_rad_s))
+    });
+    match found {
+        Some((b, q)) => {
+            trip(&g, &clock, "state", Some(&b.name), q);
+            false
         }
+        None => true,
     }
 }
 
-fn check_outputs(
+/// The output check, run condition of [`Stage::Record`]: after the Monitor stage, every pair
+/// distance, guarantee margin and diagnostics column, and the run's event counts. False
+/// (nothing of the step recorded) at a trip, or when the guard has already tripped.
+fn outputs_clear(
     clock: Res<Clock>,
-    roster: Res<Roster>,
     mon: Res<MonitorState>,
     gs: Res<Guarantees>,
     diag: Res<Diagnostics>,
     log: Res<EventLog>,
-    mut g: ResMut<Guard>,
-) {
-    for p in &mon.pairs {
-        if bad(p.distance_m) {
-            let q = (
-                format!(
-                    "distance.{}.{}_m",
-                    roster.names.get(p.a).map_or("?", String::as_str),
-                    roster.names.get(p.b).map_or("?", String::as_str)
-                ),
-                p.distance_m,
-                GUARD_LIMIT,
-            );
-            trip(&mut g, &clock, "output", None, q);
-            return;
-        }
+    g: Res<Guard>,
+) -> bool {
+    if g.trip().is_some() {
+        return false;
     }
-    for s in &gs.status {
-        if bad(s.last_margin) {
-            let q = (
-                format!("guarantee.{}.margin_{}", s.name, s.unit),
-                s.last_margin,
-                GUARD_LIMIT,
-            );
-            trip(&mut g, &clock, "output", None, q);
-            return;
-        }
-    }
-    for (n, v) in diag.names.iter().zip(&diag.values) {
-        if v.is_infinite() {
-            trip(&mut g, &clock, "output", None, (n.clone(), *v, GUARD_LIMIT));
-            return;
-        }
-    }
-    if log.count > MAX_EVENTS_PER_RUN {
+    let name = |k: usize| mon.bodies.get(k).map_or("?", |b| b.name.as_str());
+    let found = if let Some(p) = mon.pairs.iter().find(|p| bad(p.distance_m)) {
+        let quantity = format!("distance.{}.{}_m", name(p.a), name(p.b));
+        Some(("output", (quantity, p.distance_m, GUARD_LIMIT)))
+    } else if let Some(s) = gs.status.iter().find(|s| bad(s.last_margin)) {
+        let quantity = format!("guarantee.{}.margin_{}", s.name, s.unit);
+        Some(("output", (quantity, s.last_margin, GUARD_LIMIT)))
+    } else if let Some((n, v)) = diag
+        .names
+        .iter()
+        .zip(&diag.values)
+        .find(|(_, v)| v.is_infinite())
+    {
+        Some(("output", (n.clone(), *v, GUARD_LIMIT)))
+    } else if log.count > MAX_EVENTS_PER_RUN {
         let q = ("events raised".to_string(), log.count as f64, 0.0);
-        trip(&mut g, &clock, "events", None, q);
+        Some(("events", q))
     } else if log.bytes > MAX_EVENT_BYTES_PER_RUN {
         let q = ("event bytes raised".to_string(), log.bytes as f64, 0.0);
-        trip(&mut g, &clock, "events", None, q);
+        Some(("events", q))
+    } else {
+        None
+    };
+    match found {
+        Some((check, q)) => {
+            trip(&g, &clock, check, None, q);
+            false
+        }
+        None => true,
     }
 }

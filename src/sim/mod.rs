@@ -443,7 +443,7 @@ fn advance(world: &mut World) {
             }
             world.resource_mut::<multirate::SpanCap>().0 = n - done;
             schedule.run(world);
-            if world.resource::<guard::Guard>().trip.is_some() {
+            if world.resource::<guard::Guard>().trip().is_some() {
                 break;
             }
         }
@@ -1931,11 +1931,15 @@ pub(crate) fn jets_view(
 /// and the [`Order`] sets inside Actuate, Environment and Monitor (every feature plugin puts its
 /// systems in these sets), the core's systems and the `Update` system that steps the schedule.
 ///
-/// Systems, by set: [`multirate::plan_step`] in [`Order::Plan`]; `environment_gravity` in
-/// [`Order::Gravity`]; [`plume::plume_forces`] in [`Order::PlumeForces`]; `physics_step` (which
+/// Systems, by set: `environment_gravity` in [`Order::Gravity`]; `physics_step` (which
 /// advances the environment) in [`Stage::Physics`]; [`monitor::distances`] then
 /// [`monitor::contacts`] in [`Order::Geometry`]; `check_guarantees` in [`Order::Guarantees`];
-/// [`output::record`] in [`Stage::Record`]; `advance` in `Update`. Several read the scene's
+/// [`output::record`] in [`Stage::Record`]; `advance` in `Update`. Two more are added only
+/// with the resource they need, by the scene's build: [`multirate::plan_step`] in
+/// [`Order::Plan`] with a `MultiRate` stepping, [`plume::plume_forces`] in
+/// [`Order::PlumeForces`] with plumed jets (a system that is there runs, or asks its run
+/// condition, every step: each is a run of the executor's bookkeeping and a fetch of each of
+/// its resources, measurable at `free_drift`'s 4 µs a step). Several read the scene's
 /// [`Env`], which [`environment::EnvironmentPlugin`] inserts. It replaces any `SimStep`
 /// schedule, so it is added before every other plugin that puts systems there.
 #[derive(Debug, Clone, Copy, Default)]
@@ -1984,16 +1988,7 @@ impl Plugin for PipelinePlugin {
                 .in_set(Stage::Monitor),
         ));
         schedule.add_systems((
-            // Each runs only where its resource exists (a fixed-step scene plans nothing, a
-            // scene without plumed jets loads nothing): a condition is one resource fetch, the
-            // systems' parameters are up to nineteen.
-            multirate::plan_step
-                .in_set(Order::Plan)
-                .run_if(resource_exists::<multirate::MultiRate>),
             environment_gravity.in_set(Order::Gravity),
-            plume::plume_forces
-                .in_set(Order::PlumeForces)
-                .run_if(resource_exists::<plume::PlumeLoadState>),
             physics_step.in_set(Stage::Physics),
             (
                 monitor::distances,

@@ -1164,6 +1164,13 @@ pub fn install_loads(app: &mut bevy::prelude::App) {
             c
         })
         .collect();
+    // The loads' system is in the schedule only with its resource (a scene without plumed
+    // jets pays nothing for it).
+    use bevy::prelude::IntoScheduleConfigs;
+    app.add_systems(
+        super::SimStep,
+        plume_forces.in_set(super::Order::PlumeForces),
+    );
     app.insert_resource(PlumeLoadState {
         parts,
         body_parts,
