@@ -589,28 +589,31 @@ pub fn omega_bound_euler(lam: [f64; 3], l0: f64, two_e0: f64, torque: f64, dt: f
         };
         [at(0), at(1), at(2)]
     };
+    // Each candidate's feasibility is asked only where it would raise `best` (the largest
+    // feasible candidate is the same; the feasibility test is most of the cost).
     // One axis: u_p within both slabs.
     for (p, &l) in lam.iter().enumerate() {
         let hi = (l2_hi / (l * l)).min(e_hi / l);
-        let u = point(p, hi, p, hi);
-        if feasible(&u) {
-            best = best.max(hi);
+        if hi > best && feasible(&point(p, hi, p, hi)) {
+            best = hi;
         }
     }
     // Two axes: a bound of each slab active.
     for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+        let (lp, lq) = (lam[p], lam[q]);
+        // λp² up + λq² uq = l2, λp up + λq uq = e.
+        let det = lp * lp * lq - lq * lq * lp;
+        if det.abs() <= 1e-12 * lp * lq * (lp + lq) {
+            continue;
+        }
+        let (lp2, lq2) = (lp * lp, lq * lq);
         for l2 in [l2_lo, l2_hi] {
             for e in [e_lo, e_hi] {
-                // λp² up + λq² uq = l2, λp up + λq uq = e.
-                let det = lam[p] * lam[p] * lam[q] - lam[q] * lam[q] * lam[p];
-                if det.abs() <= 1e-12 * lam[p] * lam[q] * (lam[p] + lam[q]) {
-                    continue;
-                }
-                let up = (l2 * lam[q] - lam[q] * lam[q] * e) / det;
-                let uq = (lam[p] * lam[p] * e - lam[p] * l2) / det;
-                let (up, uq) = (up.max(0.0), uq.max(0.0));
-                if feasible(&point(p, up, q, uq)) {
-                    best = best.max(up + uq);
+                let up = ((l2 * lq - lq2 * e) / det).max(0.0);
+                let uq = ((lp2 * e - lp * l2) / det).max(0.0);
+                let sum = up + uq;
+                if sum > best && feasible(&point(p, up, q, uq)) {
+                    best = sum;
                 }
             }
         }
@@ -896,6 +899,99 @@ pub(crate) mod tests {
                 // λ_k(λ_k − λ_m)ω_k² by about 2·λ_m·|τ|·|ω|·dt: ω_k ≲ 0.5 rad/s here.
                 assert!(bound[1] < 1.0 && bound[2] < 1.0, "{bound:?}");
             }
+        }
+    }
+
+    #[test]
+    fn euler_bound_is_the_largest_feasible_candidate_bit_for_bit() {
+        // Reference: the definition — every candidate (one axis, then each pair of axes with
+        // each combination of active slab bounds) tested for feasibility, the largest feasible
+        // kept — against the evaluation that tests only candidates that would raise the best,
+        // bit for bit, over random moments (among them equal ones: a degenerate 2×2 solve),
+        // momenta, energies off the ellipsoid's range, torques and steps.
+        fn every_candidate(lam: [f64; 3], l0: f64, two_e0: f64, torque: f64, dt: f64) -> f64 {
+            let lmin = lam.iter().copied().fold(f64::INFINITY, f64::min);
+            let om_crude = (l0 + torque * dt) / lmin;
+            let (l_lo, l_hi) = ((l0 - torque * dt).max(0.0), l0 + torque * dt);
+            let de = 2.0 * torque * om_crude * dt;
+            let (e_lo, e_hi) = ((two_e0 - de).max(0.0), two_e0 + de);
+            let (l2_lo, l2_hi) = (l_lo * l_lo, l_hi * l_hi);
+            let slack = 1e-9;
+            let feasible = |u: &[f64; 3]| {
+                let l2: f64 = (0..3).map(|k| lam[k] * lam[k] * u[k]).sum();
+                let e: f64 = (0..3).map(|k| lam[k] * u[k]).sum();
+                u.iter().all(|x| *x >= -slack * (1.0 + x.abs()))
+                    && l2 >= l2_lo * (1.0 - slack)
+                    && l2 <= l2_hi * (1.0 + slack)
+                    && e >= e_lo * (1.0 - slack)
+                    && e <= e_hi * (1.0 + slack)
+            };
+            let mut best: f64 = 0.0;
+            for (p, &l) in lam.iter().enumerate() {
+                let hi = (l2_hi / (l * l)).min(e_hi / l);
+                let mut u = [0.0; 3];
+                u[p] = hi;
+                if feasible(&u) {
+                    best = best.max(hi);
+                }
+            }
+            for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+                for l2 in [l2_lo, l2_hi] {
+                    for e in [e_lo, e_hi] {
+                        let det = lam[p] * lam[p] * lam[q] - lam[q] * lam[q] * lam[p];
+                        if det.abs() <= 1e-12 * lam[p] * lam[q] * (lam[p] + lam[q]) {
+                            continue;
+                        }
+                        let up = (l2 * lam[q] - lam[q] * lam[q] * e) / det;
+                        let uq = (lam[p] * lam[p] * e - lam[p] * l2) / det;
+                        let mut u = [0.0; 3];
+                        u[p] = up.max(0.0);
+                        u[q] = uq.max(0.0);
+                        if feasible(&u) {
+                            best = best.max(u[p] + u[q]);
+                        }
+                    }
+                }
+            }
+            if best == 0.0 && l_hi > 0.0 {
+                return om_crude;
+            }
+            best.sqrt().min(om_crude)
+        }
+        let mut rng = crate::math::rng::Lcg(0x9E37_79B9_7F4A_7C15);
+        for k in 0..20_000 {
+            let mut lam = [0.0; 3];
+            for l in &mut lam {
+                *l = 10.0 + 1000.0 * rng.uniform();
+            }
+            if k % 5 == 0 {
+                lam[1] = lam[0];
+            }
+            let w = rng.vec3(2.0);
+            let (l0, two_e0) = (
+                (lam[0] * lam[0] * w.x * w.x
+                    + lam[1] * lam[1] * w.y * w.y
+                    + lam[2] * lam[2] * w.z * w.z)
+                    .sqrt(),
+                lam[0] * w.x * w.x + lam[1] * w.y * w.y + lam[2] * w.z * w.z,
+            );
+            // Energies off the momentum's range too (rounding, a held torque's slabs).
+            let two_e0 = two_e0 * (1.0 + 0.2 * rng.symmetric() * f64::from(u8::from(k % 3 == 0)));
+            let torque = if k % 4 == 0 {
+                0.0
+            } else {
+                50.0 * rng.uniform()
+            };
+            let dt = [0.01, 0.1, 1.0][k % 3];
+            let (got, want) = (
+                omega_bound_euler(lam, l0, two_e0, torque, dt),
+                every_candidate(lam, l0, two_e0, torque, dt),
+            );
+            assert_eq!(
+                got.to_bits(),
+                want.to_bits(),
+                "case {k}: {got} against {want}"
+            );
         }
     }
 
