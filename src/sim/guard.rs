@@ -187,6 +187,10 @@ fn first_beyond(
     v: &nalgebra::Vector3<f64>,
     limit: f64,
 ) -> Option<(String, f64, f64)> {
+    // The common case in one test of the three (false for NaN and infinities, as `beyond`).
+    if v.x.abs() <= limit && v.y.abs() <= limit && v.z.abs() <= limit && limit.is_finite() {
+        return None;
+    }
     ["x", "y", "z"]
         .iter()
         .zip(v.iter())
