@@ -165,7 +165,11 @@ fn install(app: &mut App) {
     // Each check gates the stage after it; the stages before the first check (Sense to
     // Environment) need none: `SimStep` is run only while the guard is clear (`advance` and
     // `Simulation::step_pipeline` stop at a trip). A check finding the guard already tripped
-    // (by an earlier check of the same step) answers false without looking.
+    // (by an earlier check of the same step) answers false without looking. A set's condition
+    // is asked when the executor reaches the first of the set's systems (whether or not that
+    // system's own condition then lets it run), so only in a set that has one: each of these
+    // stages has a core system of the pipeline (`physics_step`, `distances`, `record`), so
+    // every check runs every step (`tests/guard.rs` trips each of the three).
     app.configure_sets(
         SimStep,
         (
