@@ -552,27 +552,55 @@ pub fn principal_moments(j: &Matrix3<f64>) -> [f64; 3] {
     [e.x, e.y, e.z]
 }
 
+/// The polytope of [`omega_bound_euler`]: the crude bound, the slabs Σλ_k²u_k ∈ [L_lo², L_hi²]
+/// and Σλ_k u_k ∈ [2E_lo, 2E_hi] over a step under a held torque, and the feasibility test.
+pub(crate) struct EulerSlabs {
+    /// (|L₀| + τ·dt)/λ_min, rad/s.
+    pub om_crude: f64,
+    /// |L₀| + τ·dt.
+    pub l_hi: f64,
+    /// [L_lo², L_hi²].
+    pub l2: (f64, f64),
+    /// [2E_lo, 2E_hi].
+    pub e: (f64, f64),
+}
+
+impl EulerSlabs {
+    /// The slabs from |L₀|, 2E₀, the torque's magnitude and the step.
+    pub(crate) fn new(lam: [f64; 3], l0: f64, two_e0: f64, torque: f64, dt: f64) -> Self {
+        let lmin = lam.iter().copied().fold(f64::INFINITY, f64::min);
+        let om_crude = (l0 + torque * dt) / lmin;
+        let (l_lo, l_hi) = ((l0 - torque * dt).max(0.0), l0 + torque * dt);
+        let de = 2.0 * torque * om_crude * dt;
+        Self {
+            om_crude,
+            l_hi,
+            l2: (l_lo * l_lo, l_hi * l_hi),
+            e: ((two_e0 - de).max(0.0), two_e0 + de),
+        }
+    }
+
+    /// u ≥ 0 within both slabs, with a relative slack of 10⁻⁹ (rounding of the 2×2 solves).
+    pub(crate) fn feasible(&self, lam: [f64; 3], u: &[f64; 3]) -> bool {
+        let slack = 1e-9;
+        let l2: f64 = (0..3).map(|k| lam[k] * lam[k] * u[k]).sum();
+        let e: f64 = (0..3).map(|k| lam[k] * u[k]).sum();
+        u.iter().all(|x| *x >= -slack * (1.0 + x.abs()))
+            && l2 >= self.l2.0 * (1.0 - slack)
+            && l2 <= self.l2.1 * (1.0 + slack)
+            && e >= self.e.0 * (1.0 - slack)
+            && e <= self.e.1 * (1.0 + slack)
+    }
+}
+
 /// Bound on |ω| over a step of Euler's equations from angular momentum |L₀| and 2E₀ = ω₀ᵀJω₀
 /// under a held torque of magnitude `torque` (module docs): the largest Σu_k, u_k = ω_k² in
 /// principal axes, with Σλ_k²u_k ∈ [L_lo², L_hi²], Σλ_k u_k ∈ [2E_lo, 2E_hi], u ≥ 0.
 pub fn omega_bound_euler(lam: [f64; 3], l0: f64, two_e0: f64, torque: f64, dt: f64) -> f64 {
-    let lmin = lam.iter().copied().fold(f64::INFINITY, f64::min);
-    let om_crude = (l0 + torque * dt) / lmin;
-    let (l_lo, l_hi) = ((l0 - torque * dt).max(0.0), l0 + torque * dt);
-    let de = 2.0 * torque * om_crude * dt;
-    let (e_lo, e_hi) = ((two_e0 - de).max(0.0), two_e0 + de);
-    let (l2_lo, l2_hi) = (l_lo * l_lo, l_hi * l_hi);
-    // Relative slack on the feasibility checks (rounding of the 2×2 solves).
-    let slack = 1e-9;
-    let feasible = |u: &[f64; 3]| {
-        let l2: f64 = (0..3).map(|k| lam[k] * lam[k] * u[k]).sum();
-        let e: f64 = (0..3).map(|k| lam[k] * u[k]).sum();
-        u.iter().all(|x| *x >= -slack * (1.0 + x.abs()))
-            && l2 >= l2_lo * (1.0 - slack)
-            && l2 <= l2_hi * (1.0 + slack)
-            && e >= e_lo * (1.0 - slack)
-            && e <= e_hi * (1.0 + slack)
-    };
+    let slabs = EulerSlabs::new(lam, l0, two_e0, torque, dt);
+    let (om_crude, l_hi) = (slabs.om_crude, slabs.l_hi);
+    let ((l2_lo, l2_hi), (e_lo, e_hi)) = (slabs.l2, slabs.e);
+    let feasible = |u: &[f64; 3]| slabs.feasible(lam, u);
     let mut best: f64 = 0.0;
     // A point with u_p = x, u_q = y and 0 on the third axis, built without indexed stores (a
     // store to a computed index, then the array read whole, stalls the store forwarding: this
@@ -644,11 +672,8 @@ pub fn omega_components_euler(
     let om = omega_bound_euler(lam, l0, two_e0, torque, dt);
     let lmin = lam.iter().copied().fold(f64::INFINITY, f64::min);
     let lmax = lam.iter().copied().fold(0.0, f64::max);
-    let om_crude = (l0 + torque * dt) / lmin;
-    let (l_lo, l_hi) = ((l0 - torque * dt).max(0.0), l0 + torque * dt);
-    let de = 2.0 * torque * om_crude * dt;
-    let (e_lo, e_hi) = ((two_e0 - de).max(0.0), two_e0 + de);
-    let (l2_lo, l2_hi) = (l_lo * l_lo, l_hi * l_hi);
+    let slabs = EulerSlabs::new(lam, l0, two_e0, torque, dt);
+    let ((l2_lo, l2_hi), (e_lo, e_hi)) = (slabs.l2, slabs.e);
     let ulp4 = 4.0 * f64::EPSILON;
     let n_small = (l2_hi - lmin * e_lo) + ulp4 * (l2_hi + lmin * e_lo);
     let n_large = (lmax * e_hi - l2_lo) + ulp4 * (lmax * e_hi + l2_lo);
@@ -909,23 +934,13 @@ pub(crate) mod tests {
         // kept — against the evaluation that tests only candidates that would raise the best,
         // bit for bit, over random moments (among them equal ones: a degenerate 2×2 solve),
         // momenta, energies off the ellipsoid's range, torques and steps.
+        // (The slabs and the feasibility test are the function's own: what is checked here is
+        // the search.)
         fn every_candidate(lam: [f64; 3], l0: f64, two_e0: f64, torque: f64, dt: f64) -> f64 {
-            let lmin = lam.iter().copied().fold(f64::INFINITY, f64::min);
-            let om_crude = (l0 + torque * dt) / lmin;
-            let (l_lo, l_hi) = ((l0 - torque * dt).max(0.0), l0 + torque * dt);
-            let de = 2.0 * torque * om_crude * dt;
-            let (e_lo, e_hi) = ((two_e0 - de).max(0.0), two_e0 + de);
-            let (l2_lo, l2_hi) = (l_lo * l_lo, l_hi * l_hi);
-            let slack = 1e-9;
-            let feasible = |u: &[f64; 3]| {
-                let l2: f64 = (0..3).map(|k| lam[k] * lam[k] * u[k]).sum();
-                let e: f64 = (0..3).map(|k| lam[k] * u[k]).sum();
-                u.iter().all(|x| *x >= -slack * (1.0 + x.abs()))
-                    && l2 >= l2_lo * (1.0 - slack)
-                    && l2 <= l2_hi * (1.0 + slack)
-                    && e >= e_lo * (1.0 - slack)
-                    && e <= e_hi * (1.0 + slack)
-            };
+            let slabs = EulerSlabs::new(lam, l0, two_e0, torque, dt);
+            let (om_crude, l_hi) = (slabs.om_crude, slabs.l_hi);
+            let ((l2_lo, l2_hi), (e_lo, e_hi)) = (slabs.l2, slabs.e);
+            let feasible = |u: &[f64; 3]| slabs.feasible(lam, u);
             let mut best: f64 = 0.0;
             for (p, &l) in lam.iter().enumerate() {
                 let hi = (l2_hi / (l * l)).min(e_hi / l);
